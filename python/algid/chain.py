@@ -1,0 +1,106 @@
+"""The n-DOF mass-spring-damper chain of the paper's eq. 1.
+
+Spring ``j`` (1-based, ``j = 1 .. n+1``) joins DOF ``j-1`` and DOF ``j``; DOF 0 and
+DOF ``n+1`` are the walls (``x_0 = x_{n+1} = 0``). Every mass has a viscous damper
+to ground. With a *free* right end spring ``n+1`` is absent (``k_{n+1} = 0`` known).
+
+    m_i x_i'' + c_i x_i' + k_i (x_i - x_{i-1}) + k_{i+1} (x_i - x_{i+1}) = u_i     (1)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+BOUNDARIES = ("fixed", "free")
+
+
+@dataclass(frozen=True)
+class Chain:
+    """Physical parameters of an n-DOF chain.
+
+    Parameters
+    ----------
+    mass : (n,) masses m_i [kg]
+    damping : (n,) viscous dampings c_i to ground [N s/m]
+    stiffness : (n+1,) spring stiffnesses k_1 .. k_{n+1} [N/m]; with
+        ``boundary="free"`` the last entry must be 0.
+    boundary : "fixed" (walls at both ends, the paper) or "free" (no right wall).
+    """
+
+    mass: np.ndarray
+    damping: np.ndarray
+    stiffness: np.ndarray
+    boundary: str = "fixed"
+
+    def __post_init__(self) -> None:
+        m = np.asarray(self.mass, dtype=float).reshape(-1)
+        c = np.asarray(self.damping, dtype=float).reshape(-1)
+        k = np.asarray(self.stiffness, dtype=float).reshape(-1)
+        n = m.size
+        if n < 1:
+            raise ValueError("a chain needs at least one mass")
+        if c.size != n:
+            raise ValueError(f"damping has {c.size} entries, expected n = {n}")
+        if k.size != n + 1:
+            raise ValueError(f"stiffness has {k.size} entries, expected n + 1 = {n + 1}")
+        if self.boundary not in BOUNDARIES:
+            raise ValueError(f"boundary must be one of {BOUNDARIES}, got {self.boundary!r}")
+        if self.boundary == "free":
+            k = k.copy()
+            if k[-1] != 0.0:
+                raise ValueError("a free right end needs stiffness[n] == 0")
+        if np.any(m <= 0) or np.any(c < 0) or np.any(k < 0):
+            raise ValueError("masses must be > 0, dampings and stiffnesses >= 0")
+        object.__setattr__(self, "mass", m)
+        object.__setattr__(self, "damping", c)
+        object.__setattr__(self, "stiffness", k)
+
+    @property
+    def n(self) -> int:
+        """Number of degrees of freedom."""
+        return int(self.mass.size)
+
+    def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Mass, damping and stiffness matrices (M, C, K) of eq. 1."""
+        n, k = self.n, self.stiffness
+        K = np.zeros((n, n))
+        for i in range(n):
+            K[i, i] = k[i] + k[i + 1]
+            if i + 1 < n:
+                K[i, i + 1] = K[i + 1, i] = -k[i + 1]
+        return np.diag(self.mass), np.diag(self.damping), K
+
+    def natural_frequencies_hz(self) -> np.ndarray:
+        """Undamped natural frequencies [Hz], ascending (eigenvalues of M^-1 K)."""
+        M, _, K = self.matrices()
+        lam = np.linalg.eigvals(np.linalg.solve(M, K)).real
+        return np.sort(np.sqrt(np.clip(lam, 0.0, None))) / (2 * np.pi)
+
+    def identifiable(self) -> np.ndarray:
+        """The 3n+1 parameters the estimator reports, in the order
+        ``m_1..m_n, c_1..c_n, k_1..k_{n+1}`` (for n = 1 with walls, k_1 holds the
+        identifiable sum k_1 + k_2 and k_2 is NaN)."""
+        k = self.stiffness.copy()
+        if self.n == 1 and self.boundary == "fixed":
+            k = np.array([k[0] + k[1], np.nan])
+        return np.concatenate([self.mass, self.damping, k])
+
+    @staticmethod
+    def random(n: int, rng: np.random.Generator, boundary: str = "fixed") -> "Chain":
+        """A chain with parameters drawn log-uniformly around Table 1's magnitudes."""
+        m = rng.uniform(1.0, 4.0, n)
+        c = rng.uniform(2.0, 8.0, n)
+        k = rng.uniform(500.0, 1500.0, n + 1)
+        if boundary == "free":
+            k[-1] = 0.0
+        return Chain(m, c, k, boundary)
+
+
+#: The paper's Table 1 system (3 DOF, walls at both ends).
+TABLE1 = Chain(
+    mass=np.array([2.0, 2.5, 3.0]),
+    damping=np.array([5.5, 5.0, 4.5]),
+    stiffness=np.array([1000.0, 900.0, 900.0, 700.0]),
+)
