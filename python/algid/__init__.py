@@ -1,6 +1,14 @@
 """algid: on-line algebraic identification of vibrating mass-spring-damper chains."""
 
 from .chain import TABLE1, Chain
+from .estimator import SIZES, ChainEstimator, Status
 
-__all__ = ["Chain", "TABLE1"]
+__all__ = ["Chain", "ChainEstimator", "SIZES", "Status", "TABLE1", "get_include"]
 __version__ = "0.1.0"
+
+
+def get_include() -> str:
+    """Directory of the C++ headers shipped in the wheel (``#include <algid/algid.hpp>``)."""
+    from pathlib import Path
+
+    return str(Path(__file__).parent / "include")

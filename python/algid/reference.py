@@ -82,7 +82,7 @@ def _row1_operator(G: np.ndarray, q: int) -> np.ndarray:
     return G[2, q] - 4.0 * G[1, q + 1] + 2.0 * G[0, q + 2]
 
 
-def system(y: np.ndarray, u: np.ndarray, dt: float, boundary: str = "fixed", points: int = 6):
+def system(y: np.ndarray, u: np.ndarray, dt: float, boundary: str = "fixed", points: int = 8):
     """The time-scaled systems of eq. 5 for every DOF and sample.
 
     Returns ``S (T, n, 4, 4)``, ``b (T, n, 4)`` and ``tau (T,)``; ``S = R A C`` with
@@ -120,13 +120,27 @@ def system(y: np.ndarray, u: np.ndarray, dt: float, boundary: str = "fixed", poi
     return S, b, tau
 
 
-def estimate(y, u, dt: float, boundary: str = "fixed", points: int = 6, min_hadamard: float = 1e-10):
+def equilibrated_hadamard(S: np.ndarray) -> np.ndarray:
+    """Hadamard ratio ``|det| / prod(row norms)`` after scaling every column to unit norm."""
+    col = np.linalg.norm(S, axis=-2, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        Sc = S / col
+        h = np.abs(np.linalg.det(Sc)) / np.prod(np.linalg.norm(Sc, axis=-1), axis=-1)
+    return np.where(np.isfinite(h), h, 0.0)
+
+
+def estimate(y, u, dt: float, boundary: str = "fixed", points: int = 8, min_samples: int = 16,
+             min_hadamard: float = 1e-9):
     """Instantaneous (eq. 5) and ratio (eq. 7) estimates for every sample.
 
     Returns a dict with ``theta_inst`` and ``theta_ratio`` of shape ``(T, n, 4)``
     (``[m_i, c_i, k_i, k_{i+1}]``; reduced DOFs — n = 1 with walls or the last DOF of
     a free chain — solve the 3x3 system and put NaN in the 4th entry; for n = 1 with
     walls entry 3 is k_1 + k_2), ``hadamard (T, n)`` and ``tau (T,)``.
+
+    A sample enters eq. 7 when it is *trusted*: ``index + points - 1 >= min_samples``
+    (the samples the causal C++ chain has consumed when it reaches that instant), a finite
+    non-zero determinant, and an equilibrated Hadamard ratio ``>= min_hadamard``.
     """
     S, b, tau = system(y, u, dt, boundary, points)
     T, n = S.shape[:2]
@@ -140,7 +154,7 @@ def estimate(y, u, dt: float, boundary: str = "fixed", points: int = 6, min_hada
         m = 3 if reduced[i] else 4
         Si, bi = S[:, i, :m, :m], b[:, i, :m]
         det = np.linalg.det(Si)
-        had[:, i] = np.abs(det) / np.prod(np.linalg.norm(Si, axis=1), axis=1).clip(1e-300)
+        had[:, i] = equilibrated_hadamard(Si)
         ok = (tau > 0) & np.isfinite(det) & (det != 0)
         phi = np.full((T, m), np.nan)
         phi[ok] = np.linalg.solve(Si[ok], bi[ok][..., None])[..., 0]
@@ -149,7 +163,7 @@ def estimate(y, u, dt: float, boundary: str = "fixed", points: int = 6, min_hada
         theta[:, i, :m] = phi * scale
         # |det A| = |det S| tau^q, q = 19 (4x4) or 12 (3x3); only well-conditioned samples count.
         q = 19 if m == 4 else 12
-        good = ok & (had[:, i] >= min_hadamard)
+        good = ok & (had[:, i] >= min_hadamard) & (np.arange(T) + points - 1 >= min_samples)
         with np.errstate(over="ignore"):
             weight[:, i] = np.where(good, np.abs(det) * tau**q, 0.0)
     theta_ratio = np.full_like(theta, np.nan)

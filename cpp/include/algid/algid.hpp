@@ -1,0 +1,11 @@
+#pragma once
+/// @file algid.hpp
+/// Umbrella header: every public algid header, nothing else.
+
+#include "algid/chain_estimator.hpp"
+#include "algid/cramer.hpp"
+#include "algid/dof_estimator.hpp"
+#include "algid/integrator_chain.hpp"
+#include "algid/quadrature.hpp"
+#include "algid/ratio_estimator.hpp"
+#include "algid/types.hpp"

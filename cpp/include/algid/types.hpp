@@ -1,0 +1,47 @@
+#pragma once
+/// @file types.hpp
+/// Alias templates, enums and the configuration-error helper shared by every algid header.
+
+#include <Eigen/Core>
+
+#include <cstdlib>
+#include <stdexcept>
+
+namespace algid {
+
+/// Fixed-size column vector.
+template <class Scalar, int Rows>
+using Vector = Eigen::Matrix<Scalar, Rows, 1>;
+
+/// Fixed-size matrix (column-major).
+template <class Scalar, int Rows, int Cols>
+using Matrix = Eigen::Matrix<Scalar, Rows, Cols>;
+
+/// What lies beyond the last mass of the chain.
+enum class Boundary {
+  kFixed,  ///< a wall: spring n+1 joins DOF n to ground and k_{n+1} is identified (the paper)
+  kFree,   ///< no wall: k_{n+1} = 0 is known and DOF n solves a 3x3 system
+};
+
+/// Result of one per-sample `update()`.
+enum class Status {
+  kOk = 0,        ///< sample consumed; see the per-DOF validity flags for the estimates
+  kWarmup = 1,    ///< sample consumed, but the quadrature stencil is not full yet (no estimate)
+  kBadInput = 2,  ///< a non-finite sample: it was discarded and the estimator reseeded
+};
+
+namespace detail {
+
+/// Configuration errors: thrown where exceptions exist, a hard stop where they do not
+/// (firmware built with -fno-exceptions calls the non-throwing `validate()` first).
+[[noreturn]] inline void config_error(const char* what) {
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+  throw std::invalid_argument(what);
+#else
+  (void)what;
+  std::abort();
+#endif
+}
+
+}  // namespace detail
+}  // namespace algid
