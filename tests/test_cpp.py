@@ -1,0 +1,59 @@
+"""Build the C++ tests with CMake and run each binary: one pytest command runs everything.
+
+Needs cmake and Eigen (system libeigen3-dev, or cmeel-eigen from the ``test`` extra).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+BUILD = REPO / "build" / "cpp-tests"
+BINARIES = ["test_quadrature", "test_cramer", "test_estimator", "test_realtime", "test_no_exceptions",
+            "firmware_loop", "test_continuous"]
+
+
+@pytest.fixture(scope="session")
+def cpp_build() -> Path:
+    cmake = shutil.which("cmake")
+    if cmake is None:
+        pytest.fail("cmake not found: install the test extra (pip install '.[test]')")
+    cmd = [cmake, "-S", str(REPO), "-B", str(BUILD), "-DALGID_BUILD_TESTS=ON", "-DCMAKE_BUILD_TYPE=Release",
+           f"-DPython_EXECUTABLE={sys.executable}"]
+    if shutil.which("ninja") and not (BUILD / "CMakeCache.txt").exists():
+        cmd += ["-G", "Ninja"]
+    for step in (cmd, [cmake, "--build", str(BUILD), "-j", str(os.cpu_count() or 2)]):
+        proc = subprocess.run(step, capture_output=True, text=True)
+        if proc.returncode != 0:
+            pytest.fail(f"{' '.join(step[:3])} failed:\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}")
+    return BUILD
+
+
+def _binary(build: Path, name: str) -> Path | None:
+    for candidate in (build / "tests" / "cpp" / name, build / "tests" / "cpp" / "Release" / name):
+        if candidate.exists():
+            return candidate
+    return None
+
+
+@pytest.mark.parametrize("name", BINARIES)
+def test_cpp_binary(cpp_build: Path, name: str) -> None:
+    exe = _binary(cpp_build, name)
+    if exe is None:
+        source = {"firmware_loop": REPO / "examples" / "firmware_loop.cpp",
+                  "test_continuous": REPO / "tests" / "cpp" / "test_continuous.cpp"}.get(name)
+        if source is not None and not source.exists():
+            pytest.skip(f"{source.name} is not part of this tree")
+        pytest.fail(f"{name} was not built")
+    proc = subprocess.run([str(exe)], capture_output=True, text=True, timeout=600)
+    print(proc.stdout)
+    summary = re.search(r"(\d+) passed, (\d+) failed", proc.stdout)
+    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-2000:]
+    assert summary is not None and int(summary.group(2)) == 0 and int(summary.group(1)) > 0
