@@ -9,8 +9,11 @@ from scipy.integrate import solve_ivp
 from algid.chain import Chain
 
 
-def simulate_chain(chain: Chain, force, duration_s: float, fs_hz: float = 1000.0):
-    """Accelerations and forces (T, n) of ``chain`` from rest under a smooth ``force(t)``."""
+def simulate_chain(chain: Chain, force, duration_s: float, fs_hz: float = 1000.0, breaks=()):
+    """Accelerations and forces (T, n) of ``chain`` from rest under ``force(t)``, smooth
+    between the instants in ``breaks`` [s]. A sample at a break (a jump of the force) takes
+    the mean of the one-sided limits of force and acceleration, as a simultaneous sampler
+    of the continuous signals sees a jump's midpoint."""
     M, C, K = chain.matrices()
     n = chain.n
     Minv = np.linalg.inv(M)
@@ -20,9 +23,21 @@ def simulate_chain(chain: Chain, force, duration_s: float, fs_hz: float = 1000.0
         return np.concatenate([v, Minv @ (force(t) - C @ v - K @ x)])
 
     t = np.arange(int(round(duration_s * fs_hz)) + 1) / fs_hz
-    sol = solve_ivp(rhs, (0.0, t[-1]), np.zeros(2 * n), t_eval=t, method="DOP853", rtol=1e-12, atol=1e-15)
-    x, v = sol.y[:n].T, sol.y[n:].T
+    edges = [0.0] + sorted(b for b in breaks if 0 < b < t[-1]) + [t[-1]]
+    state = np.zeros(2 * n)
+    x, v = np.zeros((t.size, n)), np.zeros((t.size, n))
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        sol = solve_ivp(rhs, (lo, hi), state, method="DOP853", rtol=1e-12, atol=1e-15, dense_output=True)
+        inside = (t >= lo - 1e-12) & (t <= hi + 1e-12)
+        y = sol.sol(t[inside])
+        x[inside], v[inside] = y[:n].T, y[n:].T
+        state = sol.y[:, -1]
     u = np.array([force(tt) for tt in t])
+    eps = 1e-9
+    for b in breaks:
+        at = np.isclose(t, b, rtol=0, atol=1e-12)
+        if at.any():
+            u[at] = 0.5 * (force(b - eps) + force(b + eps))
     a = (Minv @ (u.T - C @ v.T - K @ x.T)).T
     return t, a, u, x
 
