@@ -1,0 +1,101 @@
+"""``algid identify``: final estimates, history CSV, and one-line errors with exit code 2."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from signals import multisine, simulate_chain
+
+from algid.chain import TABLE1, Chain
+from algid.recording import Recording, save_recording
+
+
+def _write(path, t, u, a=None, x=None):
+    save_recording(path, Recording(t=t, u=u, a=a, x=x))
+    return path
+
+
+@pytest.fixture(scope="module")
+def table1_csv(tmp_path_factory):
+    t, a, u, x = simulate_chain(TABLE1, multisine(3), 0.3)
+    return _write(tmp_path_factory.mktemp("rec") / "table1.csv", t, u, a=a), (t, a, u, x)
+
+
+def _identify(*args):
+    return subprocess.run([sys.executable, "-m", "algid.cli", "identify", *map(str, args)],
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_identify_table1(table1_csv, tmp_path):
+    path, _ = table1_csv
+    out, trace = tmp_path / "est.json", tmp_path / "trace.csv"
+    proc = _identify(path, "--json", out, "--trace", trace)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(out.read_text())
+    assert doc["n"] == 3 and doc["valid"] is True
+    np.testing.assert_allclose(doc["mass"], TABLE1.mass, rtol=1e-6)
+    np.testing.assert_allclose(doc["damping"], TABLE1.damping, rtol=1e-6)
+    np.testing.assert_allclose(doc["stiffness"], TABLE1.stiffness, rtol=1e-6)
+    lines = trace.read_text().splitlines()
+    assert lines[0] == "t,m1,m2,m3,c1,c2,c3,k1,k2,k3,k4,valid"
+    assert len(lines) == 302
+    last = np.array(lines[-1].split(","), dtype=float)
+    np.testing.assert_allclose(last[1:4], TABLE1.mass, rtol=1e-6)
+    assert last[-1] == 1.0
+
+
+def test_identify_from_displacements_and_n1(tmp_path):
+    chain = Chain([2.0], [3.0], [800.0, 400.0])
+    t, a, u, x = simulate_chain(chain, multisine(1, seed=4), 0.5)
+    path = _write(tmp_path / "x_only.npz", t, u, x=x)
+    out, trace = tmp_path / "est.json", tmp_path / "trace.csv"
+    proc = _identify(path, "--json", out, "--trace", trace)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(out.read_text())
+    assert doc["stiffness"][1] is None  # only k1 + k2 is identifiable, reported in k1
+    assert doc["stiffness"][0] == pytest.approx(1200.0, rel=1e-3)
+    assert doc["mass"][0] == pytest.approx(2.0, rel=1e-3)
+    assert trace.read_text().splitlines()[-1].split(",")[4] == ""  # k2 empty
+
+
+def test_identify_free_end(tmp_path):
+    chain = Chain.random(2, np.random.default_rng(3), boundary="free")
+    t, a, u, _ = simulate_chain(chain, multisine(2, seed=5), 0.3)
+    out = tmp_path / "est.json"
+    proc = _identify(_write(tmp_path / "free.csv", t, u, a=a), "--json", out, "--boundary", "free")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(out.read_text())
+    assert doc["stiffness"][2] == 0.0
+    np.testing.assert_allclose(doc["stiffness"][:2], chain.stiffness[:2], rtol=1e-6)
+
+
+@pytest.mark.parametrize("content,needle", [
+    ("t,u1,a2\n0,1,2\n0.001,1,2\n", "mismatched n"),
+    ("t,u1\n0,1\n0.001,1\n", "need accelerations"),
+    ("t,u1,a1\n0,1,2\n0.001,1,2\n0.003,1,2\n", "non-uniform"),
+    ("t,u1,a1\n0,1,2\n0.001,1\n", "ragged"),
+    ("t,u1,a1\n0,1,2\n0.001,nan,2\n", "NaN"),
+    ("t,u1,a1\n0.001,1,2\n0,1,2\n", "increasing"),
+])
+def test_malformed_files_one_line_exit_2(tmp_path, content, needle):
+    path = tmp_path / "bad.csv"
+    path.write_text(content)
+    proc = _identify(path, "--json", tmp_path / "o.json")
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and needle.lower() in lines[0].lower(), proc.stderr
+
+
+def test_missing_file_and_unsupported_n(tmp_path):
+    proc = _identify(tmp_path / "nope.csv", "--json", tmp_path / "o.json")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    T = 100
+    t = np.arange(T) * 1e-3
+    path = _write(tmp_path / "n11.npz", t, np.ones((T, 11)), a=np.ones((T, 11)))
+    proc = _identify(path, "--json", tmp_path / "o.json")
+    assert proc.returncode == 2 and "not compiled in" in proc.stderr
