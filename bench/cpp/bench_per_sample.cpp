@@ -1,0 +1,251 @@
+// Per-sample cost of ChainEstimator<N, Scalar> and of an RLS baseline of the same parameter
+// count, measured in the same run on the same closed-form multisine signals (1 kHz).
+//
+//   bench_per_sample [--windows W] [--samples T]      timing, one JSON object per line
+//   bench_per_sample --callgrind SUBJECT N SCALAR S   S updates between callgrind client
+//                                                     requests (run under valgrind
+//                                                     --tool=callgrind --instr-atstart=no)
+//
+// Timing protocol, per configuration: one untimed warm-up window, then W windows of T samples
+// each, every window starting from reset()/reseed() (not timed):
+//   batch  pass: steady_clock around 16 consecutive updates; median and p99 of the mean;
+//   single pass: steady_clock around every update minus the clock's own median overhead;
+//                max = raw worst single sample (includes whatever the OS did meanwhile),
+//                max_path = max over sample index of the min over windows (the worst
+//                data-dependent path with interference filtered out).
+// The first batch (and first 16 single samples) of every window, which contains the
+// quadrature's start-up samples (cheaper: no estimate yet), is left out of the statistics.
+//
+// ContinuousEstimator (reseeding and aggregation on) is not in the core yet; when
+// cpp/include/algid/continuous_estimator.hpp lands, add a subject for it below.
+#include <algid/algid.hpp>
+
+#include "rls.hpp"
+#include "signals.hpp"
+
+#if defined(__has_include)
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define ALGID_BENCH_HAVE_CALLGRIND 1
+#endif
+#endif
+#ifndef ALGID_BENCH_HAVE_CALLGRIND
+#define ALGID_BENCH_HAVE_CALLGRIND 0
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_STOP_INSTRUMENTATION
+#endif
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+inline long long now_ns() noexcept {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
+
+// Keeps results observable so the optimiser cannot drop the work.
+volatile double g_sink = 0;
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const std::size_t at = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(at), v.end());
+  return v[at];
+}
+
+double clock_overhead_ns() {
+  std::vector<double> d(20000);
+  for (auto& x : d) {
+    const long long a = now_ns();
+    const long long b = now_ns();
+    x = static_cast<double>(b - a);
+  }
+  return percentile(d, 0.5);
+}
+
+template <int N, class Scalar>
+struct EstimatorSubject {
+  using Est = algid::ChainEstimator<N, Scalar>;
+  static constexpr int kDofs = N;
+  const algid_bench::Signals<Scalar>* s;
+  std::unique_ptr<Est> est;
+  explicit EstimatorSubject(const algid_bench::Signals<Scalar>& sig) : s(&sig) {
+    typename Est::Config cfg;
+    cfg.dt = static_cast<Scalar>(algid_bench::kDt);
+    est = std::make_unique<Est>(cfg);
+  }
+  void reset() noexcept { est->reseed(); }
+  void step(int k) noexcept {
+    const std::size_t at = static_cast<std::size_t>(k) * N;
+    est->update(s->accel.data() + at, s->force.data() + at);
+  }
+  double observe() const { return static_cast<double>(est->mass()(0) + est->stiffness()(N)); }
+};
+
+template <int N, class Scalar>
+struct RlsSubject {
+  static constexpr int kDofs = N;
+  const algid_bench::Signals<Scalar>* s;
+  std::array<algid_bench::Rls4<Scalar>, N> rls{};
+  explicit RlsSubject(const algid_bench::Signals<Scalar>& sig) : s(&sig) {}
+  void reset() noexcept {
+    for (auto& r : rls) r.reset();
+  }
+  void step(int k) noexcept {
+    const std::size_t at = static_cast<std::size_t>(k) * N;
+    for (int i = 0; i < N; ++i) rls[static_cast<std::size_t>(i)].update(s->phi.data() + 4 * (at + static_cast<std::size_t>(i)), s->force[at + static_cast<std::size_t>(i)]);
+  }
+  double observe() const { return static_cast<double>(rls[0].theta()(0)); }
+};
+
+struct Result {
+  double batch_median = 0, batch_p99 = 0, single_median = 0, single_p99 = 0, max = 0, max_path = 0;
+  long timed = 0;
+};
+
+constexpr int kBatch = 16;
+
+template <class Subject>
+Result measure(Subject& subject, int samples, int windows, double overhead) {
+  std::vector<double> batch;
+  std::vector<double> single;
+  std::vector<double> path(static_cast<std::size_t>(samples), 1e300);
+  const int batches = samples / kBatch;
+  for (int w = 0; w <= windows; ++w) {
+    const bool warmup = w == 0;
+    subject.reset();
+    for (int b = 0; b < batches; ++b) {
+      const long long t0 = now_ns();
+      for (int k = b * kBatch; k < (b + 1) * kBatch; ++k) subject.step(k);
+      const long long t1 = now_ns();
+      if (!warmup && b > 0) batch.push_back(static_cast<double>(t1 - t0) / kBatch);
+    }
+    g_sink = g_sink + subject.observe();
+    subject.reset();
+    for (int k = 0; k < batches * kBatch; ++k) {
+      const long long t0 = now_ns();
+      subject.step(k);
+      const long long t1 = now_ns();
+      if (!warmup && k >= kBatch) {
+        const double d = std::max(0.0, static_cast<double>(t1 - t0) - overhead);
+        single.push_back(d);
+        path[static_cast<std::size_t>(k)] = std::min(path[static_cast<std::size_t>(k)], d);
+      }
+    }
+    g_sink = g_sink + subject.observe();
+  }
+  Result r;
+  r.batch_median = percentile(batch, 0.5);
+  r.batch_p99 = percentile(batch, 0.99);
+  r.single_median = percentile(single, 0.5);
+  r.single_p99 = percentile(single, 0.99);
+  r.max = single.empty() ? 0 : *std::max_element(single.begin(), single.end());
+  for (int k = kBatch; k < batches * kBatch; ++k) r.max_path = std::max(r.max_path, path[static_cast<std::size_t>(k)]);
+  r.timed = static_cast<long>(single.size());
+  return r;
+}
+
+void print(const char* config, int n, const char* scalar, const Result& r, double overhead) {
+  const double dn = n;
+  std::printf(
+      "{\"config\": \"%s\", \"n\": %d, \"scalar\": \"%s\", "
+      "\"ns_per_sample_median\": %.2f, \"ns_per_dof_sample_median\": %.2f, \"p99\": %.2f, \"max\": %.2f, "
+      "\"max_path\": %.2f, \"single_median\": %.2f, \"single_p99\": %.2f, \"timed_samples\": %ld, "
+      "\"clock_overhead_ns\": %.1f, \"batch\": %d, \"units\": \"ns per DOF-sample except ns_per_sample_median\"}\n",
+      config, n, scalar, r.batch_median, r.batch_median / dn, r.batch_p99 / dn, r.max / dn, r.max_path / dn,
+      r.single_median / dn, r.single_p99 / dn, r.timed, overhead, kBatch);
+  std::fflush(stdout);
+}
+
+template <int N, class Scalar>
+void bench_n(const char* scalar, int samples, int windows, double overhead) {
+  const auto sig = algid_bench::make_signals<N, Scalar>(samples);
+  {
+    EstimatorSubject<N, Scalar> subject(sig);
+    print("default", N, scalar, measure(subject, samples, windows, overhead), overhead);
+  }
+  {
+    RlsSubject<N, Scalar> subject(sig);
+    print("rls", N, scalar, measure(subject, samples, windows, overhead), overhead);
+  }
+}
+
+template <class Subject, class Scalar>
+int callgrind_run(int updates) {
+  constexpr int kWarm = 64;
+  const int total = kWarm + updates;
+  const auto sig = algid_bench::make_signals<Subject::kDofs, Scalar>(total);
+  Subject subject(sig);
+  subject.reset();
+  for (int k = 0; k < kWarm; ++k) subject.step(k);
+  CALLGRIND_START_INSTRUMENTATION;
+  for (int k = kWarm; k < total; ++k) subject.step(k);
+  CALLGRIND_STOP_INSTRUMENTATION;
+  g_sink = g_sink + subject.observe();
+  std::printf("{\"callgrind_client_requests\": %d, \"updates\": %d, \"warmup\": %d}\n", ALGID_BENCH_HAVE_CALLGRIND,
+              updates, kWarm);
+  return 0;
+}
+
+template <int N>
+int callgrind_dispatch(const std::string& subject, const std::string& scalar, int updates) {
+  if (subject == "default" && scalar == "double") return callgrind_run<EstimatorSubject<N, double>, double>(updates);
+  if (subject == "default" && scalar == "float") return callgrind_run<EstimatorSubject<N, float>, float>(updates);
+  if (subject == "rls" && scalar == "double") return callgrind_run<RlsSubject<N, double>, double>(updates);
+  if (subject == "rls" && scalar == "float") return callgrind_run<RlsSubject<N, float>, float>(updates);
+  std::fprintf(stderr, "unknown subject/scalar %s/%s\n", subject.c_str(), scalar.c_str());
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int windows = 10;
+  int samples = 2000;
+  for (int a = 1; a < argc; ++a) {
+    if (!std::strcmp(argv[a], "--windows") && a + 1 < argc) {
+      windows = std::atoi(argv[++a]);
+    } else if (!std::strcmp(argv[a], "--samples") && a + 1 < argc) {
+      samples = std::atoi(argv[++a]);
+    } else if (!std::strcmp(argv[a], "--callgrind") && a + 4 < argc) {
+      const std::string subject = argv[a + 1];
+      const int n = std::atoi(argv[a + 2]);
+      const std::string scalar = argv[a + 3];
+      const int updates = std::atoi(argv[a + 4]);
+      switch (n) {
+        case 1: return callgrind_dispatch<1>(subject, scalar, updates);
+        case 3: return callgrind_dispatch<3>(subject, scalar, updates);
+        case 10: return callgrind_dispatch<10>(subject, scalar, updates);
+        case 50: return callgrind_dispatch<50>(subject, scalar, updates);
+        default: std::fprintf(stderr, "n must be 1, 3, 10 or 50\n"); return 2;
+      }
+    } else {
+      std::fprintf(stderr, "usage: %s [--windows W] [--samples T] | --callgrind SUBJECT N SCALAR UPDATES\n", argv[0]);
+      return 2;
+    }
+  }
+  if (samples < 4 * kBatch || windows < 1) {
+    std::fprintf(stderr, "need --samples >= %d and --windows >= 1\n", 4 * kBatch);
+    return 2;
+  }
+  const double overhead = clock_overhead_ns();
+  bench_n<1, double>("double", samples, windows, overhead);
+  bench_n<3, double>("double", samples, windows, overhead);
+  bench_n<10, double>("double", samples, windows, overhead);
+  bench_n<50, double>("double", samples, windows, overhead);
+  bench_n<1, float>("float", samples, windows, overhead);
+  bench_n<3, float>("float", samples, windows, overhead);
+  bench_n<10, float>("float", samples, windows, overhead);
+  bench_n<50, float>("float", samples, windows, overhead);
+  return g_sink == 12345.678 ? 1 : 0;
+}
