@@ -1,136 +1,20 @@
-// pybind11 module algid._core: conversion only, no logic. One generic helper binds every
-// fixed-size instantiation ChainEstimator<N>; the Python layer dispatches on n.
+// pybind11 module algid._core: conversion only, no logic. The generic helper in
+// bind_chain.hpp binds every fixed-size ChainEstimator<N>; the Python layer dispatches on n.
 #include <algid/algid.hpp>
 
-#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
-#include <pybind11/stl.h>
-
-#include <string>
 
 namespace py = pybind11;
 
-namespace {
-
-using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-algid::Boundary parse_boundary(const std::string& b) {
-  if (b == "fixed") return algid::Boundary::kFixed;
-  if (b == "free") return algid::Boundary::kFree;
-  throw py::value_error("boundary must be 'fixed' or 'free', got '" + b + "'");
-}
-
-template <int N>
-void bind_chain(py::module_& m) {
-  using Est = algid::ChainEstimator<N, double>;
-  const std::string name = "ChainEstimator" + std::to_string(N);
-  py::class_<Est>(m, name.c_str(), ("Algebraic estimator of a " + std::to_string(N) + "-DOF chain (C++ core).").c_str())
-      .def(py::init([](double dt, const std::string& boundary, int min_samples, double min_hadamard) {
-             typename Est::Config c;
-             c.dt = dt;
-             c.boundary = parse_boundary(boundary);
-             c.validity.min_samples = min_samples;
-             c.validity.min_hadamard = min_hadamard;
-             const algid::ConfigError e = Est::validate(c);
-             if (e != algid::ConfigError::kNone) throw py::value_error(algid::to_string(e));
-             return Est(c);
-           }),
-           py::arg("dt"), py::arg("boundary") = "fixed", py::arg("min_samples") = 16, py::arg("min_hadamard") = 1e-9)
-      .def_readonly_static("n", &Est::kDofs)
-      .def_readonly_static("delay_samples", &Est::kDelay)
-      .def(
-          "update",
-          [](Est& e, const Array& accel, const Array& force) {
-            if (accel.ndim() != 1 || accel.shape(0) != N || force.ndim() != 1 || force.shape(0) != N)
-              throw py::value_error("update() takes accel and force of shape (" + std::to_string(N) + ",)");
-            return static_cast<int>(e.update(accel.data(), force.data()));
-          },
-          py::arg("accel"), py::arg("force"))
-      .def("reseed", &Est::reseed)
-      .def_property_readonly("mass", [](const Est& e) { return Array(N, e.mass().data()); })
-      .def_property_readonly("damping", [](const Est& e) { return Array(N, e.damping().data()); })
-      .def_property_readonly("stiffness", [](const Est& e) { return Array(N + 1, e.stiffness().data()); })
-      .def_property_readonly("valid", [](const Est& e) { return e.valid(); })
-      .def_property_readonly("samples", &Est::samples)
-      .def_property_readonly("window", &Est::window)
-      .def("theta", [](const Est& e, int i) { return Array(4, e.theta(i).data()); }, py::arg("dof"))
-      .def("theta_instant", [](const Est& e, int i) { return Array(4, e.theta_instant(i).data()); }, py::arg("dof"))
-      .def("hadamard", &Est::hadamard, py::arg("dof"))
-      .def(
-          "run",
-          [](Est& e, const Array& accel, const Array& force, bool full) {
-            if (accel.ndim() != 2 || accel.shape(1) != N || force.ndim() != 2 || force.shape(1) != N ||
-                accel.shape(0) != force.shape(0))
-              throw py::value_error("run() takes accel and force of the same shape (T, " + std::to_string(N) + ")");
-            const py::ssize_t T = accel.shape(0);
-            py::array_t<std::int8_t> status(T);
-            Array mass({T, static_cast<py::ssize_t>(N)}), damping({T, static_cast<py::ssize_t>(N)});
-            Array stiffness({T, static_cast<py::ssize_t>(N + 1)});
-            py::array_t<bool> valid({T, static_cast<py::ssize_t>(N)});
-            const py::ssize_t Tf = full ? T : 0;
-            Array theta({Tf, static_cast<py::ssize_t>(N), py::ssize_t(4)});
-            Array theta_instant({Tf, static_cast<py::ssize_t>(N), py::ssize_t(4)});
-            Array hadamard({Tf, static_cast<py::ssize_t>(N)});
-            const double* a = accel.data();
-            const double* f = force.data();
-            auto* st = status.mutable_data();
-            double* pm = mass.mutable_data();
-            double* pc = damping.mutable_data();
-            double* pk = stiffness.mutable_data();
-            bool* pv = valid.mutable_data();
-            double* pt = theta.mutable_data();
-            double* pi = theta_instant.mutable_data();
-            double* ph = hadamard.mutable_data();
-            {
-              py::gil_scoped_release release;
-              for (py::ssize_t t = 0; t < T; ++t) {
-                st[t] = static_cast<std::int8_t>(e.update(a + t * N, f + t * N));
-                for (int i = 0; i < N; ++i) {
-                  pm[t * N + i] = e.mass()(i);
-                  pc[t * N + i] = e.damping()(i);
-                  pv[t * N + i] = e.valid()[static_cast<std::size_t>(i)];
-                }
-                for (int j = 0; j <= N; ++j) pk[t * (N + 1) + j] = e.stiffness()(j);
-                if (full) {
-                  for (int i = 0; i < N; ++i) {
-                    const auto th = e.theta(i);
-                    const auto ti = e.theta_instant(i);
-                    for (int j = 0; j < 4; ++j) {
-                      pt[(t * N + i) * 4 + j] = th(j);
-                      pi[(t * N + i) * 4 + j] = ti(j);
-                    }
-                    ph[t * N + i] = e.hadamard(i);
-                  }
-                }
-              }
-            }
-            py::dict out;
-            out["status"] = status;
-            out["mass"] = mass;
-            out["damping"] = damping;
-            out["stiffness"] = stiffness;
-            out["valid"] = valid;
-            if (full) {
-              out["theta"] = theta;
-              out["theta_instant"] = theta_instant;
-              out["hadamard"] = hadamard;
-            }
-            return out;
-          },
-          py::arg("accel"), py::arg("force"), py::arg("full") = false,
-          "Feed a whole record (T, n) in C++ with the GIL released; returns the estimate histories.");
-}
-
-template <int... Ns>
-void bind_all(py::module_& m, std::integer_sequence<int, Ns...>) {
-  (bind_chain<Ns>(m), ...);
-}
-
-}  // namespace
+void bind_chains_small(py::module_& m);
+void bind_chains_medium(py::module_& m);
+void bind_chains_large(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "algid C++ core: on-line algebraic estimators of mass-spring-damper chains";
-  bind_all(m, std::integer_sequence<int, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 16, 20, 32, 50, 64>{});
+  bind_chains_small(m);
+  bind_chains_medium(m);
+  bind_chains_large(m);
   m.attr("SIZES") = py::make_tuple(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 16, 20, 32, 50, 64);
   py::enum_<algid::Status>(m, "Status")
       .value("OK", algid::Status::kOk)
