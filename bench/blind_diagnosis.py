@@ -1,0 +1,443 @@
+"""Blind check of ``algid diagnose`` (issue 6) on simulated recordings with a hidden effect.
+
+For every seed: a random chain (n = 1..4, parameters from ``Chain.random``, right end
+free with probability 0.2 for n >= 2), broadband forcing on every DOF (independent
+random-phase multisines, flat 0.5-50 Hz, 10 N RMS), a hidden effect drawn at random
+(``none`` with probability 0.2, each of the 8 effects with 0.1) at a random location, a
+random size and a random accelerometer SNR of 40-60 dB. The recording (``t, u1..un,
+a1..an``, nothing else) goes to ``WORK/recordings/``, the label to ``WORK/labels/``; the
+diagnosis is run on the recording alone through the code path of ``algid diagnose``
+(``algid.diagnosis.cli.run``) and its JSON written to ``WORK/diagnoses/``; the scoring
+reads labels and diagnoses only.
+
+Effect sizes ("barely visible to strong"). The size is a strength ``s`` drawn
+log-uniformly between ``S_MIN_NOISE`` times the relative accelerometer noise of the case
+and ``S_MAX``; ``s`` is the RMS of the effect's force divided by the RMS inertial force
+``m_i a_i`` of the DOF it acts on (for a spring, the larger of its two DOF), computed on
+the linear steady-state response (exact, by the chain's transfer matrix at the multisine
+lines):
+
+* coulomb_friction: ``force = s F``; quadratic_damping: ``c2 = s F / rms(v|v|)``;
+  cubic_stiffness: ``k3 = +-s F / rms(d^3)``; clearance: ``gap = g rms(d)`` with ``g``
+  uniform in [0.3, 1.5] and ``stiffness`` such that the contact force has RMS ``s F``;
+  parameter_drift: ``rel_change = +-s F sqrt(3) / (k_j rms(d))`` (clipped to +-0.5);
+* input_delay: the delay at which ``rms(u_i(t) - u_i(t - delay)) = s F`` (at most 50 ms);
+* sensor_bias: ``bias = +-s rms(a_i)``;
+* sensor_lowpass: the cutoff at which ``rms(a - LP a) = s rms(a)`` (at most 0.45 fs).
+
+Scoring (issue 6): top-1 effect accuracy; location accuracy among correct effects;
+relative error of the main parameter (the first one listed for the effect) among
+correct effect and location; gap shrink ``gap_before / gap_after`` on cases with a real
+effect (a missed effect counts as 1); false alarms on ``none``; a confusion matrix
+(table and PNG). For n = 1 the two springs are one: a spring-2 label is scored as spring
+1 and a drift's ``rel_change`` is scaled to the identifiable sum ``k1 + k2``.
+
+Usage::
+
+    python bench/blind_diagnosis.py --seeds 0:150 --work /tmp/blind [--duration 10]
+        [--stage all|generate|diagnose|score] [--timing]
+
+Seeds are arguments; thresholds inside the diagnosis were set on a disjoint seed range
+(``--seeds 1000:1100``) before the reported run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "python"))
+
+from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.recording import Recording, load_recording, save_recording  # noqa: E402
+
+EFFECTS = ("coulomb_friction", "quadratic_damping", "cubic_stiffness", "clearance", "input_delay",
+           "sensor_bias", "sensor_lowpass", "parameter_drift")
+SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift")
+MAIN = {"coulomb_friction": "force", "quadratic_damping": "c2", "cubic_stiffness": "k3", "clearance": "gap",
+        "input_delay": "delay", "sensor_bias": "bias", "sensor_lowpass": "cutoff_hz",
+        "parameter_drift": "rel_change"}
+CLASSES = ("none",) + EFFECTS + ("unknown",)
+P_NONE = 0.2
+S_MIN_NOISE = 0.3
+S_MAX = 0.3
+F_BAND_HZ = (0.5, 50.0)
+FORCE_RMS_N = 10.0
+
+
+# ----------------------------------------------------------------------------- forcing
+
+
+def multisine(n: int, duration: float, fs: float, rng: np.random.Generator) -> np.ndarray:
+    """(T, n) independent random-phase multisines, flat on the lines of F_BAND_HZ with
+    period ``duration`` (so the linear steady state is exactly periodic)."""
+    T = int(round(duration * fs))
+    df = 1.0 / duration
+    k = np.arange(int(math.ceil(F_BAND_HZ[0] / df)), int(F_BAND_HZ[1] / df) + 1)
+    U = np.zeros((T // 2 + 1, n), dtype=complex)
+    U[k] = np.exp(2j * np.pi * rng.uniform(size=(k.size, n)))
+    u = np.fft.irfft(U, n=T, axis=0)
+    return u * (FORCE_RMS_N / u.std(axis=0))
+
+
+def linear_response(chain: Chain, u: np.ndarray, fs: float) -> dict[str, np.ndarray]:
+    """Periodic steady state x, v, a (T, n) of the linear chain under periodic u."""
+    T, n = u.shape
+    M, C, K = chain.matrices()
+    Uf = np.fft.rfft(u, axis=0)
+    w = 2 * np.pi * np.fft.rfftfreq(T, 1 / fs)
+    X = np.zeros_like(Uf)
+    for q in range(1, w.size):
+        if np.any(Uf[q] != 0):
+            X[q] = np.linalg.solve(K - w[q] ** 2 * M + 1j * w[q] * C, Uf[q])
+    x = np.fft.irfft(X, n=T, axis=0)
+    v = np.fft.irfft(1j * w[:, None] * X, n=T, axis=0)
+    a = np.fft.irfft(-(w[:, None] ** 2) * X, n=T, axis=0)
+    return {"x": x, "v": v, "a": a}
+
+
+def _rms(x) -> float:
+    return float(np.sqrt(np.mean(np.asarray(x) ** 2)))
+
+
+def _deformation(x: np.ndarray, j: int) -> np.ndarray:
+    n = x.shape[1]
+    right = x[:, j - 1] if j - 1 < n else 0.0
+    left = x[:, j - 2] if j - 2 >= 0 else 0.0
+    return right - left
+
+
+def _bisect(f, lo: float, hi: float, target: float, iters: int = 60) -> float:
+    """Solve increasing f(p) = target on [lo, hi] in log space."""
+    a, b = math.log(lo), math.log(hi)
+    if f(hi) < target:
+        return hi
+    for _ in range(iters):
+        mid = 0.5 * (a + b)
+        if f(math.exp(mid)) < target:
+            a = mid
+        else:
+            b = mid
+    return math.exp(0.5 * (a + b))
+
+
+def _lowpass(x: np.ndarray, fc: float, fs: float) -> np.ndarray:
+    """First-order low-pass in the frequency domain (steady state of a periodic signal)."""
+    f = np.fft.rfftfreq(x.size, 1 / fs)
+    return np.fft.irfft(np.fft.rfft(x) / (1 + 1j * f / fc), n=x.size)
+
+
+def _delayed(x: np.ndarray, d: float, fs: float) -> np.ndarray:
+    f = np.fft.rfftfreq(x.size, 1 / fs)
+    return np.fft.irfft(np.fft.rfft(x) * np.exp(-2j * np.pi * f * d), n=x.size)
+
+
+def draw_case(seed: int, duration: float, fs: float) -> dict:
+    """Everything about one case: chain, forcing, effect, SNR (deterministic in seed)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 5))
+    boundary = "free" if (n >= 2 and rng.uniform() < 0.2) else "fixed"
+    chain = Chain.random(n, rng, boundary)
+    u = multisine(n, duration, fs, rng)
+    snr_db = float(rng.uniform(40.0, 60.0))
+    resp = linear_response(chain, u, fs)
+    effect = "none" if rng.uniform() < P_NONE else EFFECTS[int(rng.integers(len(EFFECTS)))]
+    noise_rel = 10 ** (-snr_db / 20)
+    s = float(math.exp(rng.uniform(math.log(S_MIN_NOISE * noise_rel), math.log(S_MAX))))
+    label: dict = {"seed": seed, "n": n, "boundary": boundary, "snr_db": snr_db, "strength": s,
+                   "chain": {"mass": chain.mass.tolist(), "damping": chain.damping.tolist(),
+                             "stiffness": chain.stiffness.tolist()},
+                   "duration_s": duration, "fs_hz": fs}
+    if effect == "none":
+        label.update(effect="none", location=None, params={})
+        return {"chain": chain, "u": u, "label": label, "effects": []}
+    x, v, a = resp["x"], resp["v"], resp["a"]
+    inertial = [_rms(chain.mass[i] * a[:, i]) for i in range(n)]
+    if effect in SPRING_EFFECTS:
+        top = n + 1 if boundary == "fixed" else n
+        j = int(rng.integers(1, top + 1))
+        loc = {"spring": j}
+        d = _deformation(x, j)
+        F = max(inertial[i] for i in (j - 1, j - 2) if 0 <= i < n)
+        if effect == "cubic_stiffness":
+            params = {"k3": float(rng.choice([-1.0, 1.0]) * s * F / _rms(d**3))}
+            if params["k3"] < 0:  # a softening spring must stay stable: at most 30 % of k at 3 rms(d)
+                cap = 0.3 * chain.stiffness[j - 1] / (3 * _rms(d)) ** 2
+                params["k3"] = -min(-params["k3"], cap)
+        elif effect == "clearance":
+            gap = float(rng.uniform(0.3, 1.5) * _rms(d))
+            dz = np.sign(d) * np.maximum(np.abs(d) - gap, 0.0)
+            params = {"gap": gap, "stiffness": float(s * F / max(_rms(dz), 1e-300))}
+        else:
+            r = float(rng.choice([-1.0, 1.0]) * s * F * math.sqrt(3) / (chain.stiffness[j - 1] * _rms(d)))
+            params = {"rel_change": float(np.clip(r, -0.5, 0.5))}
+    else:
+        i = int(rng.integers(0, n))
+        loc = {"dof": i + 1}
+        F = inertial[i]
+        if effect == "coulomb_friction":
+            params = {"force": s * F}
+        elif effect == "quadratic_damping":
+            params = {"c2": s * F / _rms(v[:, i] * np.abs(v[:, i]))}
+        elif effect == "input_delay":
+            ui = u[:, i]
+            params = {"delay": _bisect(lambda dd: _rms(ui - _delayed(ui, dd, fs)), 1e-7, 0.05, s * F)}
+        elif effect == "sensor_bias":
+            params = {"bias": float(rng.choice([-1.0, 1.0]) * s * _rms(a[:, i]))}
+        else:  # sensor_lowpass: larger cutoff, smaller effect
+            ai = a[:, i]
+            fc = _bisect(lambda c: -_rms(ai - _lowpass(ai, c, fs)), 0.1, 0.45 * fs, -s * _rms(ai))
+            params = {"cutoff_hz": fc}
+    label.update(effect=effect, location=loc, params={k: float(v_) for k, v_ in params.items()})
+    return {"chain": chain, "u": u, "label": label, "effects": [{"name": effect, "location": loc, "params": params}]}
+
+
+# ----------------------------------------------------------------------------- stages
+
+
+def generate(seed: int, work: Path, duration: float, fs: float) -> Path:
+    """Simulate one case; write the recording and the label (skipped if both exist)."""
+    from algid.simulator import simulate
+
+    rec_path = work / "recordings" / f"case{seed:05d}.npz"
+    lab_path = work / "labels" / f"case{seed:05d}.json"
+    if rec_path.exists() and lab_path.exists():
+        return rec_path
+    case = draw_case(seed, duration, fs)
+    lab = case["label"]
+    res = simulate(case["chain"], case["u"], duration, fs, effects=case["effects"], noise_db=lab["snr_db"],
+                   noise_on=("accel",), seed=seed)
+    rec_path.parent.mkdir(parents=True, exist_ok=True)
+    lab_path.parent.mkdir(parents=True, exist_ok=True)
+    save_recording(rec_path, Recording(t=res.t, u=res.u, a=res.a))
+    lab_path.write_text(json.dumps(lab, indent=1))
+    return rec_path
+
+
+def diagnose_case(seed: int, work: Path, boundary: str, plots: bool = False) -> dict:
+    """Run the ``algid diagnose`` code path on one recording; return its JSON."""
+    import argparse as ap
+
+    from algid.diagnosis import cli
+
+    rec_path = work / "recordings" / f"case{seed:05d}.npz"
+    out = work / "diagnoses" / f"case{seed:05d}.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    parser = ap.ArgumentParser(prog="algid")
+    sub = parser.add_subparsers(dest="command")
+    cli.add_parser(sub)
+    argv = ["diagnose", str(rec_path), "--json", str(out), "--boundary", boundary, "--quiet"]
+    if plots:
+        argv += ["--plots", str(work / "plots" / f"case{seed:05d}")]
+    args = parser.parse_args(argv)
+    t0 = time.perf_counter()
+    code = args.func(args)
+    wall = time.perf_counter() - t0
+    if code != 0:
+        raise RuntimeError(f"algid diagnose exited with {code} on {rec_path}")
+    res = json.loads(out.read_text())
+    res["_wall_s"] = wall
+    return res
+
+
+def _loc_key(loc) -> str:
+    if not loc:
+        return "-"
+    (k, v), = loc.items()
+    return f"{k} {v}"
+
+
+def score_case(lab: dict, res: dict) -> dict:
+    """Per-case scores against the label (the n = 1 spring rule applied)."""
+    truth = lab["effect"]
+    loc_true = lab["location"]
+    params_true = dict(lab["params"])
+    if lab["n"] == 1 and loc_true and "spring" in loc_true:
+        j = loc_true["spring"]
+        if truth == "parameter_drift":
+            k = lab["chain"]["stiffness"]
+            params_true["rel_change"] *= k[j - 1] / (k[0] + k[1])
+        loc_true = {"spring": 1}
+    pred = res["effect"]
+    out = {"seed": lab["seed"], "truth": truth, "pred": pred, "n": lab["n"], "snr_db": lab["snr_db"],
+           "strength": lab["strength"], "loc_true": _loc_key(loc_true), "loc_pred": _loc_key(res["location"]),
+           "gap_before": res["gap_before"], "gap_after": res["gap_after"], "wall_s": res.get("_wall_s")}
+    out["effect_ok"] = pred == truth
+    out["loc_ok"] = bool(out["effect_ok"] and (truth == "none" or out["loc_true"] == out["loc_pred"]))
+    out["shrink"] = res["gap_before"] / res["gap_after"] if res["gap_after"] > 0 else float("inf")
+    if truth != "none" and out["loc_ok"]:
+        name = MAIN[truth]
+        est, tru = res["params"].get(name), params_true[name]
+        out["param_true"], out["param_est"] = tru, est
+        out["param_rel_err"] = abs(est - tru) / abs(tru) if est is not None and tru != 0 else float("inf")
+    return out
+
+
+def summarize(rows: list[dict]) -> dict:
+    real = [r for r in rows if r["truth"] != "none"]
+    none = [r for r in rows if r["truth"] == "none"]
+    correct = [r for r in real if r["effect_ok"]]
+    loc_ok = [r for r in correct if r["loc_ok"]]
+    perr = [r["param_rel_err"] for r in loc_ok if "param_rel_err" in r]
+    shrink = [r["shrink"] if r["effect_ok"] else 1.0 for r in real]
+    walls = [r["wall_s"] for r in rows if r.get("wall_s") is not None]
+    conf = {t: {p: 0 for p in CLASSES} for t in CLASSES[:-1]}
+    for r in rows:
+        conf[r["truth"]][r["pred"] if r["pred"] in CLASSES else "unknown"] += 1
+    per_effect = {}
+    for eff in CLASSES[:-1]:
+        rs = [r for r in rows if r["truth"] == eff]
+        if rs:
+            per_effect[eff] = {"cases": len(rs), "top1": float(np.mean([r["effect_ok"] for r in rs]))}
+            pe = [r["param_rel_err"] for r in rs if "param_rel_err" in r]
+            if pe:
+                per_effect[eff]["param_within_20pct"] = float(np.mean(np.array(pe) <= 0.2))
+                per_effect[eff]["param_rel_err_median"] = float(np.median(pe))
+    return {
+        "cases": len(rows),
+        "real_effect_cases": len(real),
+        "none_cases": len(none),
+        "top1_accuracy": float(np.mean([r["effect_ok"] for r in rows])),
+        "top1_accuracy_real_effects": float(np.mean([r["effect_ok"] for r in real])) if real else None,
+        "location_accuracy_among_correct": float(len(loc_ok) / len(correct)) if correct else None,
+        "param_within_20pct_among_correct": float(np.mean(np.array(perr) <= 0.2)) if perr else None,
+        "param_rel_err_median": float(np.median(perr)) if perr else None,
+        "median_gap_shrink_real": float(np.median(shrink)) if shrink else None,
+        "false_alarm_rate_none": float(np.mean([not r["effect_ok"] for r in none])) if none else None,
+        "wall_s_median": float(np.median(walls)) if walls else None,
+        "wall_s_max": float(np.max(walls)) if walls else None,
+        "confusion": conf,
+        "per_effect": per_effect,
+    }
+
+
+def confusion_table(conf: dict) -> str:
+    short = {"none": "none", "coulomb_friction": "coul", "quadratic_damping": "quad", "cubic_stiffness": "cubic",
+             "clearance": "clear", "input_delay": "delay", "sensor_bias": "bias", "sensor_lowpass": "lowp",
+             "parameter_drift": "drift", "unknown": "unkn"}
+    head = "true \\ pred        " + " ".join(f"{short[c]:>6s}" for c in CLASSES)
+    lines = [head]
+    for t, row in conf.items():
+        lines.append(f"{t:18s} " + " ".join(f"{row[c]:6d}" for c in CLASSES))
+    return "\n".join(lines)
+
+
+def confusion_png(conf: dict, path: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = list(conf)
+    M = np.array([[conf[t][p] for p in CLASSES] for t in rows], dtype=float)
+    frac = M / np.maximum(M.sum(axis=1, keepdims=True), 1)
+    fig, ax = plt.subplots(figsize=(8.0, 6.2), dpi=110)
+    ax.imshow(frac, cmap="Blues", vmin=0, vmax=1)
+    for r in range(M.shape[0]):
+        for c in range(M.shape[1]):
+            if M[r, c]:
+                ax.text(c, r, f"{int(M[r, c])}", ha="center", va="center",
+                        color="white" if frac[r, c] > 0.6 else "black", fontsize=9)
+    ax.set_xticks(range(len(CLASSES)), [c.replace("_", "\n") for c in CLASSES], fontsize=7)
+    ax.set_yticks(range(len(rows)), rows, fontsize=8)
+    ax.set_xlabel("diagnosed effect")
+    ax.set_ylabel("hidden effect")
+    ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def timing_check(repeats: int = 3) -> dict:
+    """Wall time of diagnosing a 20 s, 3-DOF, 1 kHz recording (Table 1, cubic spring 2)."""
+    from algid.diagnosis import diagnose
+    from algid.simulator import simulate
+
+    rng = np.random.default_rng(12345)
+    u = multisine(3, 20.0, 1000.0, rng)
+    res = simulate(TABLE1, u, 20.0, 1000.0, effects=[{"name": "cubic_stiffness", "location": {"spring": 2},
+                                                      "params": {"k3": 3e5}}], noise_db=50.0, seed=1)
+    rec = Recording(t=res.t, u=res.u, a=res.a)
+    walls = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        d = diagnose(rec)
+        walls.append(time.perf_counter() - t0)
+    return {"recording": "20 s, 3 DOF, 1 kHz (Table 1, cubic_stiffness k3 = 3e5 on spring 2, 50 dB)",
+            "wall_s": walls, "wall_s_median": float(np.median(walls)), "diagnosed": d.effect}
+
+
+def _parse_seeds(text: str) -> list[int]:
+    out: list[int] = []
+    for part in text.split(","):
+        if ":" in part:
+            a, b = part.split(":")
+            out += list(range(int(a), int(b)))
+        elif part:
+            out.append(int(part))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", default="0:150", help="seed list, e.g. 0:150 or 3,7,11:20")
+    ap.add_argument("--work", type=Path, default=Path("/tmp/algid-blind"), help="folder for recordings/labels/diagnoses")
+    ap.add_argument("--duration", type=float, default=10.0, help="record length [s]")
+    ap.add_argument("--fs", type=float, default=1000.0, help="sample rate [Hz]")
+    ap.add_argument("--stage", choices=("all", "generate", "diagnose", "score"), default="all")
+    ap.add_argument("--results", type=Path, default=ROOT / "bench" / "results" / "blind_diagnosis.json")
+    ap.add_argument("--timing", action="store_true", help="also time a 20 s 3-DOF 1 kHz diagnosis")
+    ap.add_argument("--plots", action="store_true", help="write the diagnosis figures of every case")
+    args = ap.parse_args(argv)
+    seeds = _parse_seeds(args.seeds)
+    work = args.work
+    if args.stage in ("all", "generate"):
+        for k, seed in enumerate(seeds):
+            t0 = time.perf_counter()
+            generate(seed, work, args.duration, args.fs)
+            print(f"[generate {k + 1}/{len(seeds)}] seed {seed} ({time.perf_counter() - t0:.1f} s)", file=sys.stderr,
+                  flush=True)
+    if args.stage in ("all", "diagnose"):
+        for k, seed in enumerate(seeds):
+            # The diagnosis is told the boundary, as a user would tell it; never the label.
+            lab = json.loads((work / "labels" / f"case{seed:05d}.json").read_text())
+            res = diagnose_case(seed, work, lab["boundary"], args.plots)
+            (work / "diagnoses" / f"case{seed:05d}.json").write_text(json.dumps(res, indent=1))
+            print(f"[diagnose {k + 1}/{len(seeds)}] seed {seed}: {res['effect']} ({res['_wall_s']:.1f} s)",
+                  file=sys.stderr, flush=True)
+    if args.stage in ("all", "score"):
+        rows = []
+        for seed in seeds:
+            lab = json.loads((work / "labels" / f"case{seed:05d}.json").read_text())
+            res = json.loads((work / "diagnoses" / f"case{seed:05d}.json").read_text())
+            rows.append(score_case(lab, res))
+        summary = summarize(rows)
+        out = {"seeds": args.seeds, "duration_s": args.duration, "fs_hz": args.fs, "summary": summary, "cases": rows}
+        if args.timing:
+            out["timing"] = timing_check()
+        table = confusion_table(summary["confusion"])
+        print(table)
+        for key in ("cases", "top1_accuracy", "location_accuracy_among_correct", "param_within_20pct_among_correct",
+                    "median_gap_shrink_real", "false_alarm_rate_none", "wall_s_median", "wall_s_max"):
+            print(f"{key:36s} {summary[key]}")
+        if args.timing:
+            print(f"{'timing 20 s 3-DOF 1 kHz [s]':36s} {out['timing']['wall_s_median']:.2f}")
+        args.results.parent.mkdir(parents=True, exist_ok=True)
+        args.results.write_text(json.dumps(out, indent=1))
+        png = args.results.with_suffix(".png")
+        confusion_png(summary["confusion"], png, f"blind diagnosis, seeds {args.seeds}: top-1 "
+                      f"{summary['top1_accuracy']:.0%} over {summary['cases']} cases")
+        print(f"wrote {args.results} and {png}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,390 @@
+"""Candidate unmodelled effects, each fitted as an augmentation of the windowed equations.
+
+The definitions are those of the simulator (the names are part of the interface). Spring
+``j`` joins DOF ``j-1`` and DOF ``j`` with deformation ``d_j = x_j - x_{j-1}`` (walls at
+``x_0 = x_{n+1} = 0``); a spring force ``f(d_j)`` enters the equation of DOF ``j`` with
+``+`` and that of DOF ``j-1`` with ``-``, like the linear ``k_j d_j``.
+
+| effect | location | what it adds / changes | parameters (first = main) |
+|---|---|---|---|
+| coulomb_friction | dof i | ``+ force * sign(v_i)`` in eq. i | force [N] |
+| quadratic_damping | dof i | ``+ c2 * v_i |v_i|`` in eq. i | c2 [N s^2/m^2] |
+| cubic_stiffness | spring j | ``f = k3 d^3`` | k3 [N/m^3] |
+| clearance | spring j | ``f = stiffness * sign(d) max(|d| - gap, 0)`` | gap [m], stiffness [N/m] |
+| input_delay | dof i | eq. i is driven by ``u_i(t - delay)`` | delay [s] |
+| sensor_bias | dof i | true acceleration is ``a_i - bias`` | bias [m/s^2] |
+| sensor_lowpass | dof i | measured ``a_i`` is the first-order low-pass of the true one | cutoff_hz [Hz] |
+| parameter_drift | spring j | ``k_j(t) = k_j (1 + rel_change (t - t_0) / duration)`` | rel_change [-] |
+
+How each enters the least-squares problem (everything else as in :mod:`.core`; the
+equations are in acceleration form, so an effect force ``g`` enters equation e as
+``-g / m_e`` with ``m_e`` from the linear fit, and its coefficient is the physical
+parameter):
+
+* linear in the effect parameter, from the reconstructed states ``x``, ``v``: Coulomb
+  (``sign(v)``), quadratic damping (``v|v|``), cubic spring (``d^3``), drift
+  (``(t - t_0)/duration * d``, coefficient ``k_j rel_change``);
+* one nonlinear parameter on a grid, linear coefficients solved at every grid value:
+  clearance (``gap``: quantiles of ``|d_j|``), input delay (``delay``: log grid, the force
+  shifted by cubic-spline interpolation), sensor low-pass (``cutoff``: log grid; equation
+  i is filtered by the same low-pass — ``m a + c v + k (x_i - LP x_other) = LP u`` holds
+  exactly for the measured ``a_i`` — and the true ``x_i = x_meas + v_meas / (2 pi fc)`` in
+  the neighbouring equations, so no measured signal is differentiated);
+* sensor bias: the true ``x_i`` is ``x_meas - bias t^2 / 2``, which leaves
+  ``-bias t^2/2 * (sum of the springs of eq. i)`` and ``+bias t^2/2 * k_j`` in the
+  neighbours (the rest is a per-window line, removed anyway); the stiffnesses are taken
+  from the linear fit, then from a second pass with the bias.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.signal import lfilter
+
+from .core import (
+    CVResult,
+    EqSpec,
+    Prepared,
+    base_design,
+    cross_validate,
+    cross_validate_grid,
+    jackknife_std,
+    param_names,
+    spring_columns,
+    springs,
+    to_physical,
+    window_stats,
+)
+from .linear import LinearFit
+
+EFFECTS = (
+    "coulomb_friction",
+    "quadratic_damping",
+    "cubic_stiffness",
+    "clearance",
+    "input_delay",
+    "sensor_bias",
+    "sensor_lowpass",
+    "parameter_drift",
+)
+
+#: Main parameter of every effect (the first of its parameters).
+MAIN_PARAM = {
+    "coulomb_friction": "force",
+    "quadratic_damping": "c2",
+    "cubic_stiffness": "k3",
+    "clearance": "gap",
+    "input_delay": "delay",
+    "sensor_bias": "bias",
+    "sensor_lowpass": "cutoff_hz",
+    "parameter_drift": "rel_change",
+}
+
+#: Longest input delay searched [samples]; the analysis skips at least this many samples.
+MAX_DELAY_SAMPLES = 100
+N_GRID = 24
+
+
+@dataclass
+class Context:
+    """What the candidates are fitted against: windows, linear fit and states."""
+
+    P: Prepared
+    lin: LinearFit
+    x: np.ndarray
+    v: np.ndarray
+
+    @property
+    def mass(self) -> np.ndarray:
+        return self.lin.mass
+
+
+@dataclass
+class CandidateFit:
+    """A fitted candidate: cross-validation result, parameters and their std."""
+
+    effect: str
+    location: dict | None
+    eqs: list[int]
+    cv: CVResult
+    params: dict[str, float]
+    params_std: dict[str, float]
+    thetas: list[np.ndarray]  # acceleration-form parameters of the candidate's equations
+    specs: list[EqSpec] = field(repr=False, default_factory=list)
+
+
+def coupled(P: Prepared, i: int) -> list[tuple[int, int]]:
+    """Equations (other than i) whose spring columns involve x_i: (equation, spring)."""
+    out = []
+    for e, cols in enumerate(spring_columns(P.n, P.boundary)):
+        for j, other in cols:
+            if other == i and e != i:
+                out.append((e, j))
+    return out
+
+
+def spring_sides(P: Prepared, j: int) -> list[tuple[int, float]]:
+    """(equation, sign) pairs where a force of spring j enters: DOF j (+), DOF j-1 (-)."""
+    n = P.n
+    if n == 1:
+        return [(0, 1.0)]
+    out = []
+    if j - 1 < n:
+        out.append((j - 1, 1.0))
+    if j - 2 >= 0:
+        out.append((j - 2, -1.0))
+    return out
+
+
+def deformation(P: Prepared, x: np.ndarray, j: int) -> np.ndarray:
+    """d_j = x_j - x_{j-1} (walls at 0); for n = 1, x_1 (both springs in parallel)."""
+    n = P.n
+    if n == 1:
+        return x[:, 0]
+    right = x[:, j - 1] if j - 1 < n else 0.0
+    left = x[:, j - 2] if j - 2 >= 0 else 0.0
+    return right - left
+
+
+def lowpass(x: np.ndarray, cutoff_hz: float, dt: float) -> np.ndarray:
+    """First-order low-pass ``y' = 2 pi fc (x - y)``, exact for inputs linear between
+    samples, started at ``y = x`` (columns along axis 0)."""
+    wc = 2 * np.pi * cutoff_hz
+    al = np.exp(-wc * dt)
+    g = (1 - al) / (wc * dt)
+    b = [1 - g, g - al]
+    x2 = x if x.ndim == 2 else x[:, None]
+    zi = (x2[0] * (1 - b[0]))[None, :]  # steady state for a constant input
+    y = lfilter(b, [1, -al], x2, axis=0, zi=zi)[0]
+    return y if x.ndim == 2 else y[:, 0]
+
+
+def _fit_linear_effect(ctx: Context, effect: str, location: dict, eq_cols: list[tuple[int, np.ndarray]],
+                       names: list[str], transform=None) -> CandidateFit:
+    P = ctx.P
+    specs = []
+    for e, col in eq_cols:
+        X = base_design(P, e, P.A1, P.A2)
+        specs.append(EqSpec(e=e, X=X, y=P.a[:, e], E=col[:, None], key=("base", e)))
+    cv = cross_validate(P, window_stats(P, specs))
+    thetas = [cv.theta[s] for s in cv.stats.slices]
+    gam = cv.theta[cv.stats.shared]
+    gam_f = cv.theta_folds[:, cv.stats.shared]
+    if transform is not None:
+        vals = transform(gam, [to_physical(P, s.e, th) for s, th in zip(specs, thetas)])
+        vals_f = np.array([transform(gam_f[k], [to_physical(P, s.e, cv.theta_folds[k][sl])
+                                                for s, sl in zip(specs, cv.stats.slices)])
+                           for k in range(gam_f.shape[0])])
+    else:
+        vals, vals_f = gam, gam_f
+    std = jackknife_std(vals_f)
+    return CandidateFit(effect=effect, location=location, eqs=[s.e for s in specs], cv=cv,
+                        params={nm: float(vals[k]) for k, nm in enumerate(names)},
+                        params_std={nm: float(std[k]) for k, nm in enumerate(names)},
+                        thetas=thetas, specs=specs)
+
+
+def fit_dof_force(ctx: Context, effect: str, i: int) -> CandidateFit:
+    """Coulomb friction or quadratic damping at DOF i (0-based)."""
+    v = ctx.v[:, i]
+    col = np.sign(v) if effect == "coulomb_friction" else v * np.abs(v)
+    name = MAIN_PARAM[effect]
+    return _fit_linear_effect(ctx, effect, {"dof": i + 1}, [(i, -col / ctx.mass[i])], [name])
+
+
+def spring_k(P: Prepared, thetas: list[np.ndarray], eqs: list[int], j: int) -> float:
+    """Mean stiffness of spring j over the equations that estimate it (physical thetas)."""
+    vals = []
+    for th, e in zip(thetas, eqs):
+        for (jj, _), k in zip(spring_columns(P.n, P.boundary)[e], th[2:]):
+            if jj == j:
+                vals.append(k)
+    return float(np.mean(vals)) if vals else float("nan")
+
+
+def fit_spring_linear(ctx: Context, effect: str, j: int) -> CandidateFit:
+    """Cubic stiffness or parameter drift on spring j (1-based)."""
+    P = ctx.P
+    d = deformation(P, ctx.x, j)
+    if effect == "cubic_stiffness":
+        f = d**3
+        transform = None
+    else:  # parameter_drift: coefficient k_j * rel_change
+        f = (P.t / P.duration) * d
+        sides = [e for e, _ in spring_sides(P, j)]
+
+        def transform(gam, thetas):
+            return np.atleast_1d(gam) / spring_k(P, thetas, sides, j)
+
+    cols = [(e, -s * f / ctx.mass[e]) for e, s in spring_sides(P, j)]
+    return _fit_linear_effect(ctx, effect, {"spring": j}, cols, [MAIN_PARAM[effect]], transform)
+
+
+def _fit_grid(ctx: Context, effect: str, location: dict, build, grid: np.ndarray, to_param,
+              names: list[str], shared_names: list[str]) -> CandidateFit:
+    """Grid search of one nonlinear parameter; ``build(g) -> specs``; ``to_param`` maps
+    the search coordinate to the reported parameter."""
+    P = ctx.P
+    stats = []
+    specs_all = []
+    for g in grid:
+        specs = build(g)
+        specs_all.append(specs)
+        stats.append(window_stats(P, specs))
+    cv = cross_validate_grid(P, stats, grid)
+    g = cv.extra["g"]
+    specs = build(g)  # refit at the refined value
+    cv_ref = cross_validate(P, window_stats(P, specs))
+    cv.theta = cv_ref.theta
+    cv.stats = cv_ref.stats
+    cv.fit_sse = cv_ref.fit_sse
+    thetas = [cv.theta[s] for s in cv.stats.slices]
+    params = {names[0]: float(to_param(g))}
+    stds = {names[0]: float(jackknife_std(np.array([to_param(x) for x in cv.extra["g_folds"]])[:, None])[0])}
+    if shared_names:
+        gam = cv.theta[cv.stats.shared]
+        gam_f = cv.theta_folds[:, cv.stats.shared]
+        sd = jackknife_std(gam_f)
+        for k, nm in enumerate(shared_names):
+            params[nm] = float(gam[k])
+            stds[nm] = float(sd[k])
+    return CandidateFit(effect=effect, location=location, eqs=[s.e for s in specs], cv=cv,
+                        params=params, params_std=stds, thetas=thetas, specs=specs)
+
+
+def fit_clearance(ctx: Context, j: int) -> CandidateFit:
+    """Symmetric clearance (dead zone of half-width ``gap``) on spring j."""
+    P = ctx.P
+    d = deformation(P, ctx.x, j)
+    ad = np.abs(d)
+    grid = np.quantile(ad, np.linspace(0.05, 0.95, N_GRID))
+    grid = np.unique(grid[grid > 0])
+    sides = spring_sides(P, j)
+    base = {e: base_design(P, e, P.A1, P.A2) for e, _ in sides}
+
+    def build(g):
+        f = np.sign(d) * np.maximum(ad - g, 0.0)
+        return [EqSpec(e=e, X=base[e], y=P.a[:, e], E=(-s * f / ctx.mass[e])[:, None], key=("base", e))
+                for e, s in sides]
+
+    return _fit_grid(ctx, "clearance", {"spring": j}, build, grid, lambda g: g, ["gap"], ["stiffness"])
+
+
+def fit_delay(ctx: Context, i: int) -> CandidateFit:
+    """Input delay at DOF i: the equation is driven by the force recorded ``delay`` earlier."""
+    P = ctx.P
+    tf = P.dt * np.arange(P.u_full.shape[0])
+    spline = CubicSpline(tf, P.u_full[:, i])
+    t = P.t
+    hi = min(MAX_DELAY_SAMPLES, P.skip) * P.dt
+    grid = np.log(np.geomspace(0.02 * P.dt, hi, N_GRID))
+
+    def build(lg):
+        return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2, u=spline(t - np.exp(lg))), y=P.a[:, i], E=None)]
+
+    return _fit_grid(ctx, "input_delay", {"dof": i + 1}, build, grid, np.exp, ["delay"], [])
+
+
+def fit_bias(ctx: Context, i: int) -> CandidateFit:
+    """Accelerometer bias at DOF i (two passes: the stiffness weights from the fit)."""
+    P = ctx.P
+    half_t2 = 0.5 * P.t**2
+    thetas = list(ctx.lin.theta)  # physical
+    fit = None
+    for _ in range(2):
+        # a_meas = ... + bias (sum_j k_j / m_i) t^2/2 in eq. i, - bias k_j / m_e t^2/2 in a
+        # neighbour e joined by spring j (constants and lines are per-window terms).
+        own = float(np.sum(thetas[i][2:])) / thetas[i][0]
+        cols = [(i, own * half_t2)]
+        for e, j in coupled(P, i):
+            kk = [k for (jj, _), k in zip(spring_columns(P.n, P.boundary)[e], thetas[e][2:]) if jj == j][0]
+            cols.append((e, -kk / thetas[e][0] * half_t2))
+        fit = _fit_linear_effect(ctx, "sensor_bias", {"dof": i + 1}, cols, ["bias"])
+        for e, th in zip(fit.eqs, fit.thetas):
+            thetas[e] = to_physical(P, e, th)
+    return fit
+
+
+def fit_lowpass(ctx: Context, i: int) -> CandidateFit:
+    """First-order accelerometer low-pass at DOF i."""
+    P = ctx.P
+    sl = P.sl
+    nyq = 0.5 / P.dt
+    # The filter must settle within the skipped lead-in: 3 time constants.
+    lo = max(3.0 / (2 * np.pi * max(P.skip, 1) * P.dt), 1e-3 * nyq)
+    grid = np.log(np.geomspace(lo, nyq, N_GRID))
+    others = coupled(P, i)
+    cols_i = spring_columns(P.n, P.boundary)[i]
+
+    def build(lg):
+        fc = np.exp(lg)
+        tc = 1.0 / (2 * np.pi * fc)
+        specs = []
+        cols = [lowpass(P.u_full[:, i], fc, P.dt)[sl]] if P.forced[i] else []
+        cols.append(-P.A1[:, i])
+        need = [o for _, o in cols_i if o >= 0]
+        filt = {o: lowpass(P.A2_full[:, o], fc, P.dt)[sl] for o in need}
+        for _, o in cols_i:
+            cols.append(-(P.A2[:, i] - (filt[o] if o >= 0 else 0.0)))
+        specs.append(EqSpec(e=i, X=np.stack(cols, axis=1), y=P.a[:, i], E=None))
+        x = P.A2.copy()
+        x[:, i] = P.A2[:, i] + tc * P.A1[:, i]
+        for e, _ in others:
+            specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, x), y=P.a[:, e], E=None))
+        return specs
+
+    return _fit_grid(ctx, "sensor_lowpass", {"dof": i + 1}, build, grid, np.exp, ["cutoff_hz"], [])
+
+
+def all_candidates(P: Prepared) -> list[tuple[str, int]]:
+    """Every (effect, location) pair to try: DOF effects at every DOF, spring effects on
+    every spring that exists and can be told apart."""
+    out = []
+    for eff in EFFECTS:
+        if eff in ("cubic_stiffness", "clearance", "parameter_drift"):
+            out += [(eff, j) for j in springs(P.n, P.boundary)]
+        elif eff == "input_delay":  # a force delay needs a force
+            out += [(eff, i) for i in range(P.n) if P.forced[i]]
+        else:
+            out += [(eff, i) for i in range(P.n)]
+    return out
+
+
+def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
+    """Fit one candidate; ``loc`` is a 0-based DOF or a 1-based spring."""
+    if effect in ("coulomb_friction", "quadratic_damping"):
+        return fit_dof_force(ctx, effect, loc)
+    if effect in ("cubic_stiffness", "parameter_drift"):
+        return fit_spring_linear(ctx, effect, loc)
+    if effect == "clearance":
+        return fit_clearance(ctx, loc)
+    if effect == "input_delay":
+        return fit_delay(ctx, loc)
+    if effect == "sensor_bias":
+        return fit_bias(ctx, loc)
+    if effect == "sensor_lowpass":
+        return fit_lowpass(ctx, loc)
+    raise ValueError(f"unknown effect {effect!r}")
+
+
+def raw_residual(ctx: Context, fit: CandidateFit) -> np.ndarray:
+    """Undetrended acceleration errors (N, n) of the linear model with the candidate's
+    equations replaced by the candidate's (for state reconstruction and plots)."""
+    P = ctx.P
+    out = np.stack([P.a[:, e] - base_design(P, e, P.A1, P.A2) @ th for e, th in enumerate(ctx.lin.theta_a)],
+                   axis=1)
+    q = fit.cv.stats.shared
+    gam = fit.cv.theta[q]
+    for s, th in zip(fit.specs, fit.thetas):
+        r = s.y - s.X @ th
+        if s.E is not None and s.E.shape[1]:
+            r = r - s.E @ gam
+        out[:, s.e] = r
+    return out
+
+
+def eq_names(P: Prepared, e: int) -> list[str]:
+    return param_names(P.n, P.boundary, e)

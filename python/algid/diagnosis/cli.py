@@ -1,0 +1,84 @@
+"""``algid diagnose RECORDING --json OUT [--plots DIR] [--boundary fixed|free]``.
+
+Registered by the top-level ``algid`` command through :func:`add_parser`. Progress goes to
+stderr, the report to stdout; bad input gives one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..recording import RecordingError, load_recording
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Register the ``diagnose`` subcommand on an ``argparse`` subparsers object."""
+    p = subparsers.add_parser(
+        "diagnose",
+        help="locate and explain the gap between a recording and the linear chain",
+        description="Fit the linear chain to a recording, locate where it fails (per DOF, time, "
+                    "frequency, amplitude), fit every candidate unmodelled effect at every location "
+                    "on training windows, score it on withheld windows and report the best one that "
+                    "shrinks the gap beyond noise.",
+    )
+    p.add_argument("recording", metavar="RECORDING", help="CSV or .npz with t, u1..un, a1..an (or x1..xn)")
+    p.add_argument("--json", required=True, metavar="OUT", help="where to write the JSON result")
+    p.add_argument("--plots", metavar="DIR", help="write the diagnosis figures (PNG) into DIR")
+    p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
+    p.add_argument("--quiet", action="store_true", help="no progress and no report on the terminal")
+    p.set_defaults(func=run)
+    return p
+
+
+def _err(msg: str) -> int:
+    print(f"algid diagnose: error: {' '.join(str(msg).split())}", file=sys.stderr)
+    return 2
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``algid diagnose``; returns the exit code (0 ok, 2 bad input)."""
+    from .engine import diagnose
+    from .report import to_json, to_text
+
+    quiet = bool(getattr(args, "quiet", False))
+
+    def progress(msg: str) -> None:
+        if not quiet:
+            print(f"\r\033[K[diagnose] {msg}", end="", file=sys.stderr, flush=True)
+
+    out = Path(args.json)
+    if out.exists() and out.is_dir():
+        return _err(f"--json {out}: is a directory")
+    if not out.parent.exists():
+        return _err(f"--json {out}: folder {out.parent} does not exist")
+    try:
+        rec = load_recording(args.recording)
+    except RecordingError as err:
+        return _err(err)
+    try:
+        d = diagnose(rec, boundary=args.boundary, progress=progress)
+    except ValueError as err:
+        if not quiet:
+            print(file=sys.stderr)
+        return _err(f"{Path(args.recording).name}: {err}")
+    if not quiet:
+        print("\r\033[K", end="", file=sys.stderr, flush=True)
+    try:
+        out.write_text(json.dumps(to_json(d), indent=1))
+    except OSError as err:
+        return _err(f"--json {out}: {err.strerror or err}")
+    if args.plots:
+        try:
+            from ..plotting.diagnosis import save_figures
+
+            files = save_figures(d, args.plots)
+        except OSError as err:
+            return _err(f"--plots {args.plots}: {err.strerror or err}")
+        if not quiet:
+            print(f"[diagnose] figures: {', '.join(str(f) for f in files)}", file=sys.stderr)
+    if not quiet:
+        print(to_text(d, source=str(args.recording)))
+    return 0

@@ -1,0 +1,140 @@
+"""The linear chain on windows: cross-validated fit, state reconstruction, per-window fits."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .core import (
+    CVResult,
+    EqSpec,
+    Prepared,
+    base_design,
+    cross_validate,
+    detrend,
+    param_names,
+    solve_gram,
+    spring_columns,
+    to_physical,
+    window_lines,
+    window_stats,
+)
+
+
+@dataclass
+class LinearFit:
+    """Linear chain fitted by windowed equation error.
+
+    Attributes
+    ----------
+    theta_a : list of (p_e,) acceleration-form parameters ``[1/m, c/m, k_j/m ...]``.
+    theta : list of physical ``[m, c, k_j ...]`` per DOF equation (per unit mass,
+        ``m = 1``, for an unforced DOF).
+    names : parameter names per equation (``m, c, k<j>``).
+    forced : (n,) which DOFs carry a force.
+    cv : cross-validated stacked fit (all equations, acceleration units).
+    x, v : (N, n) reconstructed displacements [m] and velocities [m/s].
+    resid : (N, n) in-sample detrended equation errors [m/s^2].
+    """
+
+    theta_a: list[np.ndarray]
+    theta: list[np.ndarray]
+    names: list[list[str]]
+    forced: np.ndarray
+    cv: CVResult
+    x: np.ndarray
+    v: np.ndarray
+    resid: np.ndarray
+
+    @property
+    def mass(self) -> np.ndarray:
+        """(n,) masses [kg] (1 for an unforced DOF: its parameters are per unit mass)."""
+        return np.array([th[0] for th in self.theta])
+
+    def damping(self) -> np.ndarray:
+        """(n,) dampings [N s/m]."""
+        return np.array([th[1] for th in self.theta])
+
+    def stiffness(self) -> np.ndarray:
+        """(n+1,) spring stiffnesses [N/m]; interior springs fused (mean of the two
+        equations); n = 1: the identified sum in k1, NaN in k2; free end: k_{n+1} = 0."""
+        n = len(self.theta)
+        vals: dict[int, list[float]] = {}
+        for th, nm in zip(self.theta, self.names):
+            for value, name in zip(th[2:], nm[2:]):
+                vals.setdefault(int(name[1:]), []).append(float(value))
+        out = np.full(n + 1, np.nan)
+        for j, vs in vals.items():
+            out[j - 1] = float(np.mean(vs))
+        if n > 1 and (n + 1) not in vals:
+            out[n] = 0.0
+        return out
+
+
+def linear_specs(P: Prepared) -> list[EqSpec]:
+    """One :class:`EqSpec` per DOF: the acceleration equation on the raw integrals."""
+    return [EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=P.a[:, e], E=None, key=("base", e))
+            for e in range(P.n)]
+
+
+def stiffness_rows(P: Prepared, theta_a: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Row-wise ``M^-1 K`` and ``M^-1 C`` (each row from its own equation)."""
+    n = P.n
+    K = np.zeros((n, n))
+    C = np.zeros((n, n))
+    for e, th in enumerate(theta_a):
+        off = 1 if P.forced[e] else 0
+        C[e, e] = th[off]
+        for (j, other), k in zip(spring_columns(n, P.boundary)[e], th[off + 1:]):
+            K[e, e] += k
+            if other >= 0:
+                K[e, other] -= k
+    return K, C
+
+
+def reconstruct_states(P: Prepared, theta_a: list[np.ndarray], raw_resid: np.ndarray,
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Velocities and displacements from the integrals and the per-window lines of the
+    raw equation errors.
+
+    On window w, ``v = A1 + p`` and ``x = A2 + q + p tau``; substituted in eq. 1 the
+    unknown constants leave ``-(C p + K q + K p tau)`` (row-scaled by ``M^-1``) in the raw
+    acceleration errors, so the line ``alpha + beta tau`` fitted to them gives
+    ``p = -K^-1 beta`` and ``q = -K^-1 (alpha + C p)``.
+    """
+    K, C = stiffness_rows(P, theta_a)
+    alpha, beta = window_lines(P, raw_resid)  # (nw, n)
+    try:
+        p = -np.linalg.solve(K, beta.T).T
+        q = -np.linalg.solve(K, (alpha + p @ C.T).T).T
+    except np.linalg.LinAlgError:
+        p = np.zeros_like(beta)
+        q = np.zeros_like(alpha)
+    v = P.windows(P.A1) + p[:, None, :]
+    x = P.windows(P.A2) + q[:, None, :] + p[:, None, :] * P.tau[None, :, None]
+    N = P.nw * P.L
+    return x.reshape(N, P.n), v.reshape(N, P.n)
+
+
+def fit_linear(P: Prepared) -> LinearFit:
+    """Cross-validated linear fit of every DOF equation and the reconstructed states."""
+    specs = linear_specs(P)
+    cv = cross_validate(P, window_stats(P, specs))
+    theta_a = [cv.theta[s] for s in cv.stats.slices]
+    raw = np.stack([s.y - s.X @ th for s, th in zip(specs, theta_a)], axis=1)
+    x, v = reconstruct_states(P, theta_a, raw)
+    return LinearFit(theta_a=theta_a, theta=[to_physical(P, e, th) for e, th in enumerate(theta_a)],
+                     names=[param_names(P.n, P.boundary, e) for e in range(P.n)], forced=P.forced.copy(),
+                     cv=cv, x=x, v=v, resid=detrend(P, raw).reshape(raw.shape))
+
+
+def per_window_fits(P: Prepared, fit: LinearFit) -> list[np.ndarray]:
+    """Physical linear parameters fitted on every window alone: list over DOF of (nw, p_e)."""
+    G = fit.cv.stats.per_eq  # (nw, n, P+1, P+1)
+    out = []
+    for k, sl in enumerate(fit.cv.stats.slices):
+        idx = np.r_[np.arange(sl.start, sl.stop), G.shape[-1] - 1]
+        th = solve_gram(G[:, k][:, idx[:, None], idx[None, :]])
+        out.append(np.array([to_physical(P, k, t) for t in th]))
+    return out

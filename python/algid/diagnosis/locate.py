@@ -1,0 +1,126 @@
+"""Where the linear model fails: per DOF equation, in time, in frequency, against amplitude.
+
+All indicators use the equation errors of the linear fit in acceleration units (see
+:mod:`.core` for the metric). They locate the gap; the decision between candidate effects
+is taken by cross-validation in :mod:`.engine`, not here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import welch
+
+from .candidates import deformation, spring_sides
+from .core import Prepared, springs
+from .linear import LinearFit, per_window_fits
+
+#: Quantile bins of the amplitude scatter (restoring-force / damping-force curves).
+N_BINS = 24
+
+
+def noise_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
+    """Per-DOF RMS [m/s^2] of the white part of the equation error, estimated from the
+    median power spectral density over the upper third of the band (above the forcing
+    and the modes in a well-sampled record) times the bandwidth."""
+    f, S = welch(resid, fs=1.0 / P.dt, nperseg=min(P.L, 1024), axis=0)
+    upper = f >= (2.0 / 3.0) * f[-1]
+    return np.sqrt(np.median(S[upper], axis=0) * f[-1])
+
+
+def binned_r2(z: np.ndarray, r: np.ndarray, bins: int = N_BINS) -> float:
+    """Share of the variance of ``r`` explained by a piecewise-constant function of ``z``
+    (quantile bins), minus the share a random function with as many bins explains by
+    chance (``bins / N``)."""
+    edges = np.quantile(z, np.linspace(0, 1, bins + 1))
+    idx = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, bins - 1)
+    cnt = np.bincount(idx, minlength=bins)
+    mean = np.bincount(idx, weights=r, minlength=bins) / np.maximum(cnt, 1)
+    tot = float(np.sum((r - r.mean()) ** 2))
+    if tot <= 0:
+        return 0.0
+    expl = float(np.sum(cnt * (mean - r.mean()) ** 2))
+    return max(expl / tot - bins / r.size, 0.0)
+
+
+def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray) -> dict:
+    """Location indicators (JSON-ready) of the linear model's gap."""
+    n = P.n
+    resid = lin.resid  # (N, n) acceleration units
+    a_rms = np.sqrt(np.mean(P.a**2, axis=0))
+    denom = float(np.sum(P.a**2))
+    eq_sse = lin.cv.test_sse_eq.sum(axis=0)  # withheld, acceleration units^2
+    floor = noise_floor(P, resid)
+    per_dof = []
+    for i in range(n):
+        per_dof.append({
+            "dof": i + 1,
+            "gap": float(np.sqrt(eq_sse[i] / (P.nw * P.L)) / a_rms[i]),
+            "share_of_gap": float(eq_sse[i] / eq_sse.sum()),
+            "noise_floor": float(floor[i] / a_rms[i]),
+        })
+    # Time: withheld gap per window.
+    a_w = (P.windows(P.a) ** 2).sum(axis=(1, 2))
+    gap_w = np.sqrt(lin.cv.test_sse / a_w)
+    t_mid = P.t[0] + P.dt * P.L * (np.arange(P.nw) + 0.5)
+    slope = np.polyfit(t_mid - t_mid.mean(), gap_w, 1)[0] if P.nw > 2 else 0.0
+    time_info = {
+        "window_s": P.L * P.dt,
+        "t_mid_s": t_mid.tolist(),
+        "gap_per_window": gap_w.tolist(),
+        "max_over_min": float(gap_w.max() / max(gap_w.min(), 1e-300)),
+        "relative_trend": float(slope * (t_mid[-1] - t_mid[0]) / max(gap_w.mean(), 1e-300)),
+    }
+    # Frequency: where the residual exceeds its white floor.
+    f, S = welch(resid, fs=1.0 / P.dt, nperseg=min(4 * P.L, 4096, P.nw * P.L), axis=0)
+    Ssum = S.sum(axis=1)
+    upper = f >= (2.0 / 3.0) * f[-1]
+    excess = np.clip(Ssum - np.median(Ssum[upper]), 0.0, None)
+    if excess.max() > 0:
+        k = int(np.argmax(excess))
+        half = np.nonzero(excess >= 0.5 * excess[k])[0]
+        c = np.cumsum(excess) / excess.sum()
+        band = [float(f[np.searchsorted(c, 0.1)]), float(f[min(np.searchsorted(c, 0.9), f.size - 1)])]
+        freq_info = {"peak_hz": float(f[k]), "half_power_hz": [float(f[half.min()]), float(f[half.max()])],
+                     "band_80pct_hz": band}
+    else:
+        freq_info = {"peak_hz": None, "half_power_hz": None, "band_80pct_hz": None}
+    freq_info["excess_share"] = float(excess.sum() / max(Ssum.sum(), 1e-300))
+    freq_info["natural_frequencies_hz"] = [float(x) for x in natural_hz]
+    # Amplitude: restoring-force curves per spring, damping-force curves per mass.
+    force_resid = resid * lin.mass[None, :]
+    amp_springs = []
+    for j in springs(n, P.boundary):
+        d = deformation(P, lin.x, j)
+        z = np.concatenate([d for _ in spring_sides(P, j)])
+        r = np.concatenate([s * force_resid[:, e] for e, s in spring_sides(P, j)])
+        amp_springs.append({"spring": j, "explained": binned_r2(z, r)})
+    amp_masses = []
+    for i in range(n):
+        amp_masses.append({"dof": i + 1, "explained": binned_r2(lin.v[:, i], force_resid[:, i])})
+    return {"per_dof": per_dof, "time": time_info, "frequency": freq_info,
+            "amplitude": {"springs": amp_springs, "masses": amp_masses}}
+
+
+def window_parameters(P: Prepared, lin: LinearFit) -> dict:
+    """Linear parameters fitted on every window alone (least squares) and, when the C++
+    estimator is available, the on-line estimator reseeded at every window start (its
+    eq. 7 estimate at the window end). Returns JSON-ready lists."""
+    fits = per_window_fits(P, lin)
+    t_mid = (P.t[0] + P.dt * P.L * (np.arange(P.nw) + 0.5)).tolist()
+    out = {"t_mid_s": t_mid, "least_squares": [
+        {"dof": e + 1, "names": lin.names[e], "values": fits[e].tolist()} for e in range(P.n)]}
+    try:
+        from ..estimator import SIZES, ChainEstimator
+    except ImportError:
+        return out
+    if P.n not in SIZES:
+        return out
+    rows = []
+    for w in range(P.nw):
+        sl = slice(w * P.L, (w + 1) * P.L)
+        est = ChainEstimator(P.n, P.dt, P.boundary)
+        res = est.run(P.a[sl], P.u[sl])
+        rows.append({"mass": res["mass"][-1].tolist(), "damping": res["damping"][-1].tolist(),
+                     "stiffness": res["stiffness"][-1].tolist()})
+    out["online"] = rows
+    return out

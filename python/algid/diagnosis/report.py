@@ -1,0 +1,138 @@
+"""JSON and terminal renderings of a :class:`~algid.diagnosis.engine.Diagnosis`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .candidates import MAIN_PARAM
+from .core import METRIC
+
+UNITS = {"force": "N", "c2": "N s^2/m^2", "k3": "N/m^3", "gap": "m", "stiffness": "N/m", "delay": "s",
+         "bias": "m/s^2", "cutoff_hz": "Hz", "rel_change": "-"}
+
+
+def _clean(x):
+    """JSON-safe floats (NaN/inf -> None)."""
+    if isinstance(x, dict):
+        return {k: _clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_clean(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        x = float(x)
+        return x if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+def to_json(d) -> dict:
+    """The issue-6 JSON: ``effect, location, params, gap_before, gap_after, metric,
+    ranking`` (each ranking entry ``effect, location, params, gap_after``), plus
+    ``params_std`` (1-sigma, delete-a-group jackknife over the folds), the significance of
+    every ranked candidate, the linear model, the location indicators and timings."""
+    ranking = []
+    for s in d.ranking:
+        ranking.append({"effect": s.fit.effect, "location": s.fit.location, "params": s.fit.params,
+                        "gap_after": s.gap_after, "params_std": s.fit.params_std,
+                        "t_stat": s.t_stat, "rel_reduction": s.rel_reduction, "significant": s.significant})
+    lin = d.lin
+    out = {
+        "effect": d.effect,
+        "location": d.location,
+        "params": d.params,
+        "gap_before": d.gap_before,
+        "gap_after": d.gap_after,
+        "metric": METRIC,
+        "ranking": ranking,
+        "params_std": d.params_std,
+        "main_param": MAIN_PARAM.get(d.effect),
+        "linear_model": {"n": d.P.n, "boundary": d.P.boundary, "mass": lin.mass.tolist(),
+                         "damping": lin.damping().tolist(), "stiffness": lin.stiffness().tolist(),
+                         "natural_frequencies_hz": d.extra.get("natural_hz", [])},
+        "analysis": {"windows": d.P.nw, "window_s": d.P.L * d.P.dt, "skipped_s": d.P.skip * d.P.dt,
+                     "folds": d.P.nfolds, "noise_floor": d.extra.get("noise_floor"),
+                     "explained_excess": d.extra.get("explained_excess")},
+        "where": d.where,
+        "timings_s": d.timings,
+    }
+    return _clean(out)
+
+
+def _fmt_params(params: dict, std: dict | None = None) -> str:
+    parts = []
+    for k, v in params.items():
+        s = f"{k} = {v:.4g}"
+        if std and std.get(k) is not None and np.isfinite(std[k]):
+            s += f" +- {std[k]:.2g}"
+        parts.append(s + f" {UNITS.get(k, '')}".rstrip())
+    return ", ".join(parts)
+
+
+def _fmt_loc(loc) -> str:
+    if not loc:
+        return ""
+    (k, v), = loc.items()
+    return f"{'DOF' if k == 'dof' else 'spring'} {v}"
+
+
+def to_text(d, source: str = "") -> str:
+    """Human-readable report for the terminal."""
+    P, lin = d.P, d.lin
+    L = []
+    L.append(f"algid diagnose{': ' + source if source else ''}")
+    L.append(f"  {P.n} DOF, {P.a_full.shape[0]} samples at {1 / P.dt:g} Hz ({P.duration:.3g} s), "
+             f"{P.boundary} right end; {P.nw} windows of {P.L * P.dt:.3g} s in {P.nfolds} folds")
+    L.append("")
+    L.append("Linear chain (windowed equation-error fit):")
+    L.append("  DOF   m [kg]      c [N s/m]   springs [N/m]")
+    for e in range(P.n):
+        th = lin.theta[e]
+        springs = "  ".join(f"{nm}={v:.4g}" for nm, v in zip(lin.names[e][2:], th[2:]))
+        L.append(f"  {e + 1:<4d}  {th[0]:<10.4g}  {th[1]:<10.4g}  {springs}")
+    nat = d.extra.get("natural_hz", [])
+    if nat:
+        L.append("  natural frequencies [Hz]: " + ", ".join(f"{f:.3g}" for f in nat))
+    L.append("")
+    shrink = d.gap_before / d.gap_after if d.gap_after > 0 else float("inf")
+    L.append(f"Gap (normalised RMS acceleration equation error on withheld windows):")
+    L.append(f"  linear model        {d.gap_before:.4g}")
+    nf = d.extra.get("noise_floor")
+    if nf is not None:
+        L.append(f"  sensor-noise floor  {nf:.4g}")
+    if d.effect in ("none", "unknown"):
+        L.append(f"  diagnosis: {d.effect.upper()}"
+                 + (" - the linear model explains the data within noise" if d.effect == "none"
+                    else " - the gap is real but no candidate effect explains it"))
+    else:
+        L.append(f"  with {d.effect} at {_fmt_loc(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)")
+        L.append(f"  fitted: {_fmt_params(d.params, d.params_std)}")
+    L.append("")
+    w = d.where
+    if w:
+        L.append("Where the linear model fails:")
+        L.append("  per DOF equation (withheld NRMS / noise floor): " + ", ".join(
+            f"{p['dof']}: {p['gap']:.3g}/{p['noise_floor']:.2g}" for p in w["per_dof"]))
+        ti = w["time"]
+        L.append(f"  in time: window gap max/min {ti['max_over_min']:.3g}, trend over the record "
+                 f"{ti['relative_trend']:+.0%}")
+        fr = w["frequency"]
+        if fr.get("peak_hz") is not None:
+            L.append(f"  in frequency: excess over the noise floor peaks at {fr['peak_hz']:.3g} Hz "
+                     f"(80 % of it in {fr['band_80pct_hz'][0]:.3g}-{fr['band_80pct_hz'][1]:.3g} Hz)")
+        am = w["amplitude"]
+        sp = max(am["springs"], key=lambda s: s["explained"])
+        ms = max(am["masses"], key=lambda s: s["explained"])
+        L.append(f"  against amplitude: deformation of spring {sp['spring']} explains {sp['explained']:.0%} of "
+                 f"the error, velocity of DOF {ms['dof']} {ms['explained']:.0%}")
+        L.append("")
+    L.append("Candidates (withheld gap; * = beyond noise):")
+    for s in d.ranking[:10]:
+        mark = "*" if s.significant else " "
+        L.append(f"  {mark} {s.fit.effect:<18s} {_fmt_loc(s.fit.location):<9s} {s.gap_after:.4g}  "
+                 f"t={s.t_stat:6.1f}  {_fmt_params(s.fit.params)}")
+    if len(d.ranking) > 10:
+        L.append(f"  ... {len(d.ranking) - 10} more in the JSON")
+    L.append(f"({d.timings.get('total', float('nan')):.2f} s)")
+    return "\n".join(L)

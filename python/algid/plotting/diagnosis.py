@@ -1,0 +1,252 @@
+"""Figures of ``algid diagnose`` (matplotlib, Agg backend; PNG files).
+
+Each figure answers one question a vibration engineer asks of the gap between the
+recording and the linear chain:
+
+* ``residuals_time.png`` — when: the equation error of every DOF over time, before and
+  after the reported effect, with its withheld RMS per window;
+* ``residuals_spectrum.png`` — at which frequencies: spectra of the measured acceleration
+  and of the equation errors against the white sensor-noise floor, natural frequencies
+  marked;
+* ``restoring_force.png`` — against deformation: for every spring, the force the linear
+  spring carries plus the unexplained force of the adjacent equations, against the
+  spring's deformation (a straight line when the spring is linear);
+* ``damping_force.png`` — against velocity: for every mass, damper force plus unexplained
+  force against its velocity (a straight line when damping is viscous);
+* ``window_parameters.png`` — drift: the linear parameters fitted on every window alone
+  (least squares, and the on-line estimator reseeded per window when available), relative
+  to the whole-record fit;
+* ``ranking.png`` — which: withheld gap of every candidate against the linear model and
+  the noise floor.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy.signal import welch  # noqa: E402
+
+from ..diagnosis.candidates import deformation, spring_sides  # noqa: E402
+from ..diagnosis.core import springs  # noqa: E402
+from ..diagnosis.locate import window_parameters  # noqa: E402
+
+DPI = 90
+C_BEFORE = "#c0392b"
+C_AFTER = "#2471a3"
+C_MEAS = "#999999"
+
+
+def _subsample(N: int, max_points: int = 6000, seed: int = 0) -> np.ndarray:
+    if N <= max_points:
+        return np.arange(N)
+    return np.sort(np.random.default_rng(seed).choice(N, max_points, replace=False))
+
+
+def _label(d) -> str:
+    if d.best is None:
+        return d.effect
+    (k, v), = d.location.items()
+    return f"with {d.effect} ({'DOF' if k == 'dof' else 'spring'} {v})"
+
+
+def fig_residuals_time(d):
+    P = d.P
+    before, after = d.residuals()
+    n = P.n
+    fig, axes = plt.subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
+    t = P.t
+    tw = P.t[0] + P.dt * P.L * (np.arange(P.nw) + 0.5)
+    for i, ax in enumerate(axes[:, 0]):
+        ax.plot(t, before[:, i], color=C_BEFORE, lw=0.4, alpha=0.8, label="linear model")
+        if d.best is not None:
+            ax.plot(t, after[:, i], color=C_AFTER, lw=0.4, alpha=0.8, label=_label(d))
+        rms_w = np.sqrt((P.windows(before[:, i]) ** 2).mean(axis=1))
+        ax.step(tw, rms_w, where="mid", color="k", lw=1.0, label="RMS per window (linear)")
+        ax.set_ylabel(f"DOF {i + 1}\n[m/s$^2$]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(loc="upper right", fontsize=7, ncol=3)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(f"Acceleration equation error over time (gap {d.gap_before:.3g} -> {d.gap_after:.3g})", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def fig_residuals_spectrum(d):
+    P = d.P
+    before, after = d.residuals()
+    fs = 1.0 / P.dt
+    nper = min(4 * P.L, 4096, P.a.shape[0])
+    f, Sa = welch(P.a, fs=fs, nperseg=nper, axis=0)
+    _, Sb = welch(before, fs=fs, nperseg=nper, axis=0)
+    _, Sf = welch(after, fs=fs, nperseg=nper, axis=0)
+    n = P.n
+    fig, axes = plt.subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
+    for i, ax in enumerate(axes[:, 0]):
+        ax.loglog(f[1:], Sa[1:, i], color=C_MEAS, lw=0.8, label="measured acceleration")
+        ax.loglog(f[1:], Sb[1:, i], color=C_BEFORE, lw=0.8, label="error, linear model")
+        if d.best is not None:
+            ax.loglog(f[1:], Sf[1:, i], color=C_AFTER, lw=0.8, label="error, " + _label(d))
+        floor = d.where["per_dof"][i]["noise_floor"] * np.sqrt(np.mean(P.a[:, i] ** 2))
+        ax.axhline(floor**2 / (fs / 2), color="k", ls="--", lw=0.8, label="sensor-noise floor")
+        for fn in d.extra.get("natural_hz", []):
+            ax.axvline(fn, color="k", ls=":", lw=0.6)
+        ax.set_ylabel(f"DOF {i + 1}\n[(m/s$^2$)$^2$/Hz]")
+        ax.grid(alpha=0.3, which="both")
+    axes[0, 0].legend(loc="lower left", fontsize=7, ncol=2)
+    axes[-1, 0].set_xlabel("frequency [Hz]  (dotted: natural frequencies of the fitted chain)")
+    fig.suptitle("Spectrum of the equation error", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _binned(z, r, bins=30):
+    edges = np.quantile(z, np.linspace(0, 1, bins + 1))
+    idx = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, bins - 1)
+    cnt = np.maximum(np.bincount(idx, minlength=bins), 1)
+    return np.bincount(idx, weights=z, minlength=bins) / cnt, np.bincount(idx, weights=r, minlength=bins) / cnt
+
+
+def fig_restoring_force(d):
+    P, lin = d.P, d.lin
+    force_resid = lin.resid * lin.mass[None, :]
+    js = springs(P.n, P.boundary)
+    expl = {s["spring"]: s["explained"] for s in d.where["amplitude"]["springs"]}
+    cols = min(len(js), 3)
+    rows = int(np.ceil(len(js) / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 2.9 * rows + 0.5), squeeze=False)
+    idx = _subsample(P.a.shape[0])
+    kfit = lin.stiffness()
+    for ax, j in zip(axes.ravel(), js):
+        dj = deformation(P, lin.x, j)
+        k = kfit[0] if P.n == 1 else kfit[j - 1]
+        # Unexplained force attributed to the spring: + in eq. j, - in eq. j-1 (mean of sides).
+        sides = spring_sides(P, j)
+        r = np.mean([s * force_resid[:, e] for e, s in sides], axis=0)
+        F = k * dj + r
+        ax.plot(dj[idx] * 1e3, F[idx], ".", ms=1.2, color=C_MEAS, alpha=0.5)
+        zb, fb = _binned(dj, F)
+        ax.plot(zb * 1e3, fb, "-", color=C_BEFORE, lw=1.5, label="binned mean")
+        zz = np.linspace(dj.min(), dj.max(), 2)
+        ax.plot(zz * 1e3, k * zz, "k--", lw=0.8, label=f"linear k = {k:.4g} N/m")
+        ax.set_title(f"spring {j}" + (" (k1+k2)" if P.n == 1 else "") + f": explains {expl.get(j, 0):.0%}",
+                     fontsize=9)
+        ax.set_xlabel("deformation [mm]")
+        ax.set_ylabel("restoring force [N]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
+    for ax in axes.ravel()[len(js):]:
+        ax.axis("off")
+    fig.suptitle("Restoring force per spring (linear spring force + unexplained force)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def fig_damping_force(d):
+    P, lin = d.P, d.lin
+    force_resid = lin.resid * lin.mass[None, :]
+    n = P.n
+    expl = {s["dof"]: s["explained"] for s in d.where["amplitude"]["masses"]}
+    cols = min(n, 3)
+    rows = int(np.ceil(n / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 2.9 * rows + 0.5), squeeze=False)
+    idx = _subsample(P.a.shape[0])
+    c = lin.damping()
+    for i, ax in zip(range(n), axes.ravel()):
+        v = lin.v[:, i]
+        F = c[i] * v + force_resid[:, i]
+        ax.plot(v[idx], F[idx], ".", ms=1.2, color=C_MEAS, alpha=0.5)
+        zb, fb = _binned(v, F)
+        ax.plot(zb, fb, "-", color=C_BEFORE, lw=1.5, label="binned mean")
+        zz = np.linspace(v.min(), v.max(), 2)
+        ax.plot(zz, c[i] * zz, "k--", lw=0.8, label=f"linear c = {c[i]:.3g} N s/m")
+        ax.set_title(f"DOF {i + 1}: explains {expl.get(i + 1, 0):.0%}", fontsize=9)
+        ax.set_xlabel("velocity [m/s]")
+        ax.set_ylabel("damping force [N]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    fig.suptitle("Damping force per mass (viscous damper force + unexplained force)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def fig_window_parameters(d):
+    P, lin = d.P, d.lin
+    wp = window_parameters(P, lin)
+    t = np.array(wp["t_mid_s"])
+    n = P.n
+    fig, axes = plt.subplots(n, 1, figsize=(9, 1.8 * n + 0.9), sharex=True, squeeze=False)
+    for e, ax in enumerate(axes[:, 0]):
+        vals = np.array(wp["least_squares"][e]["values"])
+        names = wp["least_squares"][e]["names"]
+        ref = lin.theta[e]
+        for k, nm in enumerate(names):
+            ax.plot(t, vals[:, k] / ref[k], "o-", ms=3, lw=1, label=f"{nm} ({ref[k]:.4g})")
+        if "online" in wp:
+            on = wp["online"]
+            m = np.array([r["mass"][e] for r in on])
+            ax.plot(t, m / ref[0], "x", color="k", ms=5, label="m, on-line estimator")
+        ax.axhline(1.0, color="k", lw=0.6)
+        ax.set_ylabel(f"DOF {e + 1}\nrelative")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, ncol=5, loc="upper left")
+        lo, hi = np.nanpercentile(vals / ref, [2, 98])
+        ax.set_ylim(min(lo, 0.9) - 0.02, max(hi, 1.1) + 0.02)
+    axes[-1, 0].set_xlabel("window centre [s]")
+    fig.suptitle("Linear parameters fitted per window / whole-record fit", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def fig_ranking(d, top: int = 12):
+    rk = d.ranking[:top]
+    fig, ax = plt.subplots(figsize=(8, 0.32 * len(rk) + 1.4))
+    labels = []
+    for s in rk:
+        (k, v), = s.fit.location.items()
+        labels.append(f"{s.fit.effect} {'DOF' if k == 'dof' else 'spring'} {v}")
+    y = np.arange(len(rk))[::-1]
+    ax.barh(y, [s.gap_after for s in rk], color=[C_AFTER if s.significant else C_MEAS for s in rk])
+    ax.axvline(d.gap_before, color=C_BEFORE, lw=1.5, label=f"linear model {d.gap_before:.3g}")
+    nf = d.extra.get("noise_floor")
+    if nf:
+        ax.axvline(nf, color="k", ls="--", lw=1, label=f"sensor-noise floor {nf:.3g}")
+    ax.set_yticks(y, labels, fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xlabel("withheld gap (NRMS acceleration equation error); blue = beyond noise")
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title(f"Candidates ranked - diagnosis: {d.effect}", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+FIGURES = {
+    "residuals_time.png": fig_residuals_time,
+    "residuals_spectrum.png": fig_residuals_spectrum,
+    "restoring_force.png": fig_restoring_force,
+    "damping_force.png": fig_damping_force,
+    "window_parameters.png": fig_window_parameters,
+    "ranking.png": fig_ranking,
+}
+
+
+def save_figures(d, folder, which: tuple[str, ...] | None = None) -> list[Path]:
+    """Write the diagnosis figures of ``d`` into ``folder`` (created); returns the paths."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for name, make in FIGURES.items():
+        if which is not None and name not in which:
+            continue
+        fig = make(d)
+        path = folder / name
+        fig.savefig(path, dpi=DPI)
+        plt.close(fig)
+        out.append(path)
+    return out
