@@ -57,3 +57,24 @@ def test_cpp_binary(cpp_build: Path, name: str) -> None:
     summary = re.search(r"(\d+) passed, (\d+) failed", proc.stdout)
     assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-2000:]
     assert summary is not None and int(summary.group(2)) == 0 and int(summary.group(1)) > 0
+
+
+def test_installed_package_is_found_by_cmake(cpp_build: Path, tmp_path: Path) -> None:
+    """`cmake --install` then a downstream project with find_package(algid) builds and runs."""
+    cmake = shutil.which("cmake")
+    prefix = tmp_path / "prefix"
+    steps = [[cmake, "--install", str(cpp_build), "--prefix", str(prefix)]]
+    eigen_prefix = subprocess.run([sys.executable, "-m", "cmeel", "cmake"], capture_output=True, text=True)
+    search = [str(prefix)] + ([eigen_prefix.stdout.strip()] if eigen_prefix.returncode == 0 else [])
+    consumer = tmp_path / "consumer-build"
+    steps.append([cmake, "-S", str(REPO / "tests" / "cpp" / "consumer"), "-B", str(consumer),
+                  f"-DCMAKE_PREFIX_PATH={';'.join(search)}", "-DCMAKE_BUILD_TYPE=Release"])
+    steps.append([cmake, "--build", str(consumer)])
+    for step in steps:
+        proc = subprocess.run(step, capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert (prefix / "include" / "algid" / "algid.hpp").exists()
+    exe = next(p for p in consumer.rglob("consumer") if p.is_file())
+    proc = subprocess.run([str(exe)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout
+    assert "1 passed, 0 failed" in proc.stdout
