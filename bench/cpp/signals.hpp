@@ -33,7 +33,7 @@ void set_table1(algid_test::SineChain<N>& chain) {
 }
 
 template <int N, class Scalar>
-Signals<Scalar> make_signals(int samples, unsigned seed = 7) {
+Signals<Scalar> make_signals(int samples, unsigned seed = 7, double dt = kDt) {
   algid_test::SineChain<N> chain(seed);
   set_table1(chain);
   Signals<Scalar> s;
@@ -43,7 +43,7 @@ Signals<Scalar> make_signals(int samples, unsigned seed = 7) {
   s.force.resize(static_cast<std::size_t>(samples) * N);
   s.phi.resize(static_cast<std::size_t>(samples) * N * 4);
   for (int k = 0; k < samples; ++k) {
-    const double t = k * kDt;
+    const double t = k * dt;
     for (int i = 0; i < N; ++i) {
       const std::size_t at = static_cast<std::size_t>(k) * N + static_cast<std::size_t>(i);
       s.accel[at] = static_cast<Scalar>(chain.accel(i, t));
