@@ -16,7 +16,10 @@ estimates sit *inside* the integrals, ``int_0^t k_i(s) (x_i - x_{i-1})(s) ds``: 
 the paper's form for constant estimates, but when the estimates move, the paper's product
 ``k_i(t) int_0^t (x_i - x_{i-1})`` makes the velocity estimate jump by
 ``Delta k_i int_0^t (x_i - x_{i-1}) / m_i`` at every update, an error that grows with the
-length of the record. On Table 1 in continuous mode with the estimates updated every
+length of the record. The first substitution of a DOF's estimates (at ``switch_time_s``,
+or later if they are accepted later) still re-bases the integral as the product form
+does (``int K x <- int K x + (K_new - K_old) int x``), so the first estimates model the
+whole past instead of the nominal stiffness-free model. On Table 1 in continuous mode with the estimates updated every
 sample, the peak tracking error after 1 s is 0.08 % of the stroke with the integrated form
 and 9.5 % with the product form (``eq10="product"``, kept for comparison).
 
@@ -30,9 +33,20 @@ Table 1 mode (5.8 Hz = 36 rad/s) is slow, yet far below the 1 kHz sample rate.
 As in the paper, until ``switch_time_s`` (0.1 s) the law uses ``m_i = 1 kg`` and zero
 damping and stiffness; from then on it uses the estimator's current eq. 7 estimates. The
 estimates used on ``[t_k, t_{k+1})`` come from samples up to ``k - 1`` (one sample of
-computation latency). An estimate that is not valid (not finite, or a non-positive mass)
-is not used: the last valid value of that parameter is kept, or the nominal one if there
-was none yet.
+computation latency).
+
+**Which estimates are taken.** Early in a record, and under noise, eq. 7 can return
+estimates the estimator flags valid but that are far off (with 40 dB of accelerometer
+noise the first 0.1 s of the paper's references carry almost no signal). Substituting
+them can destabilise the loop, so by default (``accept="settled"``) the four estimates
+of DOF ``i`` are taken only when they are finite and physically admissible (``m > 0``,
+``c >= 0``, ``k >= 0``) and have changed by less than ``settle_tol`` (2 %) over the last
+``settle_window_s`` (20 ms; for the damping the change is measured against at least 1 %
+of the critical damping); the first substitution waits until all DOFs pass together.
+Otherwise the last accepted values of that DOF stay in use, or
+the nominal ones if none was accepted yet. Noise-free, the estimates settle well within
+the first 0.1 s, so the rule changes nothing there; ``accept="valid"`` takes every valid
+estimate with a positive mass.
 
 References (:class:`BezierReference`): Bezier rest-to-rest polynomials
 ``psi(tau) = tau^5 (252 - 1050 tau + 1800 tau^2 - 1575 tau^3 + 700 tau^4 - 126 tau^5)``
@@ -207,6 +221,18 @@ class TrackingController:
     eq10 : {"integrated", "product"}
         Stiffness estimates inside the integrals of eq. 10 (default) or multiplying them
         (the paper's literal form); see the module docstring.
+    accept : {"settled", "valid"}
+        Which estimates of a DOF the law takes (see the module docstring): ``"settled"``
+        (default) needs them physically admissible and steady within ``settle_tol`` over
+        the last ``settle_window_s``; ``"valid"`` takes every finite estimate the estimator
+        flags valid with a positive mass.
+    settle_window_s : float
+        Window [s] of the steadiness test.
+    settle_tol : float
+        Largest relative change [-] over that window.
+    hold : bool
+        Keep the first accepted estimates for the rest of the run (the estimator keeps
+        running and is logged); default False, the law follows the estimates.
 
     Notes
     -----
@@ -219,7 +245,16 @@ class TrackingController:
                  poles: Sequence[complex] = DEFAULT_POLES, switch_time_s: float = 0.1,
                  nominal_mass_kg: float = 1.0,
                  estimator_factory: Optional[Callable[[int, float, str], Any]] = None,
-                 use_estimates: bool = True, eq10: str = "integrated") -> None:
+                 use_estimates: bool = True, eq10: str = "integrated", accept: str = "settled",
+                 settle_window_s: float = 0.02, settle_tol: float = 0.02, hold: bool = False) -> None:
+        if accept not in ("settled", "valid"):
+            raise ValueError(f"accept must be 'settled' or 'valid', got {accept!r}")
+        if not (settle_window_s > 0 and settle_tol > 0):
+            raise ValueError("settle_window_s and settle_tol must be > 0")
+        self.accept = accept
+        self.hold = bool(hold)
+        self.settle_window_s = float(settle_window_s)
+        self.settle_tol = float(settle_tol)
         if eq10 not in ("integrated", "product"):
             raise ValueError(f"eq10 must be 'integrated' or 'product', got {eq10!r}")
         self.eq10 = eq10
@@ -254,15 +289,30 @@ class TrackingController:
         self._good_m = np.full(n, self.nominal_mass_kg)
         self._good_c = np.zeros(n)
         self._good_k = np.zeros(n + 1)
+        self._win = max(2, int(round(self.settle_window_s / self.dt)))
+        self._hist_m = np.zeros((self._win, n))
+        self._hist_c = np.zeros((self._win, n))
+        self._hist_k = np.zeros((self._win, n + 1))
+        self._hist_n = 0
+        self._first_accept = None
+        self._k_right_absent = np.zeros(n, bool)
+        self._k_right_absent[-1] = (boundary == "free") or n == 1
         self._nominal = self._pack(np.full(n, self.nominal_mass_kg), np.zeros(n), np.zeros(n + 1))
         self._current = self._nominal
         self._dirty = True
-        # discrete integrals of sampled mode (X: int x, or int K x for eq10="integrated")
-        self._X = np.zeros(n)
+        # discrete integrals of sampled mode: int (x - x*), int x, int K x, int u
         self._E = np.zeros(n)
+        self._X = np.zeros(n)
+        self._S = np.zeros(n)
         self._U = np.zeros(n)
         self._x_prev = np.zeros(n)
         self._kx_prev = np.zeros(n)
+        # eq10="integrated": K int x = S + R, R re-based at first substitutions
+        self._R = np.zeros(n)
+        self._accepted = np.zeros(n, bool)
+        self._used_accepted = np.zeros(n, bool)
+        self._p_prev = self._nominal
+        self._p_k = self._nominal
         self._e_prev = np.zeros(n)
         self._u_prev = np.zeros(n)
         self._log = {
@@ -288,17 +338,32 @@ class TrackingController:
         """``beta_0`` [1/s^3], ``beta_1`` [1/s^2], ``beta_2`` [1/s] of eq. 9."""
         return {"beta0": self.beta0, "beta1": self.beta1, "beta2": self.beta2}
 
+    @property
+    def n_states(self) -> int:
+        """Continuous-mode controller states ``z = [int (x - x*), int x, int K x, int u]``."""
+        return 4 * self.n
+
     # ---- parameters in use ------------------------------------------------------------
-    def params_for_sample(self, k: int) -> tuple:
+    def params_for_sample(self, k: int, z: Optional[np.ndarray] = None) -> tuple:
         """Parameters ``(m (n,), c (n,), K (n, n), k (n+1,))`` the law uses on
-        ``[t_k, t_{k+1})``; logged as ``used_*``."""
+        ``[t_k, t_{k+1})`` (``z``: the continuous-mode controller states at ``t_k``);
+        logged as ``used_*``."""
         if k < self.k_switch or not self.use_estimates:
             p = self._nominal
+            used_acc = np.zeros(self.n, bool)
         else:
             if self._dirty:
                 self._current = self._pack(self._good_m, self._good_c, self._good_k)
                 self._dirty = False
             p = self._current
+            used_acc = self._accepted.copy()
+        if self.eq10 == "integrated" and np.any(used_acc & ~self._used_accepted):
+            # a first substitution: the new stiffnesses model the whole past (as in the
+            # paper's product form); later changes enter the integral as they come
+            X = z[self.n:2 * self.n] if z is not None else self._X
+            self._R = self._R + (p[2] - self._p_prev[2]) @ X
+        self._used_accepted |= used_acc
+        self._p_prev = p
         if k < self._T:
             self._log["used_mass"][k] = p[0]
             self._log["used_damping"][k] = p[1]
@@ -307,13 +372,13 @@ class TrackingController:
         return p
 
     # ---- the law ------------------------------------------------------------------------
-    def _law(self, t: float, x: np.ndarray, E: np.ndarray, X: np.ndarray, U: np.ndarray,
-             p: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Eqs. 8-10; ``X`` is ``int K x`` (integrated form) or ``int x`` (product form)."""
+    def _law(self, t: float, x: np.ndarray, E: np.ndarray, X: np.ndarray, S: np.ndarray,
+             U: np.ndarray, p: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Eqs. 8-10 with ``X = int x`` and ``S = int K x`` (the integrated form's)."""
         m, c, K, _ = p
         xs, xsd, xsdd = self.reference.evaluate(t)
         # eq. 10: K int x = k_i int(x_i - x_{i-1}) + k_{i+1} int(x_i - x_{i+1})
-        KX = X if self.eq10 == "integrated" else K @ X
+        KX = S + self._R if self.eq10 == "integrated" else K @ X
         xd = (U - c * x - KX) / m
         v = xsdd - self.beta2 * (xd - xsd) - self.beta1 * (x - xs) - self.beta0 * E  # eq. 9
         u = m * v + c * xd + K @ x  # eq. 8
@@ -321,23 +386,25 @@ class TrackingController:
 
     def continuous(self, t: float, x: np.ndarray, z: np.ndarray, p: tuple) -> tuple[np.ndarray, np.ndarray]:
         """Continuous-time law: force [N] and the derivative of the controller states
-        ``z = [int (x - x*), int K x (or int x), int u]`` (3n)."""
+        ``z = [int (x - x*), int x, int K x, int u]`` (4n)."""
         n = self.n
-        u, _, xs = self._law(t, x, z[:n], z[n:2 * n], z[2 * n:], p)
-        return u, np.concatenate((x - xs, p[2] @ x if self.eq10 == "integrated" else x, u))
+        u, _, xs = self._law(t, x, z[:n], z[n:2 * n], z[2 * n:3 * n], z[3 * n:], p)
+        return u, np.concatenate((x - xs, x, p[2] @ x, u))
 
     def sampled_force(self, k: int, t: float, x_meas: np.ndarray) -> np.ndarray:
         """Sampled law at ``t_k`` from measured positions [m]: the force [N] held until
         ``t_{k+1}``. Integrals: trapezoidal for positions, exact for the held force."""
         xs = self.reference.evaluate(t)[0]
         e = x_meas - xs
-        kx = self._p_k[2] @ x_meas if self.eq10 == "integrated" else x_meas.copy()
+        kx = self._p_k[2] @ x_meas
         if k > 0:
-            self._X = self._X + 0.5 * self.dt * (self._kx_prev + kx)
-            self._E = self._E + 0.5 * self.dt * (self._e_prev + e)
+            h2 = 0.5 * self.dt
+            self._E = self._E + h2 * (self._e_prev + e)
+            self._X = self._X + h2 * (self._x_prev + x_meas)
+            self._S = self._S + h2 * (self._kx_prev + kx)
             self._U = self._U + self.dt * self._u_prev
-        u, xd, _ = self._law(t, x_meas, self._E, self._X, self._U, self._p_k)
-        self._kx_prev, self._e_prev, self._u_prev = kx, e, u
+        u, xd, _ = self._law(t, x_meas, self._E, self._X, self._S, self._U, self._p_k)
+        self._x_prev, self._kx_prev, self._e_prev, self._u_prev = x_meas.copy(), kx, e, u
         if k < self._T:
             self._log["velocity_estimate"][k] = xd
             self._log["force_command"][k] = u
@@ -350,7 +417,7 @@ class TrackingController:
         its valid estimates for the following intervals."""
         n = self.n
         if z is not None and k < self._T:
-            u, xd, _ = self._law(t, x_meas, z[:n], z[n:2 * n], z[2 * n:], self._p_k)
+            u, xd, _ = self._law(t, x_meas, z[:n], z[n:2 * n], z[2 * n:3 * n], z[3 * n:], self._p_k)
             self._log["velocity_estimate"][k] = xd
             self._log["force_command"][k] = u
         status = self.estimator.update(accel, force)
@@ -363,19 +430,51 @@ class TrackingController:
             L["est_mass"][k], L["est_damping"][k], L["est_stiffness"][k] = m, c, kk
             L["est_valid"][k] = valid
             L["status"][k] = int(status)
-        ok = valid & np.isfinite(m) & (m > 0) & np.isfinite(c)
-        if np.any(ok):
-            self._good_m[ok] = m[ok]
-            self._good_c[ok] = c[ok]
-            self._dirty = True
-        # a spring is estimated by the DOFs at its ends; use it once one of them is valid
+        self._accept(k, m, c, kk, valid)
+
+    def _accept(self, k: int, m: np.ndarray, c: np.ndarray, kk: np.ndarray, valid: np.ndarray) -> None:
+        """Take the estimates of every DOF that passes the acceptance rule."""
+        n, W = self.n, self._win
+        slot = k % W
+        self._hist_m[slot], self._hist_c[slot], self._hist_k[slot] = m, c, kk
+        self._hist_n = min(self._hist_n + 1, W)
+        k_left, k_right = kk[:n], kk[1:]
+        # the structurally unidentifiable right spring (n = 1 with walls, free end) is NaN
+        kr = np.where(np.isnan(k_right) & self._k_right_absent, 0.0, k_right)
+        ok = valid & np.isfinite(m) & np.isfinite(c) & np.isfinite(k_left) & np.isfinite(kr) & (m > 0)
+        if self.accept == "settled":
+            ok &= (c >= 0) & (k_left >= 0) & (kr >= 0)
+            if self._hist_n < W:
+                ok[:] = False
+            else:
+                tol = self.settle_tol
+                c_floor = 0.01 * 2.0 * np.sqrt(np.abs((k_left + kr) * m))  # 1 % of critical
+                with np.errstate(invalid="ignore"):
+                    dm = np.max(np.abs(self._hist_m - m), axis=0) <= tol * np.abs(m)
+                    dc = np.max(np.abs(self._hist_c - c), axis=0) <= tol * np.maximum(np.abs(c), c_floor)
+                    dk = np.max(np.abs(self._hist_k - kk), axis=0)
+                    dk_ok = (dk <= tol * np.abs(kk)) | (np.isnan(kk) & np.append(np.zeros(n, bool), self._k_right_absent[-1]))
+                ok &= dm & dc & dk_ok[:n] & dk_ok[1:]
+            if self._first_accept is None and not np.all(ok):
+                # the first substitution takes all DOFs together: a spring between an
+                # accepted and a rejected DOF would otherwise get a half-garbage value
+                return
+        if self.hold and self._first_accept is not None:
+            return
+        if not np.any(ok):
+            return
+        self._good_m[ok] = m[ok]
+        self._good_c[ok] = c[ok]
+        self._accepted |= ok
+        # a spring is estimated by the DOFs at its ends: take it from an accepted neighbour
         near = np.zeros(n + 1, bool)
-        near[:n] |= valid
-        near[1:] |= valid
-        kok = near & np.isfinite(kk)
-        if np.any(kok):
-            self._good_k[kok] = kk[kok]
-            self._dirty = True
+        near[:n] |= ok
+        near[1:] |= ok
+        near &= np.isfinite(kk)
+        self._good_k[near] = kk[near]
+        self._dirty = True
+        if self._first_accept is None:
+            self._first_accept = k
 
     # ---- history ------------------------------------------------------------------------
     def log(self) -> dict[str, Any]:
@@ -400,4 +499,6 @@ class TrackingController:
             "gains": self.gains, "poles": [complex(p) for p in self.poles], "eq10": self.eq10,
             "switch_time_s": self.switch_time_s, "k_switch": self.k_switch,
             "delay_samples": int(getattr(self.estimator, "delay_samples", 0)),
+            "accept": self.accept, "hold": self.hold, "first_accepted_s": (None if self._first_accept is None
+                                                       else self._first_accept * self.dt),
         }

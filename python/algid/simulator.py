@@ -727,7 +727,9 @@ def simulate(
     lag = actuator_lag_s > 0
     n_w = n if lag else 0
     ctrl_cont = closed and mode == "continuous"
-    n_z = 3 * n if ctrl_cont else 0
+    if closed:
+        controller.start(chain_n=n, dt=h, boundary=chain.boundary, samples=T, mode=mode)
+    n_z = int(controller.n_states) if ctrl_cont else 0
     o_lp = 2 * n
     o_w = o_lp + n_lp
     o_z = o_w + n_w
@@ -892,7 +894,6 @@ def simulate(
         V = V.copy()
     else:
         # ---------------- closed loop: the controller acts sample by sample
-        controller.start(chain_n=n, dt=h, boundary=chain.boundary, samples=T, mode=mode)
         X = np.empty((T, n))
         V = np.empty((T, n))
         A_true = np.empty((T, n))
@@ -921,7 +922,7 @@ def simulate(
         zero_w = np.zeros(m_state)
         for k in range(T):
             tk = tgrid[k]
-            params = controller.params_for_sample(k)
+            params = controller.params_for_sample(k, s[o_z:] if ctrl_cont else None)
             cur_params[0] = params
             x = s[:n]
             v = s[n:2 * n]

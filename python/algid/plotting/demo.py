@@ -1,0 +1,156 @@
+"""Figures of ``algid demo`` (matplotlib, Agg backend; PNG files).
+
+* ``estimates.png`` (the paper's fig. 2): the on-line estimates against time with the true
+  values, one parameter family (masses, dampings, stiffnesses) per row; left the first
+  0.25 s where they converge and the substitution happens, right the whole run;
+* ``positions.png`` (fig. 3): reference against actual positions, and the tracking error;
+* ``forces.png`` (fig. 4): the control forces, and around the substitution their
+  deviation from the force an exact model needs along the reference (the overshoot);
+* ``estimation_error.png``: relative error of every estimate on a log scale (the paper
+  does not show it; it tells when the estimates reach a given accuracy and how they drift).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["write_figures"]
+
+_FAMILIES = (("mass", "m", "mass [kg]"), ("damping", "c", "damping [N s/m]"),
+             ("stiffness", "k", "stiffness [N/m]"))
+
+
+def _families(res: Any) -> list[tuple[str, np.ndarray, np.ndarray, list[str]]]:
+    chain = res.chain
+    true_all = chain.identifiable()
+    n = chain.n
+    out = []
+    sl = {"mass": slice(0, n), "damping": slice(n, 2 * n), "stiffness": slice(2 * n, 3 * n + 1)}
+    for key, sym, label in _FAMILIES:
+        est = np.asarray(res.estimates[key], dtype=float)
+        true = true_all[sl[key]]
+        keep = np.isfinite(true)
+        names = [f"{sym}{j + 1}" for j in range(true.size)]
+        if key == "stiffness" and n == 1 and chain.boundary == "fixed":
+            names[0] = "k1+k2"
+        out.append((label, est[:, keep], true[keep], [nm for nm, k in zip(names, keep) if k]))
+    return out
+
+
+def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
+    """Write the demo's PNG figures into ``out``; returns their paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    t = res.t
+    t_sw = summary["switch_time_s"]
+    title = (f"n = {res.chain.n}, {res.mode} mode, "
+             + ("noise-free" if summary["noise_db"] is None else f"accel SNR {summary['noise_db']:.0f} dB"))
+    paths = []
+    fams = _families(res)
+
+    # ---- estimates (fig. 2)
+    fig, axes = plt.subplots(3, 2, figsize=(12, 9), sharex="col")
+    zoom = t <= min(0.25, t[-1])
+    for row, (label, est, true, names) in enumerate(fams):
+        for col, mask in enumerate((zoom, np.ones_like(zoom))):
+            ax = axes[row, col]
+            for q in range(true.size):
+                line, = ax.plot(t[mask], est[mask, q], lw=1.3, label=f"{names[q]} estimate")
+                ax.axhline(true[q], color=line.get_color(), ls="--", lw=0.9)
+            ax.axvline(t_sw, color="k", ls=":", lw=1.0)
+            spread = 0.5 if col == 0 else 0.1
+            ax.set_ylim(true.min() * (1 - spread), true.max() * (1 + spread))
+            ax.set_ylabel(label)
+            ax.grid(alpha=0.3)
+        axes[row, 1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
+                            title="dashed: true value", title_fontsize=8)
+    axes[0, 0].set_title("convergence and substitution (dotted line)")
+    axes[0, 1].set_title("whole run (y range: true values +-10 %)")
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 1].set_xlabel("time [s]")
+    fig.suptitle(f"On-line estimates, eq. 7 ({title})")
+    fig.tight_layout()
+    paths.append(out / "estimates.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    # ---- positions (fig. 3)
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    for i in range(res.chain.n):
+        line, = ax1.plot(t, 1e3 * res.x[:, i], lw=1.4, label=f"x{i + 1} actual")
+        ax1.plot(t, 1e3 * res.x_ref[:, i], ls="--", color=line.get_color(), lw=1.0,
+                 label=f"x{i + 1} reference")
+        ax2.plot(t, 1e6 * (res.x[:, i] - res.x_ref[:, i]), lw=1.0, label=f"x{i + 1} - x{i + 1}*")
+    for ax in (ax1, ax2):
+        ax.axvline(t_sw, color="k", ls=":", lw=1.0)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, ncol=2, loc="upper right")
+    ax1.set_ylabel("position [mm]")
+    ax2.set_ylabel("tracking error [um]")
+    ax2.set_xlabel("time [s]")
+    tr = summary["tracking"]
+    ax1.set_title(f"Reference tracking ({title}); peak error after 1 s "
+                  f"{1e6 * tr['peak_after_1s_m']:.3g} um = {tr['peak_after_1s_pct_stroke']:.2g} % of stroke")
+    fig.tight_layout()
+    paths.append(out / "positions.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    # ---- forces (fig. 4)
+    chain = res.chain
+    M, C, K = chain.matrices()
+    log = res.controller_log
+    u_ff = log["xdd_ref"] @ M.T + log["xd_ref"] @ C.T + res.x_ref @ K.T
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(10, 7))
+    zmask = (t >= max(0.0, t_sw - 0.05)) & (t <= t_sw + 0.2)
+    for i in range(chain.n):
+        line, = ax1.plot(t, res.u_applied[:, i], lw=1.3, label=f"u{i + 1}")
+        ax2.plot(t[zmask], 1e3 * (res.u_applied[zmask, i] - u_ff[zmask, i]), lw=1.3,
+                 color=line.get_color(), label=f"u{i + 1} - exact-model force")
+    for ax in (ax1, ax2):
+        ax.axvline(t_sw, color="k", ls=":", lw=1.0)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, ncol=3, loc="upper right")
+    ax1.set_ylabel("force [N]")
+    ax1.set_xlabel("time [s]")
+    ax1.set_title(f"Control forces ({title})")
+    ax2.set_ylabel("force deviation [mN]")
+    ax2.set_xlabel("time [s]")
+    ax2.set_title("deviation from the force an exact model needs along the reference, "
+                  "around the substitution (dotted line)", fontsize=10)
+    fig.tight_layout()
+    paths.append(out / "forces.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    # ---- estimation error (log scale)
+    fig, axes = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
+    tpos = np.maximum(t, t[1])
+    for ax, (label, est, true, names) in zip(axes, fams):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rel = np.abs(est / true - 1.0)
+        for q in range(true.size):
+            ax.plot(tpos, rel[:, q], lw=1.1, label=names[q])
+        ax.axhline(0.01, color="k", ls="--", lw=0.9, label="1 %")
+        ax.axvline(t_sw, color="k", ls=":", lw=1.0)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylim(1e-10, 10)
+        ax.set_ylabel(f"|relative error|\n{label.split(' [')[0]}")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8, ncol=5, loc="upper right")
+    axes[-1].set_xlabel("time [s] (log scale)")
+    axes[0].set_title(f"Estimation error ({title})")
+    fig.tight_layout()
+    paths.append(out / "estimation_error.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+    return paths
