@@ -287,10 +287,15 @@ class SensorNoise:
         return 10.0 ** (-self.snr_db / 20.0)
 
     def unit_noise(self, T: int, n: int) -> dict[str, np.ndarray]:
-        """Unit-variance white noise ``(T, n)`` for each channel kind named in ``channels``."""
+        """White Gaussian noise ``(T, n)`` scaled to unit RMS per column, for each channel
+        kind named in ``channels``."""
         streams = np.random.SeedSequence(self.seed).spawn(len(CHANNELS))
-        return {c: np.random.default_rng(s).standard_normal((T, n))
-                for c, s in zip(CHANNELS, streams) if c in self.channels}
+        out = {}
+        for c, s in zip(CHANNELS, streams):
+            if c in self.channels:
+                w = np.random.default_rng(s).standard_normal((T, n))
+                out[c] = w / np.sqrt(np.mean(w**2, axis=0))  # exactly unit RMS: the SNR is exact
+        return out
 
 
 @dataclass
@@ -620,7 +625,7 @@ def simulate(
     if T < 2:
         raise ValueError("duration_s * fs_hz must give at least 2 samples")
     h = 1.0 / fs_hz
-    tgrid = np.arange(T) * h
+    tgrid = np.arange(T) / fs_hz
     actuator_lag_s = float(actuator_lag_s)
     if not (math.isfinite(actuator_lag_s) and actuator_lag_s >= 0):
         raise ValueError(f"actuator_lag_s must be >= 0, got {actuator_lag_s}")
