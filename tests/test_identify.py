@@ -73,14 +73,36 @@ def test_identify_free_end(tmp_path):
     np.testing.assert_allclose(doc["stiffness"][:2], chain.stiffness[:2], rtol=1e-6)
 
 
-@pytest.mark.parametrize("content,needle", [
-    ("t,u1,a2\n0,1,2\n0.001,1,2\n", "mismatched n"),
-    ("t,u1\n0,1\n0.001,1\n", "need accelerations"),
-    ("t,u1,a1\n0,1,2\n0.001,1,2\n0.003,1,2\n", "non-uniform"),
-    ("t,u1,a1\n0,1,2\n0.001,1\n", "ragged"),
-    ("t,u1,a1\n0,1,2\n0.001,nan,2\n", "NaN"),
-    ("t,u1,a1\n0.001,1,2\n0,1,2\n", "increasing"),
-])
+def _rows(T=12, dt=1e-3):
+    return [[k * dt, 1.0 + k, 2.0 - k] for k in range(T)]
+
+
+def _csv(header, rows):
+    return header + "\n" + "\n".join(",".join(repr(v) for v in r) for r in rows) + "\n"
+
+
+def _malformed():
+    rows = _rows()
+    nonuniform = [list(r) for r in rows]
+    nonuniform[5][0] += 4e-4
+    decreasing = [list(r) for r in rows]
+    decreasing[3][0], decreasing[4][0] = decreasing[4][0], decreasing[3][0]
+    with_nan = [list(r) for r in rows]
+    with_nan[6][1] = float("nan")
+    ragged = _csv("t,u1,a1", rows).splitlines()
+    ragged[4] = ",".join(ragged[4].split(",")[:2])
+    return [
+        (_csv("t,u1,a2", rows), "mismatched n"),
+        (_csv("t,u1,q1", rows), "unexpected column"),
+        (_csv("t,u1", [r[:2] for r in rows]), "missing columns"),
+        (_csv("t,u1,a1", nonuniform), "uniform"),
+        (_csv("t,u1,a1", decreasing), "increasing"),
+        (_csv("t,u1,a1", with_nan), "nan"),
+        ("\n".join(ragged) + "\n", "row"),
+    ]
+
+
+@pytest.mark.parametrize("content,needle", _malformed())
 def test_malformed_files_one_line_exit_2(tmp_path, content, needle):
     path = tmp_path / "bad.csv"
     path.write_text(content)
