@@ -412,6 +412,9 @@ class _Propagator:
             self.F1 = ell * (p1 - 3.0 * p2 + 4.0 * p3) @ Bn
             self.F2 = ell * (2.0 * p2 - 4.0 * p3) @ Bn
             self.F3 = ell * (4.0 * p3 - p2) @ Bn
+            # fused forms: one product per combination of the scheme
+            self.E2Q = np.hstack((self.E2, self.Q))
+            self.EF = np.hstack((self.E, self.F1, self.F2, self.F3))
 
     def step(self, s: np.ndarray, t0: float, wf: np.ndarray, wh: np.ndarray, w2: np.ndarray,
              N: Callable[[float, np.ndarray], np.ndarray], n0: Optional[np.ndarray] = None) -> np.ndarray:
@@ -421,13 +424,14 @@ class _Propagator:
         ell = self.ell
         nu = N(t0, s) if n0 is None else n0
         e2s = self.E2 @ s + wh
-        a = e2s + self.Q @ nu
+        Q = self.Q
+        a = e2s + Q @ nu
         na = N(t0 + 0.5 * ell, a)
-        b = e2s + self.Q @ na
+        b = e2s + Q @ na
         nb = N(t0 + 0.5 * ell, b)
-        c = self.E2 @ a + w2 + self.Q @ (2.0 * nb - nu)
+        c = self.E2Q @ np.concatenate((a, 2.0 * nb - nu)) + w2
         nc = N(t0 + ell, c)
-        return self.E @ s + wf + self.F1 @ nu + self.F2 @ (na + nb) + self.F3 @ nc
+        return self.EF @ np.concatenate((s, nu, na + nb, nc)) + wf
 
 
 def _shift(c: np.ndarray, tau0: Union[float, np.ndarray]) -> np.ndarray:
@@ -452,14 +456,20 @@ class _Plant:
     """Linear part of eq. 1 and the effect forces."""
 
     def _effect_force_1(self, t: float, x: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """:meth:`effect_force` for one state, in scalar arithmetic (the integrator's hot path)."""
-        xs = x.tolist()
-        vs = v.tolist()
-        f = [0.0] * self.n
+        """:meth:`effect_force` for one state, in scalar arithmetic."""
+        return self.state_force(t, np.concatenate((x, v)))
+
+    def state_force(self, t: float, state: np.ndarray) -> np.ndarray:
+        """Effect forces [N] from a state vector starting ``[x, v, ..]`` (the integrator's
+        hot path: plain float arithmetic, faster than numpy on a few entries)."""
+        n = self.n
+        vals = state.tolist()
+        xs = vals[:n]
+        vs = vals[n:2 * n]
+        f = [0.0] * n
         for kind, i, a, eps in self.dof_terms:
             vi = vs[i]
             f[i] -= a * math.tanh(vi / eps) if kind == "cf" else a * vi * abs(vi)
-        n = self.n
         for kind, j, a, b in self.spring_terms:  # spring j (0-based) joins DOF j-1 and DOF j
             d = (xs[j] if j < n else 0.0) - (xs[j - 1] if j >= 1 else 0.0)
             if kind == "cs":
@@ -829,8 +839,7 @@ def simulate(
         if progress is not None and k % every == 0:
             progress(k / T)
 
-    def N_open(t: float, st: np.ndarray) -> np.ndarray:  # enters as Bg @ N
-        return plant.effect_force(t, st[:n], st[n:2 * n])
+    N_open = plant.state_force  # N(t, s) = effect forces, entering as Bg @ N
 
     lim = {k: np.empty((T, n)) for k in ("a_minus", "a_plus", "u_minus", "u_plus",
                                          "u_applied_minus", "u_applied_plus")}
@@ -871,7 +880,7 @@ def simulate(
             else:
                 for q in range(J):
                     s = Es[q] @ s + Wf[k, q]
-            if not np.all(np.isfinite(s)):
+            if k % 256 == 0 and not np.all(np.isfinite(s)):
                 raise RuntimeError(f"the simulation diverged before t = {tgrid[k + 1]:.6g} s")
         X, V = S[:, :n], S[:, n:2 * n]
         g_all = plant.effect_force(tgrid, X, V) if nonlinear else 0.0
