@@ -10,20 +10,20 @@ diagnosis is run on the recording alone through the code path of ``algid diagnos
 (``algid.diagnosis.cli.run``) and its JSON written to ``WORK/diagnoses/``; the scoring
 reads labels and diagnoses only.
 
-Effect sizes ("barely visible to strong"). The size is a strength ``s`` drawn
-log-uniformly between ``S_MIN_NOISE`` times the relative accelerometer noise of the case
-and ``S_MAX``; ``s`` is the RMS of the effect's force divided by the RMS inertial force
-``m_i a_i`` of the DOF it acts on (for a spring, the larger of its two DOF), computed on
-the linear steady-state response (exact, by the chain's transfer matrix at the multisine
-lines):
-
-* coulomb_friction: ``force = s F``; quadratic_damping: ``c2 = s F / rms(v|v|)``;
-  cubic_stiffness: ``k3 = +-s F / rms(d^3)``; clearance: ``gap = g rms(d)`` with ``g``
-  uniform in [0.3, 1.5] and ``stiffness`` such that the contact force has RMS ``s F``;
-  parameter_drift: ``rel_change = +-s F sqrt(3) / (k_j rms(d))`` (clipped to +-0.5);
-* input_delay: the delay at which ``rms(u_i(t) - u_i(t - delay)) = s F`` (at most 50 ms);
-* sensor_bias: ``bias = +-s rms(a_i)``;
-* sensor_lowpass: the cutoff at which ``rms(a - LP a) = s rms(a)`` (at most 0.45 fs).
+Effect sizes ("barely visible to strong"). What makes an effect visible is the part of
+it that the linear chain cannot absorb (a quadratic damper is mostly a viscous one, a
+stiff clearance mostly a spring). Its size is therefore set by a visibility ``rho``,
+drawn log-uniformly in [RHO_MIN, RHO_MAX] = [0.5, 50]: the RMS of the effect's equation
+error (acceleration units) left after a least-squares fit of the linear equation(s) it
+enters, divided by the accelerometer noise RMS of that DOF, computed on the exact linear
+steady-state response (the chain's transfer matrix at the multisine lines). The effect
+parameter is solved for it: linearly for ``force``, ``c2``, ``k3`` (random sign; a
+softening spring capped at 30 % of k at 3 RMS deformations), the clearance ``stiffness``
+(its ``gap`` uniform in [0.3, 1.5] RMS deformations) and ``rel_change`` (random sign,
+clipped to +-0.5); by bisection for ``delay`` (<= 50 ms) and ``cutoff_hz``
+(<= 0.45 fs); ``|bias| = rho`` times the noise RMS. The visible part is capped at 30 % of
+the DOF's acceleration RMS. ``rho = 0.5``: invisible in a plot of the signals, only
+statistics over the record can see it; ``rho = 50``: obvious.
 
 Scoring (issue 6): top-1 effect accuracy; location accuracy among correct effects;
 relative error of the main parameter (the first one listed for the effect) among
@@ -66,8 +66,9 @@ MAIN = {"coulomb_friction": "force", "quadratic_damping": "c2", "cubic_stiffness
         "parameter_drift": "rel_change"}
 CLASSES = ("none",) + EFFECTS + ("unknown",)
 P_NONE = 0.2
-S_MIN_NOISE = 0.3
-S_MAX = 0.3
+#: Visibility range of the hidden effect ("barely visible" to "strong"), see draw_case.
+RHO_MIN = 0.5
+RHO_MAX = 50.0
 F_BAND_HZ = (0.5, 50.0)
 FORCE_RMS_N = 10.0
 
@@ -139,8 +140,47 @@ def _delayed(x: np.ndarray, d: float, fs: float) -> np.ndarray:
     return np.fft.irfft(np.fft.rfft(x) * np.exp(-2j * np.pi * f * d), n=x.size)
 
 
+def _eq_columns(chain: Chain, resp: dict, u: np.ndarray, e: int) -> np.ndarray:
+    """Columns of the linear equation of DOF e on the linear response: 1, u_e, v_e and the
+    spring deformations seen by e (walls at 0; no spring n+1 for a free right end)."""
+    x, v = resp["x"], resp["v"]
+    n = chain.n
+    cols = [np.ones(len(u)), u[:, e], v[:, e], x[:, e] - (x[:, e - 1] if e >= 1 else 0.0)]
+    if e + 1 < n:
+        cols.append(x[:, e] - x[:, e + 1])
+    elif chain.boundary == "fixed" and n > 1:
+        cols.append(x[:, e])
+    return np.stack(cols, axis=1)
+
+
+def visible_rms(chain: Chain, resp: dict, u: np.ndarray, errors: dict[int, np.ndarray]) -> float:
+    """RMS over the record of the part of an effect's equation errors (acceleration units,
+    per DOF equation) that the linear equations cannot absorb: the least-squares residual
+    of each error on the columns of its own linear equation, pooled over the equations."""
+    tot = 0.0
+    for e, err in errors.items():
+        X = _eq_columns(chain, resp, u, e)
+        coef, *_ = np.linalg.lstsq(X, err, rcond=None)
+        tot += float(np.sum((err - X @ coef) ** 2))
+    return math.sqrt(tot / len(u))
+
+
+def _sides(n: int, j: int) -> list[tuple[int, float]]:
+    """(DOF, sign) where the force of spring j acts: DOF j with -, DOF j-1 with + (the
+    acceleration equations, force on the left-hand side moved right)."""
+    return [(i, sgn) for i, sgn in ((j - 1, -1.0), (j - 2, 1.0)) if 0 <= i < n]
+
+
 def draw_case(seed: int, duration: float, fs: float) -> dict:
-    """Everything about one case: chain, forcing, effect, SNR (deterministic in seed)."""
+    """Everything about one case: chain, forcing, effect, SNR (deterministic in seed).
+
+    Effect size: a visibility ``rho`` drawn log-uniformly in [RHO_MIN, RHO_MAX] is the
+    :func:`visible_rms` of the effect divided by the accelerometer noise RMS of the DOF
+    it acts on (for a spring, the mean of its two DOF); the effect parameter is solved
+    for it on the linear steady-state response. ``rho`` is capped so that the visible
+    part stays below 30 % of that DOF's acceleration RMS. Sensor bias: ``|bias| = rho *
+    noise RMS`` (a constant offset; its double integral makes it far more visible).
+    """
     rng = np.random.default_rng(seed)
     n = int(rng.integers(1, 5))
     boundary = "free" if (n >= 2 and rng.uniform() < 0.2) else "fixed"
@@ -150,51 +190,98 @@ def draw_case(seed: int, duration: float, fs: float) -> dict:
     resp = linear_response(chain, u, fs)
     effect = "none" if rng.uniform() < P_NONE else EFFECTS[int(rng.integers(len(EFFECTS)))]
     noise_rel = 10 ** (-snr_db / 20)
-    s = float(math.exp(rng.uniform(math.log(S_MIN_NOISE * noise_rel), math.log(S_MAX))))
-    label: dict = {"seed": seed, "n": n, "boundary": boundary, "snr_db": snr_db, "strength": s,
+    rho = float(math.exp(rng.uniform(math.log(RHO_MIN), math.log(RHO_MAX))))
+    label: dict = {"seed": seed, "n": n, "boundary": boundary, "snr_db": snr_db, "visibility": rho,
                    "chain": {"mass": chain.mass.tolist(), "damping": chain.damping.tolist(),
                              "stiffness": chain.stiffness.tolist()},
                    "duration_s": duration, "fs_hz": fs}
     if effect == "none":
-        label.update(effect="none", location=None, params={})
+        label.update(effect="none", location=None, params={}, visibility=0.0)
         return {"chain": chain, "u": u, "label": label, "effects": []}
     x, v, a = resp["x"], resp["v"], resp["a"]
-    inertial = [_rms(chain.mass[i] * a[:, i]) for i in range(n)]
+    m = chain.mass
+    sigma = noise_rel * np.sqrt(np.mean(a**2, axis=0))  # accelerometer noise RMS per DOF
+    a_rms = np.sqrt(np.mean(a**2, axis=0))
+    sign = float(rng.choice([-1.0, 1.0]))
+
+    def solve_linear(unit_errors: dict[int, np.ndarray], dofs: list[int]) -> float:
+        """Scale of an effect whose errors are linear in its parameter."""
+        target = min(rho * float(np.mean(sigma[dofs])), 0.3 * float(np.mean(a_rms[dofs])))
+        return target / max(visible_rms(chain, resp, u, unit_errors), 1e-300)
+
+    def solve_nonlinear(errors_of, lo: float, hi: float, dofs: list[int]) -> float:
+        """Smallest parameter in [lo, hi] reaching the target visibility (scanned upwards:
+        a very large delay or time constant is partly absorbed again by the linear
+        equation, so visibility is not monotonic), refined by bisection."""
+        target = min(rho * float(np.mean(sigma[dofs])), 0.3 * float(np.mean(a_rms[dofs])))
+        grid = np.geomspace(lo, hi, 60)
+        vis = []
+        for k, p in enumerate(grid):
+            vis.append(visible_rms(chain, resp, u, errors_of(p)))
+            if vis[-1] >= target:
+                if k == 0:
+                    return float(p)
+                return _bisect(lambda q: visible_rms(chain, resp, u, errors_of(q)), grid[k - 1], p, target)
+        return float(grid[int(np.argmax(vis))])
+
     if effect in SPRING_EFFECTS:
         top = n + 1 if boundary == "fixed" else n
         j = int(rng.integers(1, top + 1))
         loc = {"spring": j}
         d = _deformation(x, j)
-        F = max(inertial[i] for i in (j - 1, j - 2) if 0 <= i < n)
+        sides = _sides(n, j)
+        dofs = [i for i, _ in sides]
+        gap = float(rng.uniform(0.3, 1.5) * _rms(d))
+        shape = {"cubic_stiffness": d**3,
+                 "clearance": np.sign(d) * np.maximum(np.abs(d) - gap, 0.0),
+                 "parameter_drift": (np.arange(len(u)) / fs / duration) * chain.stiffness[j - 1] * d}[effect]
+        key = {"cubic_stiffness": "k3", "clearance": "stiffness", "parameter_drift": "rel_change"}[effect]
+
+        def errors(p):
+            return {i: sgn * p[key] * shape / m[i] for i, sgn in sides}
+
+        scale = solve_linear(errors({key: 1.0}), dofs)
         if effect == "cubic_stiffness":
-            params = {"k3": float(rng.choice([-1.0, 1.0]) * s * F / _rms(d**3))}
-            if params["k3"] < 0:  # a softening spring must stay stable: at most 30 % of k at 3 rms(d)
-                cap = 0.3 * chain.stiffness[j - 1] / (3 * _rms(d)) ** 2
-                params["k3"] = -min(-params["k3"], cap)
+            k3 = sign * scale
+            if k3 < 0:  # a softening spring must stay stable: at most 30 % of k at 3 rms(d)
+                k3 = -min(-k3, 0.3 * chain.stiffness[j - 1] / (3 * _rms(d)) ** 2)
+            params = {"k3": float(k3)}
         elif effect == "clearance":
-            gap = float(rng.uniform(0.3, 1.5) * _rms(d))
-            dz = np.sign(d) * np.maximum(np.abs(d) - gap, 0.0)
-            params = {"gap": gap, "stiffness": float(s * F / max(_rms(dz), 1e-300))}
+            params = {"gap": gap, "stiffness": float(scale)}
         else:
-            r = float(rng.choice([-1.0, 1.0]) * s * F * math.sqrt(3) / (chain.stiffness[j - 1] * _rms(d)))
-            params = {"rel_change": float(np.clip(r, -0.5, 0.5))}
+            params = {"rel_change": float(np.clip(sign * scale, -0.5, 0.5))}
     else:
         i = int(rng.integers(0, n))
         loc = {"dof": i + 1}
-        F = inertial[i]
+        dofs = [i]
+        ui, ai = u[:, i], a[:, i]
         if effect == "coulomb_friction":
-            params = {"force": s * F}
+            def errors(p):
+                return {i: -p["force"] * np.sign(v[:, i]) / m[i]}
+            params = {"force": solve_linear(errors({"force": 1.0}), dofs)}
         elif effect == "quadratic_damping":
-            params = {"c2": s * F / _rms(v[:, i] * np.abs(v[:, i]))}
+            def errors(p):
+                return {i: -p["c2"] * v[:, i] * np.abs(v[:, i]) / m[i]}
+            params = {"c2": solve_linear(errors({"c2": 1.0}), dofs)}
         elif effect == "input_delay":
-            ui = u[:, i]
-            params = {"delay": _bisect(lambda dd: _rms(ui - _delayed(ui, dd, fs)), 1e-7, 0.05, s * F)}
+            def errors(p):
+                return {i: (_delayed(ui, p["delay"], fs) - ui) / m[i]}
+            params = {"delay": solve_nonlinear(lambda dd: errors({"delay": dd}), 1e-6, 0.05, dofs)}
         elif effect == "sensor_bias":
-            params = {"bias": float(rng.choice([-1.0, 1.0]) * s * _rms(a[:, i]))}
-        else:  # sensor_lowpass: larger cutoff, smaller effect
-            ai = a[:, i]
-            fc = _bisect(lambda c: -_rms(ai - _lowpass(ai, c, fs)), 0.1, 0.45 * fs, -s * _rms(ai))
-            params = {"cutoff_hz": fc}
+            def errors(p):  # the sensor error itself (see the docstring)
+                return {i: np.full(len(u), p["bias"])}
+            params = {"bias": float(sign * min(rho * sigma[i], 0.3 * a_rms[i]))}
+        else:  # sensor_lowpass: the error of the sensor, LP(a) - a, in equation i
+            def errors(p):
+                return {i: _lowpass(ai, p["cutoff_hz"], fs) - ai}
+            tau = solve_nonlinear(lambda c: errors({"cutoff_hz": 1.0 / c}), 1.0 / (0.45 * fs), 1.0, dofs)
+            params = {"cutoff_hz": 1.0 / tau}
+    # The visibility actually reached (clipping, caps and the lowest visible cutoff change it).
+    if effect == "sensor_bias":
+        label["visibility"] = float(abs(params["bias"]) / sigma[i])
+    else:
+        label["visibility"] = visible_rms(chain, resp, u, errors(params)) / float(np.mean(sigma[dofs]))
+    label["visibility_drawn"] = rho
     label.update(effect=effect, location=loc, params={k: float(v_) for k, v_ in params.items()})
     return {"chain": chain, "u": u, "label": label, "effects": [{"name": effect, "location": loc, "params": params}]}
 
@@ -267,7 +354,7 @@ def score_case(lab: dict, res: dict) -> dict:
         loc_true = {"spring": 1}
     pred = res["effect"]
     out = {"seed": lab["seed"], "truth": truth, "pred": pred, "n": lab["n"], "snr_db": lab["snr_db"],
-           "strength": lab["strength"], "loc_true": _loc_key(loc_true), "loc_pred": _loc_key(res["location"]),
+           "visibility": lab.get("visibility"), "loc_true": _loc_key(loc_true), "loc_pred": _loc_key(res["location"]),
            "gap_before": res["gap_before"], "gap_after": res["gap_after"], "wall_s": res.get("_wall_s")}
     out["effect_ok"] = pred == truth
     out["loc_ok"] = bool(out["effect_ok"] and (truth == "none" or out["loc_true"] == out["loc_pred"]))
@@ -310,6 +397,14 @@ def summarize(rows: list[dict]) -> dict:
         "param_within_20pct_among_correct": float(np.mean(np.array(perr) <= 0.2)) if perr else None,
         "param_rel_err_median": float(np.median(perr)) if perr else None,
         "median_gap_shrink_real": float(np.median(shrink)) if shrink else None,
+        "median_gap_shrink_by_visibility": {
+            f"{lo:g}-{hi:g}": float(np.median([sh for sh, r in zip(shrink, real) if lo <= r["visibility"] < hi]))
+            for lo, hi in ((0.5, 2.0), (2.0, 10.0), (10.0, 50.0))
+            if any(lo <= r["visibility"] < hi for r in real)},
+        "top1_by_visibility": {
+            f"{lo:g}-{hi:g}": float(np.mean([r["effect_ok"] for r in real if lo <= r["visibility"] < hi]))
+            for lo, hi in ((0.5, 2.0), (2.0, 10.0), (10.0, 50.0))
+            if any(lo <= r["visibility"] < hi for r in real)},
         "false_alarm_rate_none": float(np.mean([not r["effect_ok"] for r in none])) if none else None,
         "wall_s_median": float(np.median(walls)) if walls else None,
         "wall_s_max": float(np.max(walls)) if walls else None,
@@ -426,7 +521,8 @@ def main(argv: list[str] | None = None) -> int:
         table = confusion_table(summary["confusion"])
         print(table)
         for key in ("cases", "top1_accuracy", "location_accuracy_among_correct", "param_within_20pct_among_correct",
-                    "median_gap_shrink_real", "false_alarm_rate_none", "wall_s_median", "wall_s_max"):
+                    "median_gap_shrink_real", "median_gap_shrink_by_visibility", "top1_by_visibility",
+                    "false_alarm_rate_none", "wall_s_median", "wall_s_max"):
             print(f"{key:36s} {summary[key]}")
         if args.timing:
             print(f"{'timing 20 s 3-DOF 1 kHz [s]':36s} {out['timing']['wall_s_median']:.2f}")

@@ -42,14 +42,14 @@ def binned_r2(z: np.ndarray, r: np.ndarray, bins: int = N_BINS) -> float:
     return max(expl / tot - bins / r.size, 0.0)
 
 
-def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray) -> dict:
+def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarray | None = None) -> dict:
     """Location indicators (JSON-ready) of the linear model's gap."""
     n = P.n
     resid = lin.resid  # (N, n) acceleration units
     a_rms = np.sqrt(np.mean(P.a**2, axis=0))
     denom = float(np.sum(P.a**2))
     eq_sse = lin.cv.test_sse_eq.sum(axis=0)  # withheld, acceleration units^2
-    floor = noise_floor(P, resid)
+    floor = noise_floor(P, resid) if floor is None else floor
     per_dof = []
     for i in range(n):
         per_dof.append({

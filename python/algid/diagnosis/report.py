@@ -36,7 +36,8 @@ def to_json(d) -> dict:
     for s in d.ranking:
         ranking.append({"effect": s.fit.effect, "location": s.fit.location, "params": s.fit.params,
                         "gap_after": s.gap_after, "params_std": s.fit.params_std,
-                        "t_stat": s.t_stat, "rel_reduction": s.rel_reduction, "significant": s.significant})
+                        "z_noise": s.z, "t_stat": s.t_stat, "rel_reduction": s.rel_reduction,
+                        "significant": s.significant})
     lin = d.lin
     out = {
         "effect": d.effect,
@@ -131,7 +132,7 @@ def to_text(d, source: str = "") -> str:
     for s in d.ranking[:10]:
         mark = "*" if s.significant else " "
         L.append(f"  {mark} {s.fit.effect:<18s} {_fmt_loc(s.fit.location):<9s} {s.gap_after:.4g}  "
-                 f"t={s.t_stat:6.1f}  {_fmt_params(s.fit.params)}")
+                 f"z={s.z:6.1f}  {_fmt_params(s.fit.params)}")
     if len(d.ranking) > 10:
         L.append(f"  ... {len(d.ranking) - 10} more in the JSON")
     L.append(f"({d.timings.get('total', float('nan')):.2f} s)")
