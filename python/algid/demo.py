@@ -118,6 +118,8 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] 
         "noise_db": noise_db,
         "accel_snr_achieved_db": (res.snr_db["accel"].tolist() if "accel" in res.snr_db else None),
         "switch_time_s": float(t[k_at]), "eq10": log.get("eq10"),
+        "estimates_substituted_s": (None if log.get("first_accepted_s") is None
+                                    else max(float(t[k_at]), float(log["first_accepted_s"]) + 1.0 / res.fs_hz)),
         "gains": log["gains"], "poles_rad_s": [p.real for p in log["poles"]],
         "estimator_delay_samples": log["delay_samples"],
         "parameters": params,
@@ -175,8 +177,11 @@ def format_summary(s: dict[str, Any]) -> str:
         + ("noise-free" if s["noise_db"] is None else
            f"{s['noise_db']:.1f} dB SNR (achieved on the actual signals: "
            + ", ".join(f"{v:.1f}" for v in s["accel_snr_achieved_db"]) + " dB)"),
-        f"controller: poles {s['poles_rad_s']} rad/s, estimates used from t = "
-        f"{s['switch_time_s']:.3f} s, eq. 10 {s['eq10']}",
+        f"controller: poles {s['poles_rad_s']} rad/s, eq. 10 {s['eq10']}; "
+        + ("estimates never substituted (none passed the acceptance rule: nominal m = 1 kg, "
+           "c = k = 0 throughout)"
+           if s["estimates_substituted_s"] is None else
+           f"estimates substituted at t = {s['estimates_substituted_s']:.3f} s"),
         "",
         f"{'param':>6} {'true':>10} {'est @ switch':>13} {'rel err':>9} {'est @ end':>12} "
         f"{'rel err':>9} {'<=1% at [s]':>11} {'stays from [s]':>14}",

@@ -53,6 +53,8 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     t_sw = summary["switch_time_s"]
     title = (f"n = {res.chain.n}, {res.mode} mode, "
              + ("noise-free" if summary["noise_db"] is None else f"accel SNR {summary['noise_db']:.0f} dB"))
+    if summary.get("estimates_substituted_s", 0.0) is None:
+        title += "; estimates never substituted"
     paths = []
     fams = _families(res)
 
