@@ -83,6 +83,8 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] 
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = est / true - 1.0
     keep = np.isfinite(true)
+    if chain.boundary == "free":
+        keep[-1] = False  # k_{n+1} = 0 is known, not estimated
     k_at = min(k_sw, len(t) - 1)
     params = []
     for q in np.nonzero(keep)[0]:

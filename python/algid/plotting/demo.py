@@ -33,6 +33,8 @@ def _families(res: Any) -> list[tuple[str, np.ndarray, np.ndarray, list[str]]]:
         est = np.asarray(res.estimates[key], dtype=float)
         true = true_all[sl[key]]
         keep = np.isfinite(true)
+        if key == "stiffness" and chain.boundary == "free":
+            keep[-1] = False  # k_{n+1} = 0 is known
         names = [f"{sym}{j + 1}" for j in range(true.size)]
         if key == "stiffness" and n == 1 and chain.boundary == "fixed":
             names[0] = "k1+k2"
