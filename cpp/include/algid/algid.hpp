@@ -3,6 +3,7 @@
 /// Umbrella header: every public algid header, nothing else.
 
 #include "algid/chain_estimator.hpp"
+#include "algid/continuous_estimator.hpp"
 #include "algid/cramer.hpp"
 #include "algid/dof_estimator.hpp"
 #include "algid/integrator_chain.hpp"
