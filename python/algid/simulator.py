@@ -60,9 +60,11 @@ of the staircase's smooth equivalent at the sample instant. Pairing the limits a
 way (held force with the acceleration just before the update, or the new force with the
 acceleration just after) makes the estimator's quadrature of eq. 4 integrate two signals
 that are half a sample out of step, and because eq. 4 forms small differences of large
-terms, all four parameters of a DOF come out biased by a common factor (10-40 % on Table 1
-under held multisine forcing at 1 kHz) instead of ~1e-5 (``tests/test_simulator.py`` checks
-both). Positions and velocities are continuous and need no convention. The first sample
+terms, the parameters of a DOF come out biased by 10-60 % instead of a few 1e-4 (Table 1,
+multisine of 1.3-7.1 Hz held at 1 kHz, 0.5-2 s, estimated with the numpy reference
+:func:`algid.reference.estimate`; ``tests/test_simulator.py`` checks both; noise-free
+continuous forcing gives 1e-9, so the remaining few 1e-4 is what a held force costs
+the estimator's smooth quadrature, not the simulator). Positions and velocities are continuous and need no convention. The first sample
 (``t = 0``) takes the right limit, the recording starting there. The one-sided limits are
 kept in :attr:`SimulationResult.limits`.
 
