@@ -284,6 +284,7 @@ class TrackingController:
         self.n, self.dt, self.boundary, self.mode = n, float(dt), boundary, mode
         self.k_switch = int(round(self.switch_time_s / self.dt))
         self.estimator = self.estimator_factory(n, self.dt, boundary)
+        self._has_theta = callable(getattr(self.estimator, "theta", None))
         T = int(samples)
         self._T = T
         self._good_m = np.full(n, self.nominal_mass_kg)
@@ -318,6 +319,7 @@ class TrackingController:
         self._log = {
             "est_mass": np.full((T, n), np.nan), "est_damping": np.full((T, n), np.nan),
             "est_stiffness": np.full((T, n + 1), np.nan), "est_valid": np.zeros((T, n), bool),
+            "est_theta": np.full((T, n, 4), np.nan),
             "status": np.zeros(T, int), "used_mass": np.zeros((T, n)),
             "used_damping": np.zeros((T, n)), "used_stiffness": np.zeros((T, n + 1)),
             "velocity_estimate": np.full((T, n), np.nan), "force_command": np.full((T, n), np.nan),
@@ -429,6 +431,9 @@ class TrackingController:
             L = self._log
             L["est_mass"][k], L["est_damping"][k], L["est_stiffness"][k] = m, c, kk
             L["est_valid"][k] = valid
+            if self._has_theta:
+                for i in range(n):
+                    L["est_theta"][k, i] = self.estimator.theta(i)
             L["status"][k] = int(status)
         self._accept(k, m, c, kk, valid)
 
@@ -480,7 +485,9 @@ class TrackingController:
     def log(self) -> dict[str, Any]:
         """History of the run (``T`` samples): reference ``x_ref``, ``xd_ref``, ``xdd_ref``
         (T, n); ``estimates`` = estimator output after each sample (``mass``, ``damping``
-        (T, n), ``stiffness`` (T, n+1), ``valid`` (T, n), ``status`` (T,)); ``used`` = the
+        (T, n), ``stiffness`` (T, n+1) fused, ``valid`` (T, n), ``status`` (T,), and ``theta``
+        (T, n, 4): each DOF's own ``[m_i, c_i, k_i, k_{i+1}]`` when the estimator has
+        ``theta(dof)``, else NaN); ``used`` = the
         parameters the law used on each interval; ``velocity_estimate`` (eq. 10) and
         ``force_command`` (T, n) at the samples; gains, poles, switch time and the
         estimator's ``delay_samples``."""
@@ -492,6 +499,7 @@ class TrackingController:
             "t": t, "x_ref": xs, "xd_ref": xd, "xdd_ref": xdd,
             "estimates": {"mass": L["est_mass"], "damping": L["est_damping"],
                           "stiffness": L["est_stiffness"], "valid": L["est_valid"],
+                          "theta": L["est_theta"],
                           "status": L["status"]},
             "used": {"mass": L["used_mass"], "damping": L["used_damping"],
                      "stiffness": L["used_stiffness"]},
