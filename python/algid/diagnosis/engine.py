@@ -31,9 +31,12 @@ MIN_REL_REDUCTION = 0.01
 #: A sensor bias is reported only beyond this many times the bias that the sample mean
 #: of the white sensor noise itself puts in the record (sigma / sqrt(N)).
 BIAS_NOISE_FACTOR = 10.0
-#: With no candidate beyond noise, a linear gap this many times the sensor-noise floor is
-#: reported as ``unknown`` rather than ``none``.
+#: A gap left this many times above the sensor-noise floor counts as unexplained: with no
+#: candidate beyond noise the diagnosis is ``unknown`` rather than ``none``, and so it is
+#: when the best candidate explains less than :data:`MIN_EXPLAINED` of the excess
+#: ``gap_before^2 - floor^2`` (it is then still listed first in the ranking).
 UNKNOWN_FLOOR_RATIO = 3.0
+MIN_EXPLAINED = 0.5
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift")
@@ -264,6 +267,9 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
         effect, location = best.fit.effect, best.fit.location
         params, std, gap_after = best.fit.params, best.fit.params_std, best.gap_after
         explained = float((gap_before**2 - gap_after**2) / excess) if excess > 0 else 1.0
+        if gap_after > UNKNOWN_FLOOR_RATIO * floor_rel and explained < MIN_EXPLAINED:
+            effect, location, params, std, gap_after = "unknown", None, {}, {}, gap_before
+            best = None
     timings["total"] = time.perf_counter() - clock
     return Diagnosis(effect=effect, location=location, params=params, params_std=std,
                      gap_before=gap_before, gap_after=gap_after, ranking=scored, P=P, lin=lin,

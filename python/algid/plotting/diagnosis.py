@@ -111,69 +111,68 @@ def _binned(z, r, bins=30):
     return np.bincount(idx, weights=z, minlength=bins) / cnt, np.bincount(idx, weights=r, minlength=bins) / cnt
 
 
+def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: str):
+    """Two rows per item: the total force against the amplitude variable with the linear
+    law, and below it the unexplained force alone (scatter and binned mean), which is
+    where a nonlinearity shows. ``items``: (label, z, linear_force, unexplained, coef_txt)."""
+    cols = len(items)
+    fig, axes = plt.subplots(2, cols, figsize=(max(3.3 * cols, 6.0), 5.4), squeeze=False, sharex="col")
+    for c, (label, z, lin_f, r, coef_txt) in enumerate(items):
+        idx = _subsample(z.size)
+        top, bot = axes[0, c], axes[1, c]
+        top.plot(z[idx] * xscale, (lin_f + r)[idx], ".", ms=1.2, color=C_MEAS, alpha=0.5)
+        zz = np.array([z.min(), z.max()])
+        k = np.polyfit(z, lin_f, 1)[0]
+        top.plot(zz * xscale, k * zz, "k--", lw=0.8, label=coef_txt)
+        top.set_title(label, fontsize=9)
+        top.legend(fontsize=7, loc="upper left")
+        bot.plot(z[idx] * xscale, r[idx], ".", ms=1.2, color=C_MEAS, alpha=0.5)
+        zb, rb = _binned(z, r)
+        bot.plot(zb * xscale, rb, "-", color=C_BEFORE, lw=1.6, label="binned mean")
+        bot.axhline(0.0, color="k", lw=0.6)
+        lo, hi = np.percentile(r, [0.5, 99.5])
+        pad = 0.3 * (hi - lo)
+        bot.set_ylim(min(lo, rb.min()) - pad, max(hi, rb.max()) + pad)
+        bot.legend(fontsize=7, loc="upper left")
+        bot.set_xlabel(xlabel)
+        for ax in (top, bot):
+            ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel(f"{ylabel} [N]")
+    axes[1, 0].set_ylabel("unexplained force [N]")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
 def fig_restoring_force(d):
     P, lin = d.P, d.lin
     force_resid = lin.resid * lin.mass[None, :]
-    js = springs(P.n, P.boundary)
     expl = {s["spring"]: s["explained"] for s in d.where["amplitude"]["springs"]}
-    cols = min(len(js), 3)
-    rows = int(np.ceil(len(js) / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 2.9 * rows + 0.5), squeeze=False)
-    idx = _subsample(P.a.shape[0])
     kfit = lin.stiffness()
-    for ax, j in zip(axes.ravel(), js):
+    items = []
+    for j in springs(P.n, P.boundary):
         dj = deformation(P, lin.x, j)
         k = kfit[0] if P.n == 1 else kfit[j - 1]
         # Unexplained force attributed to the spring: + in eq. j, - in eq. j-1 (mean of sides).
-        sides = spring_sides(P, j)
-        r = np.mean([s * force_resid[:, e] for e, s in sides], axis=0)
-        F = k * dj + r
-        ax.plot(dj[idx] * 1e3, F[idx], ".", ms=1.2, color=C_MEAS, alpha=0.5)
-        zb, fb = _binned(dj, F)
-        ax.plot(zb * 1e3, fb, "-", color=C_BEFORE, lw=1.5, label="binned mean")
-        zz = np.linspace(dj.min(), dj.max(), 2)
-        ax.plot(zz * 1e3, k * zz, "k--", lw=0.8, label=f"linear k = {k:.4g} N/m")
-        ax.set_title(f"spring {j}" + (" (k1+k2)" if P.n == 1 else "") + f": explains {expl.get(j, 0):.0%}",
-                     fontsize=9)
-        ax.set_xlabel("deformation [mm]")
-        ax.set_ylabel("restoring force [N]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    for ax in axes.ravel()[len(js):]:
-        ax.axis("off")
-    fig.suptitle("Restoring force per spring (linear spring force + unexplained force)", fontsize=10)
-    fig.tight_layout()
-    return fig
+        r = np.mean([-s * force_resid[:, e] for e, s in spring_sides(P, j)], axis=0)
+        name = f"spring {j}" + (" (k1+k2)" if P.n == 1 else "")
+        items.append((f"{name}: binned law explains {expl.get(j, 0):.0%}", dj, k * dj, r, f"linear k = {k:.4g} N/m"))
+    return _force_panels("Restoring force per spring against its deformation", items, "deformation [mm]", 1e3,
+                         "restoring force")
 
 
 def fig_damping_force(d):
     P, lin = d.P, d.lin
     force_resid = lin.resid * lin.mass[None, :]
-    n = P.n
     expl = {s["dof"]: s["explained"] for s in d.where["amplitude"]["masses"]}
-    cols = min(n, 3)
-    rows = int(np.ceil(n / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 2.9 * rows + 0.5), squeeze=False)
-    idx = _subsample(P.a.shape[0])
     c = lin.damping()
-    for i, ax in zip(range(n), axes.ravel()):
+    items = []
+    for i in range(P.n):
         v = lin.v[:, i]
-        F = c[i] * v + force_resid[:, i]
-        ax.plot(v[idx], F[idx], ".", ms=1.2, color=C_MEAS, alpha=0.5)
-        zb, fb = _binned(v, F)
-        ax.plot(zb, fb, "-", color=C_BEFORE, lw=1.5, label="binned mean")
-        zz = np.linspace(v.min(), v.max(), 2)
-        ax.plot(zz, c[i] * zz, "k--", lw=0.8, label=f"linear c = {c[i]:.3g} N s/m")
-        ax.set_title(f"DOF {i + 1}: explains {expl.get(i + 1, 0):.0%}", fontsize=9)
-        ax.set_xlabel("velocity [m/s]")
-        ax.set_ylabel("damping force [N]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    for ax in axes.ravel()[n:]:
-        ax.axis("off")
-    fig.suptitle("Damping force per mass (viscous damper force + unexplained force)", fontsize=10)
-    fig.tight_layout()
-    return fig
+        items.append((f"DOF {i + 1}: binned law explains {expl.get(i + 1, 0):.0%}", v, c[i] * v, -force_resid[:, i],
+                      f"linear c = {c[i]:.3g} N s/m"))
+    return _force_panels("Damping force per mass against its velocity", items, "velocity [m/s]", 1.0,
+                         "damping force")
 
 
 def fig_window_parameters(d):
