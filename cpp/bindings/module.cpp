@@ -6,6 +6,8 @@
 
 namespace py = pybind11;
 
+void bind_continuous(pybind11::module_& m);  // continuous.cpp
+
 void bind_chains_small(py::module_& m);
 void bind_chains_medium(py::module_& m);
 void bind_chains_large(py::module_& m);
@@ -15,6 +17,7 @@ PYBIND11_MODULE(_core, m) {
   bind_chains_small(m);
   bind_chains_medium(m);
   bind_chains_large(m);
+  bind_continuous(m);
   m.attr("SIZES") = py::make_tuple(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 16, 20, 32, 50, 64);
   py::enum_<algid::Status>(m, "Status")
       .value("OK", algid::Status::kOk)
