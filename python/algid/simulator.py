@@ -24,8 +24,12 @@ clearance contact of stiffness ``k_c`` gets ``h sqrt(k_c / m) <= 0.25`` by autom
 sub-steps, and the dry-friction regularisation width defaults to
 ``v_eps = max(1e-4 m/s, F / (m_i f_sub))`` (``f_sub`` the sub-step rate) so that its
 relaxation rate ``F / (m v_eps)`` never exceeds one per step (an explicit ``v_eps`` gets
-enough sub-steps instead). The tests check the result against scipy's ``solve_ivp`` at
-tight tolerance and a zero-order-hold response against its exact discretisation.
+enough sub-steps instead). A step across a switch (a dry-friction velocity changing sign,
+a clearance contact engaging or releasing) is redone in 8 sub-steps. Measured against
+scipy's ``solve_ivp`` (DOP853, rtol 1e-11) at 1 kHz: linear chains 1e-10 relative,
+smooth effects (cubic spring, quadratic damping, drift, low-pass) 1e-8, clearance 1e-6,
+dry friction 2e-5 (``tests/test_simulator.py``; a zero-order-hold response matches its
+exact discretisation to 1e-12).
 
 Force input
 -----------
@@ -526,6 +530,20 @@ class _Plant:
             + [("cl", e.spring - 1, e.params["gap"], e.params["stiffness"]) for e in cl]
             + [("dr", e.spring - 1, r, 0.0) for e, r in zip(dr, self.dr_rate)])
         self.nonlinear = bool(self.dof_terms or cs or cl or dr)
+        self.has_switches = bool(cl) or any(kind == "cf" for kind, *_ in self.dof_terms)
+
+    def switch_state(self, state: np.ndarray) -> tuple:
+        """Which side of its switch every steep effect is on: the sign of each dry-friction
+        velocity and whether each clearance contact is engaged (a change within a step
+        makes the integrator redo that step with finer sub-steps)."""
+        n = self.n
+        vals = state.tolist()
+        out = [vals[n + i] > 0.0 for kind, i, _, _ in self.dof_terms if kind == "cf"]
+        for kind, j, gap, _ in self.spring_terms:
+            if kind == "cl":
+                d = (vals[j] if j < n else 0.0) - (vals[j - 1] if j >= 1 else 0.0)
+                out.append(abs(d) > gap)
+        return tuple(out)
 
     def effect_force(self, t: Union[float, np.ndarray], x: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Sum of the effect forces [N] on each mass; ``x, v`` (n,) or (T, n) with ``t``
@@ -778,6 +796,44 @@ def simulate(
         if key not in props:
             props[key] = _Propagator(Lm, B_in, ell, rk, None if ctrl_cont else Bg)
     P = [props[round(ell * fs_hz, 12)] for ell in lens]
+    # a step across a friction reversal or a contact switch is redone in REFINE sub-steps
+    REFINE = 8
+    P_fine: list[_Propagator] = []
+    if plant.has_switches:
+        fine: dict[float, _Propagator] = {}
+        for ell in lens:
+            key = round(ell * fs_hz, 12)
+            if key not in fine:
+                fine[key] = _Propagator(Lm, B_in, ell / REFINE, True, None if ctrl_cont else Bg)
+        P_fine = [fine[round(ell * fs_hz, 12)] for ell in lens]
+    n_refined = [0]
+    sw_cache: list[Any] = [None, None]  # (state, its switch state)
+
+    def rk_step(q: int, s0: np.ndarray, t0: float, coef: Optional[np.ndarray], wf: np.ndarray,
+                wh: np.ndarray, w2: np.ndarray, N: Callable, n0: Optional[np.ndarray] = None) -> np.ndarray:
+        """One ETDRK4 step over sub-interval ``q``, redone finely across a switch;
+        ``coef`` (4, n) is the polynomial input on the sub-interval (None: no input)."""
+        s1 = P[q].step(s0, t0, wf, wh, w2, N, n0)
+        if not P_fine:
+            return s1
+        sw0 = sw_cache[1] if sw_cache[0] is s0 else plant.switch_state(s0)
+        sw1 = plant.switch_state(s1)
+        if sw1 == sw0:
+            sw_cache[0], sw_cache[1] = s1, sw1
+            return s1
+        n_refined[0] += 1
+        Pf = P_fine[q]
+        ell = Pf.ell
+        s1 = s0
+        for j in range(REFINE):
+            if coef is None:
+                s1 = Pf.step(s1, t0 + j * ell, wf * 0.0, wh * 0.0, w2 * 0.0, N)
+            else:
+                c = _shift(coef, j * ell)
+                fwf = np.einsum("jmn,jn->m", Pf.G, c)
+                fwh = np.einsum("jmn,jn->m", Pf.Gh, c)
+                s1 = Pf.step(s1, t0 + j * ell, fwf, fwh, fwf - Pf.E2 @ fwh, N)
+        return s1
 
     # ---- recorded force pieces per interval (open loop): rec[k, j] = coefficient of tau^j
     rec = None
@@ -877,7 +933,7 @@ def simulate(
             if nonlinear:
                 tq = tgrid[k]
                 for q in range(J):
-                    s = P[q].step(s, tq, Wf[k, q], Wh[k, q], W2[k, q], N_open)
+                    s = rk_step(q, s, tq, app[k, q], Wf[k, q], Wh[k, q], W2[k, q], N_open)
                     tq += lens[q]
             else:
                 for q in range(J):
@@ -997,7 +1053,9 @@ def simulate(
                     wf = P[q].G[0] @ app_q[q]
                     if rk:
                         wh = P[q].Gh[0] @ app_q[q]
-                        s = P[q].step(s, tq, wf, wh, wf - P[q].E2 @ wh, N_open)
+                        coef = np.zeros((4, n))
+                        coef[0] = app_q[q]
+                        s = rk_step(q, s, tq, coef, wf, wh, wf - P[q].E2 @ wh, N_open)
                     else:
                         s = P[q].E @ s + wf
                     tq += lens[q]
@@ -1006,7 +1064,7 @@ def simulate(
             else:
                 tq = tk
                 for q in range(J):
-                    s = P[q].step(s, tq, zero_w, zero_w, zero_w, N_ctrl, n0 if q == 0 else None)
+                    s = rk_step(q, s, tq, None, zero_w, zero_w, zero_w, N_ctrl, n0 if q == 0 else None)
                     tq += lens[q]
                 u_l, _ = controller.continuous(tgrid[k + 1], s[:n], s[o_z:], params)
                 left_app = left_rec = u_l
@@ -1050,7 +1108,7 @@ def simulate(
         res.estimates = log.get("estimates")
     if progress is not None:
         progress(1.0)
-    res.stats = {"substeps_per_sample": J, "v_eps": {effs[q].dof + 1: v for q, v in v_eps.items()},
+    res.stats = {"substeps_per_sample": J, "refined_steps": n_refined[0], "v_eps": {effs[q].dof + 1: v for q, v in v_eps.items()},
                  "integrator": "etdrk4" if rk else "exact", "wall_s": time.perf_counter() - wall0}
     return res
 
