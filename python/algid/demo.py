@@ -80,6 +80,8 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] 
     est = np.concatenate([E["mass"], E["damping"], E["stiffness"]], axis=1)
     true = chain.identifiable()
     names = parameter_names(chain)
+    if chain.n == 1 and chain.boundary == "fixed":
+        names[2] = "k1+k2"  # the two walls' springs act in parallel
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = est / true - 1.0
     keep = np.isfinite(true)
