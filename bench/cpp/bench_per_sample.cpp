@@ -6,19 +6,35 @@
 //                                                     requests (run under valgrind
 //                                                     --tool=callgrind --instr-atstart=no)
 //
+//   bench_per_sample --dump N T PATH                  write the n = N signals (T samples): accel
+//                                                     then force, row-major float64
+//
+// Configurations: "default" = ChainEstimator<N, Scalar> (one window from t0, reseeded between
+// timing windows); "continuous" = ContinuousEstimator<N, Scalar> with its default configuration
+// (K = 4 staggered reseeded 0.3 s windows, block-median aggregation, change detection), fed one
+// uninterrupted signal (never reset between timing windows); "rls" = the baseline.
+//
 // Timing protocol, per configuration: one untimed warm-up window, then W windows of T samples
-// each, every window starting from reset()/reseed() (not timed):
+// each (default and rls: each starting from reset()/reseed(), not timed):
 //   batch  pass: steady_clock around 16 consecutive updates; median and p99 of the mean;
 //   single pass: steady_clock around every update minus the clock's own median overhead;
 //                max = raw worst single sample (includes whatever the OS did meanwhile),
 //                max_path = max over sample index of the min over windows (the worst
 //                data-dependent path with interference filtered out).
+//   window_min:  whole batch pass of a window / T, min over windows (the protocol of the Python
+//                batch run() figure in bench/per_sample.py).
 // The first batch (and first 16 single samples) of every window, which contains the
 // quadrature's start-up samples (cheaper: no estimate yet), is left out of the statistics.
-//
-// ContinuousEstimator (reseeding and aggregation on) is not in the core yet; when
-// cpp/include/algid/continuous_estimator.hpp lands, add a subject for it below.
 #include <algid/algid.hpp>
+#if defined(__has_include)
+#if __has_include(<algid/continuous_estimator.hpp>)
+#include <algid/continuous_estimator.hpp>
+#define ALGID_BENCH_HAVE_CONTINUOUS 1
+#endif
+#endif
+#ifndef ALGID_BENCH_HAVE_CONTINUOUS
+#define ALGID_BENCH_HAVE_CONTINUOUS 0
+#endif
 
 #include "rls.hpp"
 #include "signals.hpp"
@@ -38,6 +54,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -73,10 +90,14 @@ double clock_overhead_ns() {
   return percentile(d, 0.5);
 }
 
+// A subject is timed on segments of its signals: begin(segment) prepares segment `segment`
+// (untimed), step(k) consumes its k-th sample.
 template <int N, class Scalar>
 struct EstimatorSubject {
   using Est = algid::ChainEstimator<N, Scalar>;
   static constexpr int kDofs = N;
+  static constexpr bool kContinuous = false;
+  static constexpr int kCallgrindWarmup = 64;
   const algid_bench::Signals<Scalar>* s;
   std::unique_ptr<Est> est;
   explicit EstimatorSubject(const algid_bench::Signals<Scalar>& sig) : s(&sig) {
@@ -84,7 +105,7 @@ struct EstimatorSubject {
     cfg.dt = static_cast<Scalar>(algid_bench::kDt);
     est = std::make_unique<Est>(cfg);
   }
-  void reset() noexcept { est->reseed(); }
+  void begin(int) noexcept { est->reseed(); }
   void step(int k) noexcept {
     const std::size_t at = static_cast<std::size_t>(k) * N;
     est->update(s->accel.data() + at, s->force.data() + at);
@@ -92,13 +113,43 @@ struct EstimatorSubject {
   double observe() const { return static_cast<double>(est->mass()(0) + est->stiffness()(N)); }
 };
 
+#if ALGID_BENCH_HAVE_CONTINUOUS
+template <int N, class Scalar>
+struct ContinuousSubject {
+  using Est = algid::ContinuousEstimator<N, Scalar>;
+  static constexpr int kDofs = N;
+  static constexpr bool kContinuous = true;
+  // Past the first window results (0.3 s windows): every window in flight, aggregation running.
+  static constexpr int kCallgrindWarmup = 400;
+  const algid_bench::Signals<Scalar>* s;
+  std::unique_ptr<Est> est;
+  int segment_samples;
+  std::size_t base = 0;
+  ContinuousSubject(const algid_bench::Signals<Scalar>& sig, int segment) : s(&sig), segment_samples(segment) {
+    typename Est::Config cfg;
+    cfg.dt = static_cast<Scalar>(algid_bench::kDt);
+    est = std::make_unique<Est>(cfg);
+  }
+  explicit ContinuousSubject(const algid_bench::Signals<Scalar>& sig) : ContinuousSubject(sig, sig.samples) {}
+  // Never reset: consecutive segments are consecutive stretches of one signal.
+  void begin(int segment) noexcept { base = static_cast<std::size_t>(segment) * static_cast<std::size_t>(segment_samples); }
+  void step(int k) noexcept {
+    const std::size_t at = (base + static_cast<std::size_t>(k)) * N;
+    est->update(s->accel.data() + at, s->force.data() + at);
+  }
+  double observe() const { return static_cast<double>(est->estimate()(0)); }
+};
+#endif
+
 template <int N, class Scalar>
 struct RlsSubject {
   static constexpr int kDofs = N;
+  static constexpr bool kContinuous = false;
+  static constexpr int kCallgrindWarmup = 64;
   const algid_bench::Signals<Scalar>* s;
   std::array<algid_bench::Rls4<Scalar>, N> rls{};
   explicit RlsSubject(const algid_bench::Signals<Scalar>& sig) : s(&sig) {}
-  void reset() noexcept {
+  void begin(int) noexcept {
     for (auto& r : rls) r.reset();
   }
   void step(int k) noexcept {
@@ -110,6 +161,7 @@ struct RlsSubject {
 
 struct Result {
   double batch_median = 0, batch_p99 = 0, single_median = 0, single_p99 = 0, max = 0, max_path = 0;
+  double window_min = 1e300;
   long timed = 0;
 };
 
@@ -121,17 +173,21 @@ Result measure(Subject& subject, int samples, int windows, double overhead) {
   std::vector<double> single;
   std::vector<double> path(static_cast<std::size_t>(samples), 1e300);
   const int batches = samples / kBatch;
+  Result r;
   for (int w = 0; w <= windows; ++w) {
     const bool warmup = w == 0;
-    subject.reset();
+    subject.begin(2 * w);
+    double window_ns = 0;
     for (int b = 0; b < batches; ++b) {
       const long long t0 = now_ns();
       for (int k = b * kBatch; k < (b + 1) * kBatch; ++k) subject.step(k);
       const long long t1 = now_ns();
+      window_ns += static_cast<double>(t1 - t0);
       if (!warmup && b > 0) batch.push_back(static_cast<double>(t1 - t0) / kBatch);
     }
+    if (!warmup) r.window_min = std::min(r.window_min, window_ns / (batches * kBatch));
     g_sink = g_sink + subject.observe();
-    subject.reset();
+    subject.begin(2 * w + 1);
     for (int k = 0; k < batches * kBatch; ++k) {
       const long long t0 = now_ns();
       subject.step(k);
@@ -144,7 +200,6 @@ Result measure(Subject& subject, int samples, int windows, double overhead) {
     }
     g_sink = g_sink + subject.observe();
   }
-  Result r;
   r.batch_median = percentile(batch, 0.5);
   r.batch_p99 = percentile(batch, 0.99);
   r.single_median = percentile(single, 0.5);
@@ -160,33 +215,48 @@ void print(const char* config, int n, const char* scalar, const Result& r, doubl
   std::printf(
       "{\"config\": \"%s\", \"n\": %d, \"scalar\": \"%s\", "
       "\"ns_per_sample_median\": %.2f, \"ns_per_dof_sample_median\": %.2f, \"p99\": %.2f, \"max\": %.2f, "
-      "\"max_path\": %.2f, \"single_median\": %.2f, \"single_p99\": %.2f, \"timed_samples\": %ld, "
+      "\"max_path\": %.2f, \"window_min\": %.2f, \"single_median\": %.2f, \"single_p99\": %.2f, \"timed_samples\": %ld, "
       "\"clock_overhead_ns\": %.1f, \"batch\": %d, \"units\": \"ns per DOF-sample except ns_per_sample_median\"}\n",
       config, n, scalar, r.batch_median, r.batch_median / dn, r.batch_p99 / dn, r.max / dn, r.max_path / dn,
-      r.single_median / dn, r.single_p99 / dn, r.timed, overhead, kBatch);
+      r.window_min / dn, r.single_median / dn, r.single_p99 / dn, r.timed, overhead, kBatch);
   std::fflush(stdout);
 }
 
 template <int N, class Scalar>
 void bench_n(const char* scalar, int samples, int windows, double overhead) {
-  const auto sig = algid_bench::make_signals<N, Scalar>(samples);
   {
-    EstimatorSubject<N, Scalar> subject(sig);
-    print("default", N, scalar, measure(subject, samples, windows, overhead), overhead);
+    const auto sig = algid_bench::make_signals<N, Scalar>(samples);
+    {
+      EstimatorSubject<N, Scalar> subject(sig);
+      print("default", N, scalar, measure(subject, samples, windows, overhead), overhead);
+    }
+    {
+      RlsSubject<N, Scalar> subject(sig);
+      print("rls", N, scalar, measure(subject, samples, windows, overhead), overhead);
+    }
   }
+#if ALGID_BENCH_HAVE_CONTINUOUS
   {
-    RlsSubject<N, Scalar> subject(sig);
-    print("rls", N, scalar, measure(subject, samples, windows, overhead), overhead);
+    // One uninterrupted signal: 2 segments (batch and single pass) per window. Segments are a
+    // whole number of result periods (window samples / stagger) long, so that sample index k
+    // has the same place in the harvest schedule in every segment (max_path needs that).
+    const typename algid::ContinuousEstimator<N, Scalar>::Config cfg{};
+    const int period = static_cast<int>(std::lround(cfg.window_s / static_cast<Scalar>(algid_bench::kDt))) / cfg.stagger;
+    const int segment = (samples + period - 1) / period * period;
+    const auto sig = algid_bench::make_signals<N, Scalar>(2 * (windows + 1) * segment, 7, algid_bench::kDt, false);
+    ContinuousSubject<N, Scalar> subject(sig, segment);
+    print("continuous", N, scalar, measure(subject, segment, windows, overhead), overhead);
   }
+#endif
 }
 
 template <class Subject, class Scalar>
 int callgrind_run(int updates) {
-  constexpr int kWarm = 64;
+  constexpr int kWarm = Subject::kCallgrindWarmup;
   const int total = kWarm + updates;
   const auto sig = algid_bench::make_signals<Subject::kDofs, Scalar>(total);
   Subject subject(sig);
-  subject.reset();
+  subject.begin(0);
   for (int k = 0; k < kWarm; ++k) subject.step(k);
   CALLGRIND_START_INSTRUMENTATION;
   for (int k = kWarm; k < total; ++k) subject.step(k);
@@ -203,8 +273,22 @@ int callgrind_dispatch(const std::string& subject, const std::string& scalar, in
   if (subject == "default" && scalar == "float") return callgrind_run<EstimatorSubject<N, float>, float>(updates);
   if (subject == "rls" && scalar == "double") return callgrind_run<RlsSubject<N, double>, double>(updates);
   if (subject == "rls" && scalar == "float") return callgrind_run<RlsSubject<N, float>, float>(updates);
+#if ALGID_BENCH_HAVE_CONTINUOUS
+  if (subject == "continuous" && scalar == "double") return callgrind_run<ContinuousSubject<N, double>, double>(updates);
+  if (subject == "continuous" && scalar == "float") return callgrind_run<ContinuousSubject<N, float>, float>(updates);
+#endif
   std::fprintf(stderr, "unknown subject/scalar %s/%s\n", subject.c_str(), scalar.c_str());
   return 2;
+}
+
+template <int N>
+int dump(int samples, const char* path) {
+  const auto sig = algid_bench::make_signals<N, double>(samples, 7, algid_bench::kDt, false);
+  std::FILE* f = std::fopen(path, "wb");
+  if (!f) return 1;
+  const bool ok = std::fwrite(sig.accel.data(), sizeof(double), sig.accel.size(), f) == sig.accel.size() &&
+                  std::fwrite(sig.force.data(), sizeof(double), sig.force.size(), f) == sig.force.size();
+  return std::fclose(f) == 0 && ok ? 0 : 1;
 }
 
 }  // namespace
@@ -217,6 +301,16 @@ int main(int argc, char** argv) {
       windows = std::atoi(argv[++a]);
     } else if (!std::strcmp(argv[a], "--samples") && a + 1 < argc) {
       samples = std::atoi(argv[++a]);
+    } else if (!std::strcmp(argv[a], "--dump") && a + 3 < argc) {
+      const int n = std::atoi(argv[a + 1]);
+      const int t = std::atoi(argv[a + 2]);
+      switch (n) {
+        case 1: return dump<1>(t, argv[a + 3]);
+        case 3: return dump<3>(t, argv[a + 3]);
+        case 10: return dump<10>(t, argv[a + 3]);
+        case 50: return dump<50>(t, argv[a + 3]);
+        default: std::fprintf(stderr, "n must be 1, 3, 10 or 50\n"); return 2;
+      }
     } else if (!std::strcmp(argv[a], "--callgrind") && a + 4 < argc) {
       const std::string subject = argv[a + 1];
       const int n = std::atoi(argv[a + 2]);
@@ -230,7 +324,8 @@ int main(int argc, char** argv) {
         default: std::fprintf(stderr, "n must be 1, 3, 10 or 50\n"); return 2;
       }
     } else {
-      std::fprintf(stderr, "usage: %s [--windows W] [--samples T] | --callgrind SUBJECT N SCALAR UPDATES\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--windows W] [--samples T] | --callgrind SUBJECT N SCALAR UPDATES | --dump N T PATH\n",
+                   argv[0]);
       return 2;
     }
   }

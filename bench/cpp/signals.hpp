@@ -33,7 +33,7 @@ void set_table1(algid_test::SineChain<N>& chain) {
 }
 
 template <int N, class Scalar>
-Signals<Scalar> make_signals(int samples, unsigned seed = 7, double dt = kDt) {
+Signals<Scalar> make_signals(int samples, unsigned seed = 7, double dt = kDt, bool with_phi = true) {
   algid_test::SineChain<N> chain(seed);
   set_table1(chain);
   Signals<Scalar> s;
@@ -41,13 +41,14 @@ Signals<Scalar> make_signals(int samples, unsigned seed = 7, double dt = kDt) {
   s.dofs = N;
   s.accel.resize(static_cast<std::size_t>(samples) * N);
   s.force.resize(static_cast<std::size_t>(samples) * N);
-  s.phi.resize(static_cast<std::size_t>(samples) * N * 4);
+  if (with_phi) s.phi.resize(static_cast<std::size_t>(samples) * N * 4);
   for (int k = 0; k < samples; ++k) {
     const double t = k * dt;
     for (int i = 0; i < N; ++i) {
       const std::size_t at = static_cast<std::size_t>(k) * N + static_cast<std::size_t>(i);
       s.accel[at] = static_cast<Scalar>(chain.accel(i, t));
       s.force[at] = static_cast<Scalar>(chain.force(i, t));
+      if (!with_phi) continue;
       const double x = chain.deriv(i, 0, t);
       s.phi[4 * at + 0] = static_cast<Scalar>(chain.accel(i, t));
       s.phi[4 * at + 1] = static_cast<Scalar>(chain.deriv(i, 1, t));

@@ -1,0 +1,216 @@
+// Floating-point operations per DOF-sample, counted by running the real code on a scalar type
+// that counts its own arithmetic (ChainEstimator<N, Counted>): additions/subtractions,
+// multiplications, divisions and square roots, as the implementation performs them (Eigen's
+// scalar path: a dense fixed-size product counts every multiplication, also by a structural
+// zero). Sign flips, comparisons, copies and integer work are not counted.
+//
+//   flop_count            one JSON object per (subject, n) on stdout
+//
+// Cross-check of the hand count in docs/performance.md; the same counter measures the RLS
+// baseline. Phases are separated by counting the parts of one update through the public
+// IntegratorChain / DofEstimator with the same inputs.
+// Counted and its std overloads must be declared before the core headers: the core calls
+// std::isfinite / std::abs / std::sqrt by qualified name.
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace algid_bench {
+
+struct OpCount {
+  long add = 0, mul = 0, div = 0, sqrt = 0;
+  long flops() const { return add + mul + div + sqrt; }
+};
+inline OpCount g_ops;
+
+/// A double that counts the arithmetic done on it.
+class Counted {
+ public:
+  Counted() = default;
+  Counted(double v) : v_(v) {}  // NOLINT: implicit, like a built-in floating type
+  Counted(long double v) : v_(static_cast<double>(v)) {}
+  Counted(float v) : v_(v) {}
+  Counted(int v) : v_(v) {}
+  Counted(long v) : v_(static_cast<double>(v)) {}
+  explicit operator double() const { return v_; }
+  explicit operator float() const { return static_cast<float>(v_); }
+  explicit operator long double() const { return v_; }
+  double value() const { return v_; }
+
+  friend Counted operator+(Counted a, Counted b) { ++g_ops.add; return Counted(a.v_ + b.v_); }
+  friend Counted operator-(Counted a, Counted b) { ++g_ops.add; return Counted(a.v_ - b.v_); }
+  friend Counted operator*(Counted a, Counted b) { ++g_ops.mul; return Counted(a.v_ * b.v_); }
+  friend Counted operator/(Counted a, Counted b) { ++g_ops.div; return Counted(a.v_ / b.v_); }
+  friend Counted operator-(Counted a) { return Counted(-a.v_); }
+  friend Counted operator+(Counted a) { return a; }
+  Counted& operator+=(Counted b) { return *this = *this + b; }
+  Counted& operator-=(Counted b) { return *this = *this - b; }
+  Counted& operator*=(Counted b) { return *this = *this * b; }
+  Counted& operator/=(Counted b) { return *this = *this / b; }
+  friend bool operator<(Counted a, Counted b) { return a.v_ < b.v_; }
+  friend bool operator>(Counted a, Counted b) { return a.v_ > b.v_; }
+  friend bool operator<=(Counted a, Counted b) { return a.v_ <= b.v_; }
+  friend bool operator>=(Counted a, Counted b) { return a.v_ >= b.v_; }
+  friend bool operator==(Counted a, Counted b) { return a.v_ == b.v_; }
+  friend bool operator!=(Counted a, Counted b) { return a.v_ != b.v_; }
+
+ private:
+  double v_ = 0;
+};
+
+}  // namespace algid_bench
+
+// The core calls std::isfinite / std::abs / std::sqrt on its Scalar; a bench-only overload set.
+namespace std {
+inline bool isfinite(algid_bench::Counted x) { return std::isfinite(x.value()); }
+inline bool isnan(algid_bench::Counted x) { return std::isnan(x.value()); }
+inline algid_bench::Counted abs(algid_bench::Counted x) { return algid_bench::Counted(std::fabs(x.value())); }
+inline algid_bench::Counted sqrt(algid_bench::Counted x) {
+  ++algid_bench::g_ops.sqrt;
+  return algid_bench::Counted(std::sqrt(x.value()));
+}
+template <>
+class numeric_limits<algid_bench::Counted> : public numeric_limits<double> {
+ public:
+  static algid_bench::Counted quiet_NaN() { return numeric_limits<double>::quiet_NaN(); }
+  static algid_bench::Counted infinity() { return numeric_limits<double>::infinity(); }
+  static algid_bench::Counted epsilon() { return numeric_limits<double>::epsilon(); }
+  static algid_bench::Counted min() { return numeric_limits<double>::min(); }
+  static algid_bench::Counted max() { return numeric_limits<double>::max(); }
+  static algid_bench::Counted lowest() { return numeric_limits<double>::lowest(); }
+};
+}  // namespace std
+
+#include <Eigen/Core>
+
+namespace Eigen {
+template <>
+struct NumTraits<algid_bench::Counted> : GenericNumTraits<algid_bench::Counted> {
+  using Real = algid_bench::Counted;
+  using NonInteger = algid_bench::Counted;
+  using Nested = algid_bench::Counted;
+  using Literal = algid_bench::Counted;
+  enum { IsComplex = 0, IsInteger = 0, IsSigned = 1, RequireInitialization = 1, ReadCost = 1, AddCost = 1, MulCost = 1 };
+  static Real epsilon() { return std::numeric_limits<double>::epsilon(); }
+  static Real dummy_precision() { return 1e-12; }
+  static Real highest() { return std::numeric_limits<double>::max(); }
+  static Real lowest() { return std::numeric_limits<double>::lowest(); }
+  static int digits10() { return std::numeric_limits<double>::digits10; }
+};
+}  // namespace Eigen
+
+#include <algid/algid.hpp>
+
+#include "rls.hpp"
+#include "signals.hpp"
+
+namespace {
+
+using algid_bench::Counted;
+using algid_bench::g_ops;
+
+void print(const char* subject, int n, long samples, const algid_bench::OpCount& c) {
+  const double per = static_cast<double>(samples) * n;
+  std::printf(
+      "{\"subject\": \"%s\", \"n\": %d, \"flops_per_dof_sample\": %.2f, \"add\": %.2f, \"mul\": %.2f, "
+      "\"div\": %.2f, \"sqrt\": %.2f}\n",
+      subject, n, static_cast<double>(c.flops()) / per, static_cast<double>(c.add) / per, static_cast<double>(c.mul) / per,
+      static_cast<double>(c.div) / per, static_cast<double>(c.sqrt) / per);
+}
+
+constexpr int kWarm = 64;
+constexpr int kCounted = 512;
+
+template <int N>
+void count_estimator() {
+  const auto sig = algid_bench::make_signals<N, double>(kWarm + kCounted);
+  using Est = algid::ChainEstimator<N, Counted>;
+  typename Est::Config cfg;
+  cfg.dt = Counted(algid_bench::kDt);
+  Est est(cfg);
+  Counted a[N], u[N];
+  auto feed = [&](int k) {
+    for (int i = 0; i < N; ++i) {
+      a[i] = Counted(sig.accel[static_cast<std::size_t>(k * N + i)]);
+      u[i] = Counted(sig.force[static_cast<std::size_t>(k * N + i)]);
+    }
+    est.update(a, u);
+  };
+  for (int k = 0; k < kWarm; ++k) feed(k);
+  g_ops = {};
+  for (int k = kWarm; k < kWarm + kCounted; ++k) feed(k);
+  print("default", N, kCounted, g_ops);
+}
+
+// The phases of one DOF-sample, on the DOF in the middle of a 3-DOF chain.
+void count_phases() {
+  constexpr int N = 3;
+  const auto sig = algid_bench::make_signals<N, double>(kWarm + kCounted);
+  using Chain = algid::IntegratorChain<8, Counted>;
+  typename Chain::Rule rule(Counted(algid_bench::kDt));
+  Chain ya[N], fa[N];
+  algid::DofEstimator<4, Counted> dof;
+  algid::ValidityRule<Counted> validity;
+  for (auto& c : ya) c.reset();
+  for (auto& c : fa) c.reset();
+  dof.reset();
+  algid_bench::OpCount push{}, update{};
+  for (int k = 0; k < kWarm + kCounted; ++k) {
+    const bool counting = k >= kWarm;
+    const Counted delta = Counted(static_cast<double>(k) * algid_bench::kDt);
+    g_ops = {};
+    for (int i = 0; i < N; ++i) {
+      ya[i].push(Counted(sig.accel[static_cast<std::size_t>(k * N + i)]), delta, rule);
+      fa[i].push(Counted(sig.force[static_cast<std::size_t>(k * N + i)]), delta, rule);
+    }
+    if (counting) {
+      push.add += g_ops.add / N, push.mul += g_ops.mul / N, push.div += g_ops.div / N, push.sqrt += g_ops.sqrt / N;
+    }
+    if (k + 1 < 8) continue;
+    const Counted tau = Counted(static_cast<double>(k + 1 - 8 + 1) * algid_bench::kDt);
+    g_ops = {};
+    dof.update(&ya[0], ya[1], &ya[2], fa[1], tau, Counted(algid_bench::kDt), k + 1, validity);
+    if (counting) update.add += g_ops.add, update.mul += g_ops.mul, update.div += g_ops.div, update.sqrt += g_ops.sqrt;
+  }
+  print("phase:two_chain_pushes", 1, kCounted, push);
+  print("phase:dof_update(system+cramer+hadamard+eq7)", 1, kCounted, update);
+  // Cramer alone, and the ratio estimator alone.
+  g_ops = {};
+  const auto sol = algid::cramer(dof.system(), dof.rhs());
+  print("phase:cramer_4x4", 1, 1, g_ops);
+  algid::RatioEstimator<4, Counted> ratio;
+  ratio.reset();
+  ratio.add(Counted(0.01), Counted(1e-3), Counted(1.0), sol.numerator);
+  g_ops = {};
+  ratio.add(Counted(0.011), Counted(1e-3), Counted(1.0), sol.numerator);
+  print("phase:eq7_ratio_add", 1, 1, g_ops);
+}
+
+template <int N>
+void count_rls() {
+  const auto sig = algid_bench::make_signals<N, double>(kWarm + kCounted);
+  algid_bench::Rls4<Counted> rls[N];
+  Counted phi[4];
+  auto feed = [&](int k) {
+    for (int i = 0; i < N; ++i) {
+      for (int j = 0; j < 4; ++j) phi[j] = Counted(sig.phi[static_cast<std::size_t>(4 * (k * N + i) + j)]);
+      rls[i].update(phi, Counted(sig.force[static_cast<std::size_t>(k * N + i)]));
+    }
+  };
+  for (int k = 0; k < kWarm; ++k) feed(k);
+  g_ops = {};
+  for (int k = kWarm; k < kWarm + kCounted; ++k) feed(k);
+  print("rls", N, kCounted, g_ops);
+}
+
+}  // namespace
+
+int main() {
+  count_estimator<1>();
+  count_estimator<3>();
+  count_estimator<10>();
+  count_estimator<50>();
+  count_rls<3>();
+  count_phases();
+  return 0;
+}
