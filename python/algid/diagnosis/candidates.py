@@ -86,6 +86,8 @@ MAIN_PARAM = {
 #: Longest input delay searched [samples]; the analysis skips at least this many samples.
 MAX_DELAY_SAMPLES = 100
 N_GRID = 24
+#: Refinement factor of the second grid stage.
+FINE = 4
 
 
 @dataclass
@@ -185,12 +187,17 @@ def lowpass(x: np.ndarray, cutoff_hz: float, dt: float) -> np.ndarray:
 
 
 def _fit_linear_effect(ctx: Context, effect: str, location: dict, eq_cols: list[tuple[int, np.ndarray]],
-                       names: list[str], transform=None) -> CandidateFit:
+                       names: list[str], transform=None, signals: tuple | None = None) -> CandidateFit:
+    """Linear model plus one shared effect column per equation; ``signals = (a, A1, A2)``
+    replaces the measured acceleration and its integrals (e.g. bias-corrected)."""
     P = ctx.P
     specs = []
     for e, col in eq_cols:
-        X = base_design(P, e, P.A1, P.A2)
-        specs.append(EqSpec(e=e, X=X, y=P.a[:, e], E=col[:, None], key=("base", e)))
+        if signals is None:
+            specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=P.a[:, e], E=col[:, None], key=("base", e)))
+        else:
+            a, A1, A2 = signals
+            specs.append(EqSpec(e=e, X=base_design(P, e, A1, A2), y=a[:, e], E=col[:, None]))
     cv = cross_validate(P, window_stats(P, specs))
     thetas = [cv.theta[s] for s in cv.stats.slices]
     gam = cv.theta[cv.stats.shared]
@@ -248,15 +255,22 @@ def fit_spring_linear(ctx: Context, effect: str, j: int) -> CandidateFit:
 def _fit_grid(ctx: Context, effect: str, location: dict, build, grid: np.ndarray, to_param,
               names: list[str], shared_names: list[str]) -> CandidateFit:
     """Grid search of one nonlinear parameter; ``build(g) -> specs``; ``to_param`` maps
-    the search coordinate to the reported parameter."""
+    the search coordinate to the reported parameter.
+
+    Two stages: the coarse ``grid``, then a grid :data:`FINE` times finer spanning the
+    coarse neighbours of every fold's choice and of the all-window choice (so each fold
+    refines inside its own bracket), on which the cross-validation is repeated.
+    """
     P = ctx.P
-    stats = []
-    specs_all = []
-    for g in grid:
-        specs = build(g)
-        specs_all.append(specs)
-        stats.append(window_stats(P, specs))
-    cv = cross_validate_grid(P, stats, grid)
+
+    def run(gr):
+        return cross_validate_grid(P, [window_stats(P, build(g)) for g in gr], gr)
+
+    cv = run(grid)
+    idx = np.r_[cv.extra["g_index_folds"], cv.extra["g_index"]]
+    lo, hi = max(int(idx.min()) - 1, 0), min(int(idx.max()) + 1, len(grid) - 1)
+    if hi > lo:
+        cv = run(np.interp(np.arange(FINE * (hi - lo) + 1) / FINE, np.arange(hi - lo + 1), grid[lo:hi + 1]))
     g = cv.extra["g"]
     specs = build(g)  # refit at the refined value
     cv_ref = cross_validate(P, window_stats(P, specs))
@@ -310,23 +324,40 @@ def fit_delay(ctx: Context, i: int) -> CandidateFit:
     return _fit_grid(ctx, "input_delay", {"dof": i + 1}, build, grid, np.exp, ["delay"], [])
 
 
-def fit_bias(ctx: Context, i: int) -> CandidateFit:
-    """Accelerometer bias at DOF i (two passes: the stiffness weights from the fit)."""
+def fit_bias(ctx: Context, i: int, iterations: int = 4) -> CandidateFit:
+    """Accelerometer bias at DOF i, by Gauss-Newton on the bias.
+
+    Every pass removes the current bias estimate from the acceleration and its integrals
+    (``a - b``, ``A1 - b t``, ``A2 - b t^2 / 2``, t from the first sample) and fits the
+    linear equations plus the bias column built with the stiffnesses of the previous pass
+    (its coefficient is the correction of b). The reported fit is the last pass.
+    """
     P = ctx.P
-    half_t2 = 0.5 * P.t**2
+    t = P.t
     thetas = list(ctx.lin.theta)  # physical
+    bias = 0.0
     fit = None
-    for _ in range(2):
-        # a_meas = ... + bias (sum_j k_j / m_i) t^2/2 in eq. i, - bias k_j / m_e t^2/2 in a
+    for _ in range(iterations):
+        a, A1, A2 = P.a.copy(), P.A1.copy(), P.A2.copy()
+        a[:, i] -= bias
+        A1[:, i] -= bias * t
+        A2[:, i] -= 0.5 * bias * t**2
+        # a_meas = ... + b (sum_j k_j / m_i) t^2/2 in eq. i, - b k_j / m_e t^2/2 in a
         # neighbour e joined by spring j (constants and lines are per-window terms).
         own = float(np.sum(thetas[i][2:])) / thetas[i][0]
-        cols = [(i, own * half_t2)]
+        cols = [(i, own * 0.5 * t**2)]
         for e, j in coupled(P, i):
             kk = [k for (jj, _), k in zip(spring_columns(P.n, P.boundary)[e], thetas[e][2:]) if jj == j][0]
-            cols.append((e, -kk / thetas[e][0] * half_t2))
-        fit = _fit_linear_effect(ctx, "sensor_bias", {"dof": i + 1}, cols, ["bias"])
+            cols.append((e, -kk / thetas[e][0] * 0.5 * t**2))
+        fit = _fit_linear_effect(ctx, "sensor_bias", {"dof": i + 1}, cols, ["bias"], signals=(a, A1, A2))
+        step = fit.params["bias"]
         for e, th in zip(fit.eqs, fit.thetas):
             thetas[e] = to_physical(P, e, th)
+        if abs(step) <= 1e-6 * max(abs(bias), 1e-300):
+            bias += step
+            break
+        bias += step
+    fit.params["bias"] = float(bias)
     return fit
 
 

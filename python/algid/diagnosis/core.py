@@ -425,19 +425,21 @@ def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray)
     test = np.zeros(stats[best].per_sub.shape[:3])
     thetas = np.zeros((K, thetas_all.shape[1]))
     g_folds = np.zeros(K)
+    gb_folds = np.zeros(K, dtype=int)
     for k in range(K):
         mask = P.folds == k
         Gtr = Gsum - G[:, mask].sum(axis=1)
         ths = solve_gram(Gtr)
         tr = np.array([sse(Gtr[g], ths[g]) for g in range(ng)])
         gb = int(np.argmin(tr))
+        gb_folds[k] = gb
         thetas[k] = ths[gb]
         g_folds[k] = refine_min(grid, tr, gb)
         test[mask] = sse(stats[gb].per_sub[mask], ths[gb])
     res.theta_folds = thetas
     res.test_sub = test
     res.extra = {"g": refine_min(grid, fit_all, best), "g_index": best, "g_folds": g_folds,
-                 "grid_sse": fit_all}
+                 "g_index_folds": gb_folds, "grid_sse": fit_all}
     return res
 
 

@@ -37,6 +37,9 @@ BIAS_NOISE_FACTOR = 10.0
 #: ``gap_before^2 - floor^2`` (it is then still listed first in the ranking).
 UNKNOWN_FLOOR_RATIO = 3.0
 MIN_EXPLAINED = 0.5
+#: A linear gap below this (0.01 % NRMS) is numerical resolution (quadrature, the
+#: integrator of a simulation): reported as ``none`` whatever the candidates say.
+GAP_RESOLUTION = 1e-4
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift")
@@ -257,6 +260,9 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     floor_rel = float(np.sqrt(sum(p["noise_floor"] ** 2 * np.sum(P.a[:, p["dof"] - 1] ** 2)
                                   for p in where["per_dof"]) / denom))
     best = next((s for s in scored if s.significant), None)
+    if gap_before < GAP_RESOLUTION:
+        best = None
+    floor_rel = max(floor_rel, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
     excess = gap_before**2 - floor_rel**2
     if best is None:
         effect, location, params, std, gap_after = "none", None, {}, {}, gap_before
