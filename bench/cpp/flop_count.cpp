@@ -101,6 +101,7 @@ struct NumTraits<algid_bench::Counted> : GenericNumTraits<algid_bench::Counted> 
 
 #include <algid/algid.hpp>
 
+#include "chain_variants.hpp"
 #include "rls.hpp"
 #include "signals.hpp"
 
@@ -173,6 +174,24 @@ void count_phases() {
     if (counting) update.add += g_ops.add, update.mul += g_ops.mul, update.div += g_ops.div, update.sqrt += g_ops.sqrt;
   }
   print("phase:two_chain_pushes", 1, kCounted, push);
+  // The Kahan-compensated chain of chain_variants.hpp (the float fix), same inputs: its
+  // triangular state update replaces the dense 5x5 propagation product.
+  {
+    using Variant = algid_bench::VariantChain<8, Counted, Counted, true>;
+    typename Variant::Rule vrule(algid_bench::kDt);
+    Variant vy, vf;
+    vy.reset();
+    vf.reset();
+    algid_bench::OpCount vpush{};
+    for (int k = 0; k < kWarm + kCounted; ++k) {
+      const Counted delta = Counted(static_cast<double>(k) * algid_bench::kDt);
+      g_ops = {};
+      vy.push(Counted(sig.accel[static_cast<std::size_t>(k * N + 1)]), delta, vrule);
+      vf.push(Counted(sig.force[static_cast<std::size_t>(k * N + 1)]), delta, vrule);
+      if (k >= kWarm) vpush.add += g_ops.add, vpush.mul += g_ops.mul, vpush.div += g_ops.div, vpush.sqrt += g_ops.sqrt;
+    }
+    print("phase:two_chain_pushes_kahan_variant", 1, kCounted, vpush);
+  }
   print("phase:dof_update(system+cramer+hadamard+eq7)", 1, kCounted, update);
   // Cramer alone, and the ratio estimator alone.
   g_ops = {};

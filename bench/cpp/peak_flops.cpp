@@ -55,10 +55,11 @@ double gflops(long iterations) {
 
 template <class T, int Lanes>
 void report(const char* scalar) {
-  // Best of 5 short runs (~20 ms each): the peak, not an average over interference.
+  // Best of 25 short runs (~8 ms each): the peak, not an average over interference (the
+  // machine may be shared; one quiet stretch is enough).
   double best = 0;
-  for (int r = 0; r < 5; ++r) {
-    const double g = gflops<T, Lanes>(2000000 / Lanes);
+  for (int r = 0; r < 25; ++r) {
+    const double g = gflops<T, Lanes>(800000 / Lanes);
     best = g > best ? g : best;
   }
   std::printf("{\"scalar\": \"%s\", \"lanes\": %d, \"gflops\": %.2f, \"flops_per_ns\": %.2f}\n", scalar, Lanes, best, best);
