@@ -44,10 +44,16 @@ def run(args: argparse.Namespace) -> int:
     from .report import to_json, to_text
 
     quiet = bool(getattr(args, "quiet", False))
+    tty = sys.stderr.isatty()
 
     def progress(msg: str) -> None:
-        if not quiet:
+        if quiet:
+            return
+        if tty:  # one status line, rewritten in place
             print(f"\r\033[K[diagnose] {msg}", end="", file=sys.stderr, flush=True)
+        elif not msg.startswith("candidate ") or msg.startswith("candidate 1/"):
+            print(f"[diagnose] {msg}" + (" ..." if msg.startswith("candidate 1/") else ""), file=sys.stderr,
+                  flush=True)
 
     out = Path(args.json)
     if out.exists() and out.is_dir():
@@ -61,10 +67,10 @@ def run(args: argparse.Namespace) -> int:
     try:
         d = diagnose(rec, boundary=args.boundary, progress=progress)
     except ValueError as err:
-        if not quiet:
-            print(file=sys.stderr)
+        if not quiet and tty:
+            print("\r\033[K", end="", file=sys.stderr, flush=True)
         return _err(f"{Path(args.recording).name}: {err}")
-    if not quiet:
+    if not quiet and tty:
         print("\r\033[K", end="", file=sys.stderr, flush=True)
     try:
         out.write_text(json.dumps(to_json(d), indent=1))

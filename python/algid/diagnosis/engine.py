@@ -43,6 +43,8 @@ GAP_RESOLUTION = 1e-4
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift")
+#: Most refits of a state-dependent candidate with states reconstructed under it.
+STATE_REFITS = 4
 STATE_EFFECTS = ("coulomb_friction", "quadratic_damping", "cubic_stiffness", "clearance", "parameter_drift")
 
 
@@ -236,22 +238,27 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
         scored.append(_assess(P, lin, fit, denom, floor))
     timings["candidates"] = time.perf_counter() - clock - timings["linear"]
 
-    # Refit the leading state-dependent candidates with states reconstructed under them.
+    # Refit the leading state-dependent candidates with states reconstructed under them
+    # (a strong effect biases the states reconstructed by the linear model), repeated
+    # while the withheld gap keeps shrinking.
     scored.sort(key=lambda s: s.gap_after)
     for idx in range(min(3, len(scored))):
         s = scored[idx]
-        if s.fit.effect in STATE_EFFECTS and s.significant:
+        if s.fit.effect not in STATE_EFFECTS or not s.significant:
+            continue
+        loc = s.fit.location.get("dof", s.fit.location.get("spring"))
+        loc = loc - 1 if "dof" in s.fit.location else loc
+        for _ in range(STATE_REFITS):
             raw = raw_residual(ctx, s.fit)
             thetas = list(lin.theta_a)
             for e, th in zip(s.fit.eqs, s.fit.thetas):
                 thetas[e] = th
             x, v = reconstruct_states(P, thetas, raw)
-            ctx2 = Context(P=P, lin=lin, x=x, v=v)
-            loc = s.fit.location.get("dof", s.fit.location.get("spring"))
-            loc = loc - 1 if "dof" in s.fit.location else loc
-            refit = _assess(P, lin, fit_candidate(ctx2, s.fit.effect, loc), denom, floor)
-            if refit.gap_after <= s.gap_after:
-                scored[idx] = refit
+            refit = _assess(P, lin, fit_candidate(Context(P=P, lin=lin, x=x, v=v), s.fit.effect, loc), denom, floor)
+            if refit.gap_after >= 0.999 * s.gap_after:
+                break
+            s = refit
+        scored[idx] = s
     scored.sort(key=lambda s: s.gap_after)
 
     _progress(progress, "locating the gap")

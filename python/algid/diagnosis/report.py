@@ -49,8 +49,10 @@ def to_json(d) -> dict:
         "ranking": ranking,
         "params_std": d.params_std,
         "main_param": MAIN_PARAM.get(d.effect),
-        "linear_model": {"n": d.P.n, "boundary": d.P.boundary, "mass": lin.mass.tolist(),
+        "linear_model": {"n": d.P.n, "boundary": d.P.boundary,
+                         "mass": [float(m) if f else None for m, f in zip(lin.mass, lin.forced)],
                          "damping": lin.damping().tolist(), "stiffness": lin.stiffness().tolist(),
+                         "unforced_dofs_per_unit_mass": [i + 1 for i, f in enumerate(lin.forced) if not f],
                          "natural_frequencies_hz": d.extra.get("natural_hz", [])},
         "analysis": {"windows": d.P.nw, "window_s": d.P.L * d.P.dt, "skipped_s": d.P.skip * d.P.dt,
                      "folds": d.P.nfolds, "noise_floor": d.extra.get("noise_floor"),
@@ -91,7 +93,10 @@ def to_text(d, source: str = "") -> str:
     for e in range(P.n):
         th = lin.theta[e]
         springs = "  ".join(f"{nm}={v:.4g}" for nm, v in zip(lin.names[e][2:], th[2:]))
-        L.append(f"  {e + 1:<4d}  {th[0]:<10.4g}  {th[1]:<10.4g}  {springs}")
+        m = f"{th[0]:<10.4g}" if lin.forced[e] else "(no force)"
+        L.append(f"  {e + 1:<4d}  {m}  {th[1]:<10.4g}  {springs}")
+    if not lin.forced.all():
+        L.append("  DOF without force: m unknown, c and k per unit mass [1/s], [1/s^2]")
     nat = d.extra.get("natural_hz", [])
     if nat:
         L.append("  natural frequencies [Hz]: " + ", ".join(f"{f:.3g}" for f in nat))
