@@ -1,9 +1,10 @@
 """algid: on-line algebraic identification of vibrating mass-spring-damper chains."""
 
 from .chain import TABLE1, Chain
+from .continuous import ChangeEvent, ContinuousEstimator
 from .estimator import SIZES, ChainEstimator, Status
 
-__all__ = ["Chain", "ChainEstimator", "SIZES", "Status", "TABLE1", "get_include"]
+__all__ = ["Chain", "ChainEstimator", "ChangeEvent", "ContinuousEstimator", "SIZES", "Status", "TABLE1", "get_include"]
 __version__ = "0.1.0"
 
 

@@ -334,6 +334,7 @@ class ContinuousEstimator {
     Scalar cusum_hi = Scalar(0), cusum_lo = Scalar(0);
     Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();           // per-window sigma
     Scalar relative_spread = std::numeric_limits<Scalar>::quiet_NaN();  // carried over a restart
+    bool spread_ok = false;  // spread measured on >= min_windows results: the tests may run
   };
 
   static typename Window::Config window_config(const Config& c) noexcept {
@@ -397,7 +398,7 @@ class ContinuousEstimator {
     Track& t = tracks_[static_cast<std::size_t>(j)];
     const Scalar est = estimate_(j);
     Scalar z = std::numeric_limits<Scalar>::quiet_NaN();
-    if (std::isfinite(est) && std::isfinite(t.spread)) {
+    if (t.spread_ok && std::isfinite(est)) {
       const Scalar s = floor_spread(t, est);
       if (s > Scalar(0)) z = (x - est) / s;
     }
@@ -424,7 +425,7 @@ class ContinuousEstimator {
       t.in_block = 0;
       newest(t.value, t.head, config_.block);
       const Scalar bm = detail::median_inplace(scratch_.data(), config_.block);
-      if (config_.detect && t.s0 > Scalar(0) && std::isfinite(t.spread)) {
+      if (config_.detect && t.s0 > Scalar(0) && t.spread_ok) {
         const Scalar sb = block_scale_ * floor_spread(t, est);
         if (sb > Scalar(0)) {
           const Scalar d = std::clamp((bm - est) / sb, -config_.cusum_clip, config_.cusum_clip);
@@ -446,19 +447,34 @@ class ContinuousEstimator {
 
   // Spread, estimate and uncertainty of parameter j from its track.
   void refresh(int j, Track& t) noexcept {
+    // The per-window spread is trusted (and the tests armed) once min_windows results have
+    // arrived: a MAD of three heavy-tailed values can be tiny. Before that a provisional spread
+    // only feeds the uncertainty. After a restart the ring mixes two levels, so the relative
+    // spread is carried until min_windows new results have arrived.
+    const bool measure = t.fresh >= config_.min_windows;
     Scalar ring_median = std::numeric_limits<Scalar>::quiet_NaN();
-    // The spread of a ring that mixes two levels is not the new level's: after a restart the
-    // relative spread is carried until min_windows new results have arrived.
-    if ((t.fresh >= config_.min_windows && t.count >= 3) || (t.count >= 3 && !std::isfinite(t.relative_spread))) {
+    if (t.count >= 3 && (measure || !t.spread_ok)) {
       newest(t.value, t.head, t.count);
       ring_median = detail::median_inplace(scratch_.data(), t.count);
       t.spread = detail::kMadToSigma<Scalar> * detail::mad_inplace(scratch_.data(), t.count, ring_median);
-      if (ring_median != Scalar(0)) t.relative_spread = t.spread / std::abs(ring_median);
+      if (measure) {
+        t.spread_ok = true;
+        t.relative_spread = ring_median != Scalar(0) ? t.spread / std::abs(ring_median) : Scalar(0);
+      }
     }
     Scalar est;
-    Scalar sig;
     if (t.s0 > Scalar(0)) {
       est = t.s1 / t.s0;
+    } else {
+      if (!std::isfinite(ring_median)) {
+        newest(t.value, t.head, t.count);
+        ring_median = detail::median_inplace(scratch_.data(), t.count);
+      }
+      est = ring_median;
+    }
+    if (!measure && t.spread_ok) t.spread = t.relative_spread * std::abs(est);
+    Scalar sig;
+    if (t.s0 > Scalar(0)) {
       const Scalar n_eff = t.s0 * t.s0 / t.s0sq;
       sig = block_scale_ * t.spread / std::sqrt(n_eff);
       if (n_eff >= Scalar(4)) {
@@ -466,13 +482,6 @@ class ContinuousEstimator {
         sig = std::max(sig, std::sqrt(std::max(var, Scalar(0)) / n_eff));
       }
     } else {
-      if (!std::isfinite(ring_median)) {
-        newest(t.value, t.head, t.count);
-        ring_median = detail::median_inplace(scratch_.data(), t.count);
-      }
-      est = ring_median;
-      if (t.count < config_.min_windows && std::isfinite(t.relative_spread))
-        t.spread = t.relative_spread * std::abs(est);
       sig = detail::kMedianInefficiency<Scalar> * t.spread /
             std::sqrt(std::max(Scalar(1), static_cast<Scalar>(t.count) * config_.overlap_efficiency));
     }
@@ -518,9 +527,6 @@ class ContinuousEstimator {
 
   void finish_restart(int j, Track& t, ChangeKind kind) noexcept {
     const Scalar before = estimate_(j);
-    newest(t.value, t.head, t.count);
-    const Scalar level = detail::median_inplace(scratch_.data(), t.count);
-    if (std::isfinite(t.relative_spread)) t.spread = t.relative_spread * std::abs(level);
     refresh(j, t);
     Event& ev = events_[static_cast<std::size_t>(event_count_ < kParams ? event_count_ : kParams - 1)];
     ev.sample = samples_ - 1;

@@ -1,0 +1,233 @@
+"""Python face of the continuous estimator: ``ContinuousEstimator(n, dt, ...)``.
+
+Continuous operation of the algebraic estimator for long, noisy records (the per-sample work
+runs in ``cpp/include/algid/continuous_estimator.hpp``):
+
+* K staggered windows of length L (``stagger``, ``window_s``), each a ChainEstimator that is
+  reseeded when full: a window result every L/K;
+* per parameter, a running estimate (median of the window results until a block of ``block``
+  results is complete, then the mean of block medians) with a one-sigma uncertainty;
+* a change detector (step test on the median robust z-score of the last 2K+1 window
+  results; drift test, a CUSUM of block medians) that restarts the aggregation of the
+  parameter that changed and reports a change event.
+
+``run()`` takes whole signals (GIL released); ``update()`` one sample.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _core
+from .estimator import SIZES, Status
+
+ChangeKind = _core.ChangeKind
+
+#: Defaults of the C++ ContinuousConfig (benchmarked in bench/continuous.py).
+DEFAULTS = dict(window_s=0.3, stagger=4, block=16, confirm=0, step_threshold=6.0, cusum_reference=0.75,
+                cusum_threshold=6.0, cusum_clip=4.0, min_relative_spread=1e-3, min_windows=8,
+                overlap_efficiency=0.5, horizon_s=0.0, detect=True, amortize=True, min_samples=16,
+                min_hadamard=1e-9)
+
+
+@dataclass(frozen=True)
+class ChangeEvent:
+    """The aggregation of one parameter restarted because its window results changed level."""
+
+    sample: int      #: index of the sample whose update raised it (0-based, since construction/reset)
+    time_s: float    #: ``sample * dt`` [s]
+    param: int       #: index into :attr:`ContinuousEstimator.names`
+    name: str        #: ``"m1"``, ``"c2"``, ``"k3"``, ...
+    kind: str        #: ``"step"`` or ``"drift"``
+    before: float    #: running estimate before [kg, N s/m or N/m]
+    after: float     #: running estimate right after
+
+
+def parameter_names(n: int) -> list[str]:
+    """``m1..mn, c1..cn, k1..k{n+1}``: the order of every estimate vector."""
+    return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
+
+
+class ContinuousEstimator:
+    """Continuous algebraic estimator of an n-DOF chain: reseeded staggered windows, a running
+    estimate with uncertainty per parameter, change events.
+
+    Parameters
+    ----------
+    n : int
+        Number of DOF (one of :data:`algid.SIZES`).
+    dt : float
+        Sample period [s].
+    boundary : {"fixed", "free"}
+        Right end: a wall (k_{n+1} identified) or free (k_{n+1} = 0 known).
+    window_s : float
+        Window length L [s] (default 0.3).
+    stagger : int
+        Windows in flight K (1..4), started L/K apart (default 4).
+    block : int
+        Window results per block median (default 16, at most 64).
+    confirm : int
+        Window results in the step test; 0 = 2K+1 (default).
+    step_threshold : float
+        Step test threshold on the median robust z-score (default 6).
+    cusum_reference, cusum_threshold, cusum_clip : float
+        Drift test: CUSUM reference k, alarm level h and clip, in block-median sigmas
+        (defaults 0.75, 6, 4).
+    min_relative_spread : float
+        Floor of the per-window spread relative to the estimate (default 1e-3: noise-free
+        data do not make every rounding difference a change).
+    min_windows : int
+        Window results since a restart before the tests are armed (default 8).
+    overlap_efficiency : float
+        Independent fraction of the staggered window results used in the uncertainty (0.5).
+    horizon_s : float
+        Forgetting time constant of the block mean [s]; 0 = none (default).
+    detect : bool
+        Run the change detector (default True).
+    amortize : bool
+        Spread the per-parameter aggregation over the samples between window results.
+    min_samples, min_hadamard
+        Validity rule of each window (see :class:`algid.ChainEstimator`).
+    """
+
+    def __init__(self, n: int, dt: float, boundary: str = "fixed", **options) -> None:
+        n = int(n)
+        if n not in SIZES:
+            raise ValueError(f"n = {n} is not compiled in; available chain sizes: {SIZES}")
+        if boundary not in ("fixed", "free"):
+            raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
+        unknown = set(options) - set(DEFAULTS)
+        if unknown:
+            raise TypeError(f"unknown option(s) {sorted(unknown)}; known: {sorted(DEFAULTS)}")
+        cfg = {**DEFAULTS, **options}
+        self._impl = getattr(_core, f"ContinuousEstimator{n}")(float(dt), boundary, **cfg)
+        self.n, self.dt, self.boundary = n, float(dt), boundary
+        self.options = cfg
+        #: parameter names in estimate order
+        self.names = parameter_names(n)
+
+    # -- per sample ---------------------------------------------------------------------------
+    def update(self, accel, force) -> Status:
+        """Consume one simultaneous sample: accelerations [m/s^2] and forces [N], shape (n,).
+        Change events raised by this sample are in :meth:`events`."""
+        a = np.ascontiguousarray(accel, dtype=float).reshape(-1)
+        u = np.ascontiguousarray(force, dtype=float).reshape(-1)
+        if a.size != self.n or u.size != self.n:
+            raise ValueError(f"update() takes accel and force with {self.n} entries, got {a.size} and {u.size}")
+        return Status(self._impl.update(a, u))
+
+    def events(self) -> list[ChangeEvent]:
+        """Change events raised by the last :meth:`update`."""
+        return [self._event(*e) for e in self._impl.events()]
+
+    def reset(self) -> None:
+        """Forget everything; the next sample starts a new schedule."""
+        self._impl.reset()
+
+    @property
+    def estimate(self) -> np.ndarray:
+        """Running estimates (3n+1,) in :attr:`names` order [kg, N s/m, N/m] (NaN before the
+        first window result)."""
+        return self._impl.estimate
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """One-sigma statistical uncertainty of :attr:`estimate` (noise-induced bias excluded)."""
+        return self._impl.sigma
+
+    @property
+    def mass(self) -> np.ndarray:
+        """Running masses m_i [kg]."""
+        return self.estimate[: self.n]
+
+    @property
+    def damping(self) -> np.ndarray:
+        """Running dampings c_i [N s/m]."""
+        return self.estimate[self.n: 2 * self.n]
+
+    @property
+    def stiffness(self) -> np.ndarray:
+        """Running springs k_1..k_{n+1} [N/m]."""
+        return self.estimate[2 * self.n:]
+
+    @property
+    def ready(self) -> bool:
+        """True once every identified parameter has an estimate."""
+        return bool(self._impl.ready)
+
+    @property
+    def last_window(self) -> np.ndarray:
+        """The latest window result (3n+1,)."""
+        return self._impl.last_window
+
+    @property
+    def window_results(self) -> int:
+        """Window results harvested so far."""
+        return int(self._impl.window_results)
+
+    @property
+    def window_samples(self) -> int:
+        """Window length M [samples]."""
+        return int(self._impl.window_samples)
+
+    def since_restart(self, param: int) -> int:
+        """Window results aggregated into parameter ``param`` since its last restart."""
+        return int(self._impl.since_restart(int(param)))
+
+    def window_spread(self, param: int) -> float:
+        """Per-window spread (1.4826 MAD) of parameter ``param`` [its units]."""
+        return float(self._impl.window_spread(int(param)))
+
+    # -- whole records ------------------------------------------------------------------------
+    def run(self, accel, force, stride: int = 1) -> dict:
+        """Feed a whole record through the C++ loop (GIL released).
+
+        Parameters
+        ----------
+        accel, force : array_like, shape (T, n)
+            Accelerations [m/s^2] and forces [N] sampled simultaneously every ``dt``.
+        stride : int
+            Keep every ``stride``-th row of the estimate histories (memory; events and window
+            results are never decimated).
+
+        Returns
+        -------
+        dict with
+            ``status`` (T,); ``sample`` (R,) sample index of each history row, ``time_s`` (R,);
+            ``estimate``, ``sigma`` (R, 3n+1) running estimates and uncertainties;
+            ``mass``, ``damping`` (R, n), ``stiffness`` (R, n+1) views of ``estimate``;
+            ``events``: list of :class:`ChangeEvent`; ``event_sample``, ``event_param``,
+            ``event_kind`` (1 step, 2 drift), ``event_before``, ``event_after`` as arrays;
+            ``windows`` (W, 3n+1) every window result and ``window_sample`` (W,) the sample
+            at which it was harvested; ``names``.
+        """
+        a = np.ascontiguousarray(accel, dtype=float)
+        u = np.ascontiguousarray(force, dtype=float)
+        if a.ndim == 1 and self.n == 1:
+            a, u = a[:, None], u.reshape(-1, 1)
+        if a.ndim != 2 or a.shape[1] != self.n or u.shape != a.shape:
+            raise ValueError(f"run() takes accel and force of the same shape (T, {self.n}); "
+                             f"got {a.shape} and {u.shape}")
+        if int(stride) < 1:
+            raise ValueError("stride must be >= 1")
+        out = dict(self._impl.run(a, u, int(stride)))
+        n = self.n
+        est = out["estimate"]
+        out["mass"], out["damping"], out["stiffness"] = est[:, :n], est[:, n:2 * n], est[:, 2 * n:]
+        out["time_s"] = out["sample"] * self.dt
+        out["events"] = [self._event(s, p, k, b, a_) for s, p, k, b, a_ in
+                         zip(out["event_sample"], out["event_param"], out["event_kind"],
+                             out["event_before"], out["event_after"])]
+        out["names"] = list(self.names)
+        return out
+
+    def _event(self, sample, param, kind, before, after) -> ChangeEvent:
+        return ChangeEvent(sample=int(sample), time_s=float(sample) * self.dt, param=int(param),
+                           name=self.names[int(param)], kind={1: "step", 2: "drift"}.get(int(kind), "none"),
+                           before=float(before), after=float(after))
+
+    def __repr__(self) -> str:
+        return (f"ContinuousEstimator(n={self.n}, dt={self.dt}, boundary={self.boundary!r}, "
+                f"window_s={self.options['window_s']}, stagger={self.options['stagger']})")
