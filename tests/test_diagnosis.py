@@ -188,8 +188,6 @@ def test_unforced_dof_has_parameters_per_unit_mass():
     # Same motion, but DOF 3's force is not recorded: its equation loses its scale.
     d_full = diagnose(Recording(t=res.t, u=u, a=res.a))
     u[:, 2] = 0.0
-    from algid.diagnosis.core import integrals as _i  # noqa: F401  (same module, for clarity)
-
     d = diagnose(Recording(t=res.t, u=u, a=res.a))
     assert d.lin.mass[2] == 1.0 and not d.lin.forced[2]
     # Without its force the equation of DOF 3 is wrong: the diagnosis must not call it linear.

@@ -52,7 +52,6 @@ from .core import (
     cross_validate,
     cross_validate_grid,
     jackknife_std,
-    param_names,
     spring_columns,
     springs,
     to_physical,
@@ -437,7 +436,3 @@ def raw_residual(ctx: Context, fit: CandidateFit) -> np.ndarray:
             r = r - s.E @ gam
         out[:, s.e] = r
     return out
-
-
-def eq_names(P: Prepared, e: int) -> list[str]:
-    return param_names(P.n, P.boundary, e)

@@ -1,4 +1,18 @@
-"""The diagnosis pipeline: linear fit, candidate search, noise-aware selection."""
+"""The diagnosis pipeline: linear fit, candidate search, noise-aware selection.
+
+1. Accelerations (measured, or derived from displacements), their integrals, windows of
+   half the lowest natural period (from a first fit on 0.5 s windows); the first
+   ``max(0.1 s, 100 samples)`` are kept out of the windows as lead-in for delays and
+   filters.
+2. The linear chain, cross-validated (``gap_before``), and the states it reconstructs.
+3. Every candidate effect at every location (:mod:`.candidates`), cross-validated, scored
+   by its withheld error reduction and tested against noise (:func:`noise_z`); the
+   state-dependent leaders are refitted with the states reconstructed under them.
+4. The best significant candidate by withheld gap, unless it leaves most of a large gap
+   unexplained (``unknown``); ``none`` when nothing is beyond noise and the gap is at the
+   noise floor.
+5. Location indicators (:mod:`.locate`).
+"""
 
 from __future__ import annotations
 
@@ -19,7 +33,7 @@ from .candidates import (
     fit_candidate,
     raw_residual,
 )
-from .core import METRIC, Prepared, detrend, integrals, prepare, window_length
+from .core import METRIC, Prepared, base_design, detrend, integrals, prepare, window_length
 from .linear import LinearFit, fit_linear, reconstruct_states
 from .locate import locate, noise_floor
 
@@ -147,7 +161,7 @@ def noise_z(P: Prepared, lin: LinearFit, fit: CandidateFit) -> float:
         cols = [spec.X] + ([spec.E] if spec.E is not None and spec.E.shape[1] else [])
         Zc = detrend(P, np.concatenate(cols, axis=1))  # (nw, L, p+q)
         yd = detrend(P, spec.y[:, None])[..., 0]  # (nw, L)
-        Zl = detrend(P, base_columns(P, e))
+        Zl = detrend(P, base_design(P, e, P.A1, P.A2))
         rc = np.empty_like(yd)
         rl = np.empty_like(yd)
         lsl = lin.cv.stats.slices[e]
@@ -170,12 +184,6 @@ def noise_z(P: Prepared, lin: LinearFit, fit: CandidateFit) -> float:
     if var <= 0:
         return float("inf") if total_d > 0 else 0.0
     return float(total_d / (2.0 * np.sqrt(var)))
-
-
-def base_columns(P: Prepared, e: int) -> np.ndarray:
-    from .core import base_design
-
-    return base_design(P, e, P.A1, P.A2)
 
 
 def lowest_frequency_hz(lin: LinearFit, boundary: str) -> float:
@@ -212,7 +220,7 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     T = a.shape[0]
     skip = int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
     _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: linear fit")
-    # Window length from the lowest natural frequency of a first fit on 1 s windows.
+    # Window length from the lowest natural frequency of a first fit on 0.5 s windows.
     A = integrals(a, dt)
     L0 = window_length(dt, 1.0, T - skip)
     lin0 = fit_linear(prepare(a, u, dt, L0, boundary, skip, A=A))

@@ -47,7 +47,6 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
     n = P.n
     resid = lin.resid  # (N, n) acceleration units
     a_rms = np.sqrt(np.mean(P.a**2, axis=0))
-    denom = float(np.sum(P.a**2))
     eq_sse = lin.cv.test_sse_eq.sum(axis=0)  # withheld, acceleration units^2
     floor = noise_floor(P, resid) if floor is None else floor
     per_dof = []

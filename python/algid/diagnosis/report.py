@@ -102,7 +102,7 @@ def to_text(d, source: str = "") -> str:
         L.append("  natural frequencies [Hz]: " + ", ".join(f"{f:.3g}" for f in nat))
     L.append("")
     shrink = d.gap_before / d.gap_after if d.gap_after > 0 else float("inf")
-    L.append(f"Gap (normalised RMS acceleration equation error on withheld windows):")
+    L.append("Gap (normalised RMS acceleration equation error on withheld windows):")
     L.append(f"  linear model        {d.gap_before:.4g}")
     nf = d.extra.get("noise_floor")
     if nf is not None:
