@@ -26,7 +26,8 @@ namespace {
 // every DOF full), assembled from the public DofEstimator and an integrator chain type:
 // algid::IntegratorChain<8, S> or a VariantChain (chain_variants.hpp). The system build,
 // Cramer and eq. 7 run in DofScalar. With IntegratorChain<8, float> and DofScalar = float it
-// reproduces ChainEstimator<3, float> bit for bit; swapping one part at a time locates the loss.
+// reproduces ChainEstimator<3, float> (same errors at every checkpoint); swapping one part at a
+// time locates the loss.
 template <class Chain>
 struct ChainInput;
 template <int P, class S>
