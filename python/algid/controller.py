@@ -72,6 +72,8 @@ import numpy as np
 
 __all__ = [
     "BEZIER_COEFFS",
+    "ContinuousAdapter",
+    "Multisine",
     "DEFAULT_POLES",
     "BezierReference",
     "TrackingController",
@@ -205,6 +207,152 @@ def _default_estimator(n: int, dt: float, boundary: str) -> Any:
     return ChainEstimator(n, dt, boundary=boundary)
 
 
+class Multisine:
+    """Probing force ``f_i(t) = amplitude * sum_q sin(2 pi f_q t + phi_iq)`` [N] per DOF.
+
+    The paper's references are slow (2 s rest-to-rest moves): their accelerations carry so
+    little information that 40 dB of accelerometer noise buries it (neither the growing
+    window nor the continuous estimator gets a usable estimate from them, even with the
+    loop tracking on the true parameters). A small known multisine added to the commanded
+    force keeps the chain excited; with the default 3-16 Hz lines each DOF moves by some
+    10 um (0.2 % of the stroke) under the loop's feedback. Phases are fixed per DOF
+    (``seed``), so every run gets the same probe.
+    """
+
+    FREQS_HZ = (3.1, 4.7, 6.3, 8.9, 12.1, 15.7)
+
+    def __init__(self, n: int, amplitude_n: float, freqs_hz: Sequence[float] = FREQS_HZ,
+                 seed: int = 0) -> None:
+        if not amplitude_n >= 0:
+            raise ValueError("amplitude_n must be >= 0")
+        self.amplitude_n = float(amplitude_n)
+        self.freqs_hz = np.asarray(freqs_hz, dtype=float)
+        self._w = 2 * np.pi * self.freqs_hz
+        self.phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, (int(n), self.freqs_hz.size))
+
+    def __call__(self, t: float) -> np.ndarray:
+        """Force [N] (n,) at time ``t`` [s]."""
+        return self.amplitude_n * np.sin(self._w * t + self.phases).sum(axis=1)
+
+
+class ContinuousAdapter:
+    """:class:`algid.ContinuousEstimator` behind the ChainEstimator-like face the controller
+    reads (``update``, ``mass``, ``damping``, ``stiffness``, ``valid``, ``delay_samples``),
+    with a per-DOF validity from the running estimate's uncertainty.
+
+    The running estimate needs its first window results (``window_s``, 0.3 s by default)
+    before it exists. Until then (``phase == "bootstrap"``) the adapter serves the growing
+    window of a plain ChainEstimator fed the same samples, the paper's estimator, so the
+    noise-free loop still has its estimates within 0.1 s; its relative uncertainty is taken
+    as the largest relative change of each estimate over the last ``bootstrap_window_s``
+    (a steadiness proxy, as the controller's ``accept="settled"`` rule). From the first
+    sample at which the running estimate is :attr:`~algid.ContinuousEstimator.ready` on
+    (``phase == "running"``) the adapter serves the running estimate and its ``sigma``.
+
+    ``valid[i]`` is True when every parameter of DOF ``i`` (``m_i``, ``c_i``, ``k_i``,
+    ``k_{i+1}``) is finite with a relative uncertainty :attr:`rel_sigma` at most
+    ``rel_sigma_tol``; the damping's uncertainty is measured against at least 1 % of the
+    DOF's critical damping, so a light damper does not block a DOF whose masses and
+    springs are well known.
+
+    Parameters
+    ----------
+    n, dt, boundary
+        As :class:`algid.ContinuousEstimator` (dt [s]).
+    rel_sigma_tol : float
+        Largest relative one-sigma uncertainty [-] of a valid DOF (default 0.05).
+    bootstrap_window_s : float
+        Window [s] of the bootstrap phase's steadiness proxy (default 0.02).
+    **options
+        Passed to :class:`algid.ContinuousEstimator` (``window_s``, ``stagger``, ...).
+    """
+
+    def __init__(self, n: int, dt: float, boundary: str = "fixed", rel_sigma_tol: float = 0.05,
+                 bootstrap_window_s: float = 0.02, **options: Any) -> None:
+        from . import ChainEstimator, ContinuousEstimator
+
+        if not rel_sigma_tol > 0:
+            raise ValueError("rel_sigma_tol must be > 0")
+        self.n, self.dt, self.boundary = int(n), float(dt), boundary
+        self.rel_sigma_tol = float(rel_sigma_tol)
+        self.continuous = ContinuousEstimator(n, dt, boundary, **options)
+        self.bootstrap = ChainEstimator(n, dt, boundary=boundary)
+        self.delay_samples = int(getattr(self.bootstrap, "delay_samples", 0))
+        self._W = max(2, int(round(bootstrap_window_s / dt)))
+        self._hist = np.full((self._W, 3 * self.n + 1), np.nan)
+        self._k = 0
+        self.phase = "bootstrap"
+        #: sample index (0-based) from which the running estimate is served; None before
+        self.running_from: Optional[int] = None
+        self.estimate = np.full(3 * self.n + 1, np.nan)
+        self.sigma = np.full(3 * self.n + 1, np.nan)
+        self.valid = np.zeros(self.n, bool)
+        absent = np.zeros(3 * self.n + 1, bool)
+        if boundary == "free" or self.n == 1:
+            absent[-1] = True  # k_{n+1}: known 0 (free end) or folded into k_1 (n = 1, walls)
+        self._absent = absent
+
+    @property
+    def mass(self) -> np.ndarray:
+        """Masses [kg] served (n,)."""
+        return self.estimate[: self.n]
+
+    @property
+    def damping(self) -> np.ndarray:
+        """Dampings [N s/m] served (n,)."""
+        return self.estimate[self.n: 2 * self.n]
+
+    @property
+    def stiffness(self) -> np.ndarray:
+        """Springs k_1..k_{n+1} [N/m] served (n+1,)."""
+        return self.estimate[2 * self.n:]
+
+    @property
+    def rel_sigma(self) -> np.ndarray:
+        """Relative one-sigma uncertainty of each served estimate (3n+1,) [-] (damping against
+        at least 1 % of the critical damping; 0 for a parameter that is not estimated)."""
+        n = self.n
+        est = self.estimate
+        m, k = est[:n], est[2 * n:]
+        k_sum = k[:n] + np.where(np.isnan(k[1:]) & self._absent[2 * n + 1:], 0.0, k[1:])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            scale = np.abs(est).copy()
+            scale[n:2 * n] = np.maximum(scale[n:2 * n], 0.02 * np.sqrt(np.abs(k_sum * m)))
+            r = self.sigma / scale
+        r[self._absent] = 0.0
+        return r
+
+    def update(self, accel: np.ndarray, force: np.ndarray) -> int:
+        """Feed one sample (accelerations [m/s^2], forces [N], (n,)); returns the running
+        estimator's status."""
+        status = self.continuous.update(accel, force)
+        n = self.n
+        if self.phase == "bootstrap":
+            self.bootstrap.update(accel, force)
+            est = np.concatenate([np.asarray(self.bootstrap.mass, float),
+                                  np.asarray(self.bootstrap.damping, float),
+                                  np.asarray(self.bootstrap.stiffness, float)])
+            ok_b = np.asarray(self.bootstrap.valid, bool)
+            self._hist[self._k % self._W] = est
+            with np.errstate(invalid="ignore"):
+                spread = np.max(np.abs(self._hist - est), axis=0) if self._k + 1 >= self._W \
+                    else np.full(est.size, np.inf)
+            self.estimate, self.sigma = est, spread
+            if self.continuous.ready:
+                self.phase, self.running_from = "running", self._k
+        else:
+            ok_b = np.ones(n, bool)
+        if self.phase == "running":
+            self.estimate = np.asarray(self.continuous.estimate, float).copy()
+            self.sigma = np.asarray(self.continuous.sigma, float).copy()
+        r = self.rel_sigma
+        good = np.isfinite(r) & (r <= self.rel_sigma_tol) & (np.isfinite(self.estimate) | self._absent)
+        idx = np.arange(n)
+        self.valid = ok_b & good[idx] & good[n + idx] & good[2 * n + idx] & good[2 * n + idx + 1]
+        self._k += 1
+        return int(status)
+
+
 class TrackingController:
     """Eqs. 8-10 with parameters switched from nominal to on-line estimates.
 
@@ -237,6 +385,9 @@ class TrackingController:
     hold : bool
         Keep the first accepted estimates for the rest of the run (the estimator keeps
         running and is logged); default False, the law follows the estimates.
+    excitation : callable ``t [s] -> (n,)`` [N] or None
+        A known probing force added to the commanded force of eq. 8 (see
+        :class:`Multisine`); it is part of ``u`` in eq. 10 and in what the estimator sees.
 
     Notes
     -----
@@ -250,9 +401,11 @@ class TrackingController:
                  nominal_mass_kg: float = 1.0,
                  estimator_factory: Optional[Callable[[int, float, str], Any]] = None,
                  use_estimates: bool = True, eq10: str = "integrated", accept: str = "settled",
-                 settle_window_s: float = 0.02, settle_tol: float = 0.02, hold: bool = False) -> None:
-        if accept not in ("settled", "valid"):
-            raise ValueError(f"accept must be 'settled' or 'valid', got {accept!r}")
+                 settle_window_s: float = 0.02, settle_tol: float = 0.02, hold: bool = False,
+                 excitation: Optional[Callable[[float], np.ndarray]] = None) -> None:
+        self.excitation = excitation
+        if accept not in ("settled", "valid", "sigma"):
+            raise ValueError(f"accept must be 'settled', 'valid' or 'sigma', got {accept!r}")
         if not (settle_window_s > 0 and settle_tol > 0):
             raise ValueError("settle_window_s and settle_tol must be > 0")
         self.accept = accept
@@ -289,6 +442,7 @@ class TrackingController:
         self.k_switch = int(round(self.switch_time_s / self.dt))
         self.estimator = self.estimator_factory(n, self.dt, boundary)
         self._has_theta = callable(getattr(self.estimator, "theta", None))
+        self._has_sigma = getattr(self.estimator, "sigma", None) is not None
         T = int(samples)
         self._T = T
         self._good_m = np.full(n, self.nominal_mass_kg)
@@ -323,7 +477,7 @@ class TrackingController:
         self._log = {
             "est_mass": np.full((T, n), np.nan), "est_damping": np.full((T, n), np.nan),
             "est_stiffness": np.full((T, n + 1), np.nan), "est_valid": np.zeros((T, n), bool),
-            "est_theta": np.full((T, n, 4), np.nan),
+            "est_theta": np.full((T, n, 4), np.nan), "est_sigma": np.full((T, 3 * n + 1), np.nan),
             "status": np.zeros(T, int), "used_mass": np.zeros((T, n)),
             "used_damping": np.zeros((T, n)), "used_stiffness": np.zeros((T, n + 1)),
             "velocity_estimate": np.full((T, n), np.nan), "force_command": np.full((T, n), np.nan),
@@ -388,6 +542,8 @@ class TrackingController:
         xd = (U - c * x - KX) / m
         v = xsdd - self.beta2 * (xd - xsd) - self.beta1 * (x - xs) - self.beta0 * E  # eq. 9
         u = m * v + c * xd + K @ x  # eq. 8
+        if self.excitation is not None:
+            u = u + self.excitation(t)  # known probing force; eq. 10 integrates it with u
         return u, xd, xs
 
     def continuous(self, t: float, x: np.ndarray, z: np.ndarray, p: tuple) -> tuple[np.ndarray, np.ndarray]:
@@ -435,6 +591,8 @@ class TrackingController:
             L = self._log
             L["est_mass"][k], L["est_damping"][k], L["est_stiffness"][k] = m, c, kk
             L["est_valid"][k] = valid
+            if self._has_sigma:
+                L["est_sigma"][k] = np.asarray(self.estimator.sigma, dtype=float)
             if self._has_theta:
                 for i in range(n):
                     L["est_theta"][k, i] = self.estimator.theta(i)
@@ -451,9 +609,11 @@ class TrackingController:
         # the structurally unidentifiable right spring (n = 1 with walls, free end) is NaN
         kr = np.where(np.isnan(k_right) & self._k_right_absent, 0.0, k_right)
         ok = valid & np.isfinite(m) & np.isfinite(c) & np.isfinite(k_left) & np.isfinite(kr) & (m > 0)
-        if self.accept == "settled":
+        if self.accept in ("settled", "sigma"):
             ok &= (c >= 0) & (k_left >= 0) & (kr >= 0)
-            if self._hist_n < W:
+            if self.accept == "sigma":
+                pass  # the estimator's valid flag carries the uncertainty test
+            elif self._hist_n < W:
                 ok[:] = False
             else:
                 tol = self.settle_tol
@@ -503,7 +663,7 @@ class TrackingController:
             "t": t, "x_ref": xs, "xd_ref": xd, "xdd_ref": xdd,
             "estimates": {"mass": L["est_mass"], "damping": L["est_damping"],
                           "stiffness": L["est_stiffness"], "valid": L["est_valid"],
-                          "theta": L["est_theta"],
+                          "theta": L["est_theta"], "sigma": L["est_sigma"],
                           "status": L["status"]},
             "used": {"mass": L["used_mass"], "damping": L["used_damping"],
                      "stiffness": L["used_stiffness"]},
@@ -511,6 +671,8 @@ class TrackingController:
             "gains": self.gains, "poles": [complex(p) for p in self.poles], "eq10": self.eq10,
             "switch_time_s": self.switch_time_s, "k_switch": self.k_switch,
             "delay_samples": int(getattr(self.estimator, "delay_samples", 0)),
-            "accept": self.accept, "hold": self.hold, "first_accepted_s": (None if self._first_accept is None
+            "accept": self.accept, "hold": self.hold,
+            "running_from_s": (None if getattr(self.estimator, "running_from", None) is None
+                               else self.estimator.running_from * self.dt), "first_accepted_s": (None if self._first_accept is None
                                                        else self._first_accept * self.dt),
         }
