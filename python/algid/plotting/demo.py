@@ -7,7 +7,10 @@
 * ``forces.png`` (fig. 4): the control forces, and around the substitution their
   deviation from the force an exact model needs along the reference (the overshoot);
 * ``estimation_error.png``: relative error of every estimate on a log scale (the paper
-  does not show it; it tells when the estimates reach a given accuracy and how they drift).
+  does not show it; it tells when the estimates reach a given accuracy and how they drift);
+  when the demo ran the drift table (``res.drift``), a last panel compares the largest
+  error of the single growing window with that of the continuous running estimate, both
+  open loop on the recorded samples.
 """
 
 from __future__ import annotations
@@ -54,7 +57,8 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     t = res.t
     t_sw = summary["switch_time_s"]
     title = (f"n = {res.chain.n}, {res.mode} mode, "
-             + ("noise-free" if summary["noise_db"] is None else f"accel SNR {summary['noise_db']:.0f} dB"))
+             + ("noise-free" if summary["noise_db"] is None else f"accel SNR {summary['noise_db']:.0f} dB")
+             + (f", {summary['estimator']} estimator" if summary.get("estimator") else ""))
     if summary.get("estimates_substituted_s", 0.0) is None:
         title += "; estimates never substituted"
     paths = []
@@ -101,7 +105,7 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     ax2.set_ylabel("tracking error [um]")
     ax2.set_xlabel("time [s]")
     tr = summary["tracking"]
-    ax1.set_title(f"Reference tracking ({title}); peak error after 1 s "
+    ax1.set_title(f"Reference tracking ({title})\npeak error after 1 s "
                   f"{1e6 * tr['peak_after_1s_m']:.3g} um = {tr['peak_after_1s_pct_stroke']:.2g} % of stroke")
     fig.tight_layout()
     paths.append(out / "positions.png")
@@ -136,9 +140,12 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     plt.close(fig)
 
     # ---- estimation error (log scale)
-    fig, axes = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
+    drift = getattr(res, "drift", None)
+    rows = 4 if drift is not None else 3
+    fig, axes = plt.subplots(rows, 1, figsize=(10, 3 * rows), sharex=True)
     tpos = np.maximum(t, t[1])
-    for ax, (label, est, true, names) in zip(axes, fams):
+    y_lo = 1e-10 if summary["noise_db"] is None else 1e-5
+    for ax, (label, est, true, names) in zip(axes[:3], fams):
         with np.errstate(invalid="ignore", divide="ignore"):
             rel = np.abs(est / true - 1.0)
         for q in range(true.size):
@@ -147,10 +154,28 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
         ax.axvline(t_sw, color="k", ls=":", lw=1.0)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_ylim(1e-10, 10)
+        ax.set_ylim(y_lo, 10)
         ax.set_ylabel(f"|relative error|\n{label.split(' [')[0]}")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8, ncol=5, loc="upper right")
+    if drift is not None:
+        ax = axes[3]
+        with np.errstate(invalid="ignore"):
+            for key, lab in (("single_history", "single growing window"),
+                             ("continuous_history", "continuous (running estimate from "
+                              + (f"{drift['running_from_s']:.2f} s)" if drift["running_from_s"] is not None
+                                 else "-)"))):
+                h = np.asarray(drift[key], dtype=float)
+                worst = np.where(np.all(np.isnan(h), axis=1), np.nan, np.nanmax(np.where(np.isnan(h), np.inf, h), axis=1))
+                ax.plot(tpos, worst, lw=1.2, label=lab)
+        ax.axhline(0.01, color="k", ls="--", lw=0.9, label="1 %")
+        ax.axvline(t_sw, color="k", ls=":", lw=1.0)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylim(y_lo, 100)
+        ax.set_ylabel("largest |relative\nerror|, open loop")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8, loc="upper right")
     axes[-1].set_xlabel("time [s] (log scale)")
     axes[0].set_title(f"Estimation error ({title})")
     fig.tight_layout()
