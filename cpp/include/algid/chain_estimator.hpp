@@ -150,11 +150,25 @@ class ChainEstimator {
   }
 
   /// Eq. 7 estimate [m_i, c_i, k_i, k_{i+1}] of DOF i (0-based); a reduced DOF has NaN in
-  /// slot 3 (and k_1 + k_2 in slot 2 when N = 1 with walls).
-  Vector<Scalar, 4> theta(int i) const noexcept { return pick(i, [](const auto& d, int j) { return d.estimate(j); }, true); }
+  /// slot 3 (and k_1 + k_2 in slot 2 when N = 1 with walls); NaN while not valid.
+  Vector<Scalar, 4> theta(int i) const noexcept {
+    Vector<Scalar, 4> out = Vector<Scalar, 4>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+    if (is_reduced(i)) {
+      if (last_.valid()) out.template head<3>() = last_.estimates();
+    } else if (full_[i].valid()) {
+      out = full_[i].estimates();
+    }
+    return out;
+  }
   /// Instantaneous Cramer solution of eq. 5 for DOF i (0-based), same layout as theta().
   Vector<Scalar, 4> theta_instant(int i) const noexcept {
-    return pick(i, [](const auto& d, int j) { return d.instant()(j); }, false);
+    Vector<Scalar, 4> out = Vector<Scalar, 4>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+    if (is_reduced(i)) {
+      out.template head<3>() = last_.instant();
+    } else {
+      out = full_[i].instant();
+    }
+    return out;
   }
   /// Equilibrated Hadamard ratio of DOF i's last system.
   Scalar hadamard(int i) const noexcept { return is_reduced(i) ? last_.hadamard() : full_[i].hadamard(); }
@@ -173,19 +187,6 @@ class ChainEstimator {
   bool free_end() const noexcept { return config_.boundary == Boundary::kFree; }
   bool reduced_last() const noexcept { return N == 1 || free_end(); }
   bool is_reduced(int i) const noexcept { return i == N - 1 && reduced_last(); }
-
-  template <class Get>
-  Vector<Scalar, 4> pick(int i, Get get, bool need_valid) const noexcept {
-    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    Vector<Scalar, 4> out = Vector<Scalar, 4>::Constant(nan);
-    if (is_reduced(i)) {
-      if (!need_valid || last_.valid())
-        for (int j = 0; j < 3; ++j) out(j) = get(last_, j);
-    } else if (!need_valid || full_[i].valid()) {
-      for (int j = 0; j < 4; ++j) out(j) = get(full_[i], j);
-    }
-    return out;
-  }
 
   void collect() noexcept {
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();

@@ -86,7 +86,7 @@ class DofEstimator {
     const bool solvable = std::isfinite(sol.det) && sol.det != Scalar(0);
     trusted_ = solvable && samples >= rule.min_samples && hadamard_ >= rule.min_hadamard;
     if (solvable) {
-      instant_ = sol.numerator.cwiseProduct(unscale) / sol.det;
+      instant_ = sol.numerator.cwiseProduct(unscale) * (Scalar(1) / sol.det);
     } else {
       instant_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
     }
@@ -104,6 +104,8 @@ class DofEstimator {
   bool instant_valid() const noexcept { return trusted_; }
   /// Eq. 7 estimate of parameter j; meaningful when valid().
   Scalar estimate(int j) const noexcept { return ratio_.estimate(j); }
+  /// All eq. 7 estimates; meaningful when valid().
+  Vector<Scalar, M> estimates() const noexcept { return ratio_.estimates(); }
   /// True once eq. 7 has integrated a trusted sample.
   bool valid() const noexcept { return ratio_.valid(); }
   /// Doubly equilibrated Hadamard ratio of the last system, in [0, 1].
@@ -115,20 +117,24 @@ class DofEstimator {
   Scalar weight() const noexcept { return ratio_.denominator(); }
 
  private:
+  // |det| / prod(column norms) / prod(norms of the rows of the column-normalised matrix),
+  // with M reciprocals and three square roots (columns paired so that no product of squared
+  // norms leaves the range of single precision; normalised rows have squared norms <= M).
   Scalar equilibrated_hadamard(Scalar det) const noexcept {
-    Vector<Scalar, M> col2 = system_.colwise().squaredNorm().transpose();
-    Scalar col_product = Scalar(1);
-    Scalar row_product = Scalar(1);
+    Vector<Scalar, M> inv_col2;
     for (int c = 0; c < M; ++c) {
-      if (!(col2(c) > Scalar(0))) return Scalar(0);
-      col_product *= std::sqrt(col2(c));
+      const Scalar col2 = system_.col(c).squaredNorm();
+      if (!(col2 > Scalar(0))) return Scalar(0);
+      inv_col2(c) = Scalar(1) / col2;
     }
+    Scalar row_product = Scalar(1);
     for (int r = 0; r < M; ++r) {
       Scalar row2 = Scalar(0);
-      for (int c = 0; c < M; ++c) row2 += system_(r, c) * system_(r, c) / col2(c);
-      row_product *= std::sqrt(row2);
+      for (int c = 0; c < M; ++c) row2 += system_(r, c) * system_(r, c) * inv_col2(c);
+      row_product *= row2;
     }
-    const Scalar h = std::abs(det) / col_product / row_product;
+    const Scalar tail = M == 4 ? inv_col2(2) * inv_col2(M - 1) : inv_col2(2);
+    const Scalar h = std::abs(det) * std::sqrt(inv_col2(0) * inv_col2(1)) * std::sqrt(tail) / std::sqrt(row_product);
     return std::isfinite(h) ? h : Scalar(0);
   }
 

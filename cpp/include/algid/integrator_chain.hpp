@@ -16,8 +16,9 @@
 
 namespace algid {
 
-/// Integrator chains of one signal. Storage: a (2 * 2P) x 3 ring of Delta^p f samples and a
-/// 5 x 3 state; nothing else.
+/// Integrator chains of one signal. Storage: a (2 * 2P) x 3 ring of Delta^p f samples, a
+/// 5 x 3 state and its 5 x 3 Kahan compensation; nothing else. Do not build with -ffast-math
+/// (it would remove the compensation).
 /// @tparam P interpolation points of the quadrature (see InterpolatoryRule).
 template <int P, class Scalar = double>
 class IntegratorChain {
@@ -51,9 +52,23 @@ class IntegratorChain {
     const long start = j - (P / 2 - 1) > 0 ? j - (P / 2 - 1) : 0;  // centred, shifted near t_0
     const int off = static_cast<int>(j - start);
     const int first = static_cast<int>(start % kRing);
-    increment_.noalias() = rule.weights(off) * ring_.template block<P, kPowers>(first, 0);
-    next_.noalias() = rule.propagate() * state_;
-    state_ = next_ + increment_;
+    Matrix<Scalar, kOrders, kPowers> increment;
+    increment.noalias() = rule.weights(off) * ring_.template block<P, kPowers>(first, 0);
+    // I^r += sum_{q<r} h^(r-q)/(r-q)! I^q + increment: the propagation is unit lower
+    // triangular, so update in place from the highest order down (the lower orders are still
+    // the old ones), with Kahan compensation: the state grows like tau^(r+p) while each step
+    // adds a small amount, which is where single precision loses its digits.
+    const auto& prop = rule.propagate();
+    for (int p = 0; p < kPowers; ++p) {
+      for (int r = kOrders - 1; r >= 0; --r) {
+        Scalar step = increment(r, p);
+        for (int q = 0; q < r; ++q) step += prop(r, q) * state_(q, p);
+        const Scalar y = step - compensation_(r, p);
+        const Scalar t = state_(r, p) + y;
+        compensation_(r, p) = (t - state_(r, p)) - y;
+        state_(r, p) = t;
+      }
+    }
     const int end = static_cast<int>((j + 1) % kRing);
     value_ = ring_.row(end).transpose();
     return true;
@@ -69,8 +84,7 @@ class IntegratorChain {
   static constexpr int kRing = 2 * P;  // >= 3P/2 - 1 samples: a centred stencil's span
   Matrix<Scalar, 2 * kRing, kPowers> ring_ = Matrix<Scalar, 2 * kRing, kPowers>::Zero();
   Matrix<Scalar, kOrders, kPowers> state_ = Matrix<Scalar, kOrders, kPowers>::Zero();
-  Matrix<Scalar, kOrders, kPowers> next_ = Matrix<Scalar, kOrders, kPowers>::Zero();
-  Matrix<Scalar, kOrders, kPowers> increment_ = Matrix<Scalar, kOrders, kPowers>::Zero();
+  Matrix<Scalar, kOrders, kPowers> compensation_ = Matrix<Scalar, kOrders, kPowers>::Zero();  // Kahan
   Vector<Scalar, kPowers> value_ = Vector<Scalar, kPowers>::Zero();
   long count_ = 0;
 };

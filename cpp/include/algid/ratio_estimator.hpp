@@ -67,6 +67,9 @@ class RatioEstimator {
   /// Eq. 7 estimate of parameter j (meaningful only when valid()).
   Scalar estimate(int j) const noexcept { return num_(j, 1) / den_(1); }
 
+  /// All M eq. 7 estimates at once (one division).
+  Vector<Scalar, M> estimates() const noexcept { return num_.col(1) * (Scalar(1) / den_(1)); }
+
   /// Scaled denominator I^2|Delta| * tau^-q (a confidence weight for fusion and diagnostics).
   Scalar denominator() const noexcept { return den_(1); }
 
