@@ -19,6 +19,7 @@ It implements the same discretisation, so both agree to rounding:
 
 from __future__ import annotations
 
+from functools import lru_cache
 from math import factorial
 
 import numpy as np
@@ -27,6 +28,7 @@ import numpy as np
 MAX_ORDER = 5
 
 
+@lru_cache(maxsize=None)
 def quadrature_weights(points: int, max_order: int = MAX_ORDER) -> np.ndarray:
     """Weights ``W[off, r-1, m]`` (shape ``(points-1, max_order, points)``).
 
@@ -46,6 +48,7 @@ def quadrature_weights(points: int, max_order: int = MAX_ORDER) -> np.ndarray:
                 kernel = np.poly1d([-1.0, 1.0]) ** (r - 1) / factorial(r - 1)  # (1-x)^(r-1)/(r-1)!
                 P = np.polyint(L * kernel)
                 W[off, r - 1, m] = P(1.0) - P(0.0)
+    W.setflags(write=False)  # cached: shared by every call
     return W
 
 
