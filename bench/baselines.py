@@ -127,15 +127,14 @@ def rls(a: np.ndarray, u: np.ndarray, dt: float, read: np.ndarray, *, window_s: 
         Rc = lfilter([1.0], [1.0, -lam], R_t, axis=0)
         rc = lfilter([1.0], [1.0, -lam], r_t, axis=0)
         out = np.full((len(read), p), np.nan)
-        for q, s in enumerate(read):
-            done = (s + 1) // M * M - 1  # last sample of the last complete window
-            if done < 0:
-                continue
-            R = Rc[done].reshape(p, p)[np.ix_(idx, idx)]
-            try:
-                out[q, idx] = np.linalg.solve(R, rc[done][idx])  # the common decay cancels
-            except np.linalg.LinAlgError:
-                pass
+        done = (np.asarray(read) + 1) // M * M - 1  # last sample of the last complete window
+        have = np.nonzero(done >= 0)[0]
+        R = Rc[done[have]].reshape(-1, p, p)[:, idx][:, :, idx]
+        r = rc[done[have]][:, idx]
+        ok = np.linalg.cond(R) < 1e14
+        sol = np.full((have.size, idx.size), np.nan)
+        sol[ok] = np.linalg.solve(R[ok], r[ok][..., None])[..., 0]  # the common decay cancels
+        out[np.ix_(have, idx)] = sol
         if boundary == "free":
             out[:, -1] = 0.0
         results.append(out)

@@ -27,7 +27,7 @@ ChangeKind = _core.ChangeKind
 
 #: Defaults of the C++ ContinuousConfig (benchmarked in bench/continuous.py).
 DEFAULTS = dict(window_s=0.3, stagger=4, block=16, confirm=0, step_threshold=6.0, cusum_reference=0.75,
-                cusum_threshold=6.0, cusum_clip=4.0, min_relative_spread=1e-3, min_windows=8,
+                cusum_threshold=5.0, cusum_clip=4.0, min_relative_spread=1e-2, min_windows=8,
                 overlap_efficiency=0.5, horizon_s=0.0, detect=True, amortize=True, min_samples=16,
                 min_hadamard=1e-9)
 
@@ -74,10 +74,12 @@ class ContinuousEstimator:
         Step test threshold on the median robust z-score (default 6).
     cusum_reference, cusum_threshold, cusum_clip : float
         Drift test: CUSUM reference k, alarm level h and clip, in block-median sigmas
-        (defaults 0.75, 6, 4).
+        (defaults 0.75, 5, 4).
     min_relative_spread : float
-        Floor of the per-window spread relative to the estimate (default 1e-3: noise-free
-        data do not make every rounding difference a change).
+        Floor of the per-window spread relative to the estimate (default 0.01: the step test
+        needs a change of at least ``step_threshold`` x 1 %; at high SNR a weakly excited
+        stretch of signal biases a few consecutive windows by a few percent, which must not
+        count as a change).
     min_windows : int
         Window results since a restart before the tests are armed (default 8).
     overlap_efficiency : float

@@ -87,9 +87,9 @@ struct ContinuousConfig {
   int confirm = 0;                                ///< window results in the step test; 0: 2K+1 (<= Capacity)
   Scalar step_threshold = Scalar(6);              ///< step test: |median z| above this [per-window sigmas]
   Scalar cusum_reference = Scalar(0.75);          ///< drift test: CUSUM reference k [block-median sigmas]
-  Scalar cusum_threshold = Scalar(6);             ///< drift test: alarm level h [block-median sigmas]
+  Scalar cusum_threshold = Scalar(5);             ///< drift test: alarm level h [block-median sigmas]
   Scalar cusum_clip = Scalar(4);                  ///< drift test: clip of one standardised block median
-  Scalar min_relative_spread = Scalar(1e-3);      ///< floor of the per-window spread relative to |estimate|
+  Scalar min_relative_spread = Scalar(1e-2);      ///< floor of the per-window spread relative to |estimate|
   int min_windows = 8;                            ///< window results since a restart before the tests are armed
   Scalar overlap_efficiency = Scalar(0.5);        ///< independent fraction of the staggered window results, (0, 1]
   Scalar horizon_s = Scalar(0);                   ///< forgetting time constant of the block mean [s]; 0: none
