@@ -39,7 +39,8 @@ void bind_one(py::module_& m) {
       .def(py::init([](double dt, const std::string& boundary, double window_s, int stagger, int block, int confirm,
                        double step_threshold, double cusum_reference, double cusum_threshold, double cusum_clip,
                        double min_relative_spread, int min_windows, double overlap_efficiency, double horizon_s,
-                       bool detect, bool amortize, int min_samples, double min_hadamard) {
+                       double prefilter_hz, int prefilter_order, bool detect, bool amortize, int min_samples,
+                       double min_hadamard) {
              typename Est::Config c;
              c.dt = dt;
              c.boundary = boundary_of(boundary);
@@ -55,6 +56,8 @@ void bind_one(py::module_& m) {
              c.min_windows = min_windows;
              c.overlap_efficiency = overlap_efficiency;
              c.horizon_s = horizon_s;
+             c.prefilter_hz = prefilter_hz;
+             c.prefilter_order = prefilter_order;
              c.detect = detect;
              c.amortize = amortize;
              c.validity.min_samples = min_samples;
@@ -66,7 +69,8 @@ void bind_one(py::module_& m) {
            py::arg("dt"), py::arg("boundary"), py::arg("window_s"), py::arg("stagger"), py::arg("block"),
            py::arg("confirm"), py::arg("step_threshold"), py::arg("cusum_reference"), py::arg("cusum_threshold"),
            py::arg("cusum_clip"), py::arg("min_relative_spread"), py::arg("min_windows"),
-           py::arg("overlap_efficiency"), py::arg("horizon_s"), py::arg("detect"), py::arg("amortize"),
+           py::arg("overlap_efficiency"), py::arg("horizon_s"), py::arg("prefilter_hz"), py::arg("prefilter_order"),
+           py::arg("detect"), py::arg("amortize"),
            py::arg("min_samples"), py::arg("min_hadamard"))
       .def_readonly_static("n", &Est::kDofs)
       .def_readonly_static("params", &Est::kParams)
@@ -90,6 +94,8 @@ void bind_one(py::module_& m) {
       .def_property_readonly("window_samples", &Est::window_samples)
       .def_property_readonly("confirm", &Est::confirm)
       .def_property_readonly("budget", &Est::budget)
+      .def_property_readonly("settle_samples", &Est::settle_samples)
+      .def_property_readonly("prefilter_hz", &Est::prefilter_hz)
       .def_property_readonly("total_events", &Est::total_events)
       .def("events", [](const Est& e) {
         py::list out;

@@ -3,6 +3,8 @@
 Continuous operation of the algebraic estimator for long, noisy records (the per-sample work
 runs in ``cpp/include/algid/continuous_estimator.hpp``):
 
+* the same Butterworth low-pass on accelerations and forces (default fs/20), which removes
+  out-of-band noise without changing eq. 1;
 * K staggered windows of length L (``stagger``, ``window_s``), each a ChainEstimator that is
   reseeded when full: a window result every L/K;
 * per parameter, a running estimate (median of the window results until a block of ``block``
@@ -28,7 +30,8 @@ ChangeKind = _core.ChangeKind
 #: Defaults of the C++ ContinuousConfig (benchmarked in bench/continuous.py).
 DEFAULTS = dict(window_s=0.3, stagger=4, block=16, confirm=0, step_threshold=6.0, cusum_reference=0.75,
                 cusum_threshold=5.0, cusum_clip=4.0, min_relative_spread=1e-2, min_windows=8,
-                overlap_efficiency=0.5, horizon_s=0.0, detect=True, amortize=True, min_samples=16,
+                overlap_efficiency=0.5, horizon_s=0.0, prefilter_hz=-1.0, prefilter_order=4, detect=True,
+                amortize=True, min_samples=16,
                 min_hadamard=1e-9)
 
 
@@ -86,6 +89,13 @@ class ContinuousEstimator:
         Independent fraction of the staggered window results used in the uncertainty (0.5).
     horizon_s : float
         Forgetting time constant of the block mean [s]; 0 = none (default).
+    prefilter_hz : float
+        Butterworth low-pass applied alike to accelerations and forces before the windows [Hz];
+        -1 = fs/20 (default), 0 = off. Eq. 1 is LTI, so the filtered signals obey it with the
+        same parameters while the out-of-band noise (the cause of the noise bias) is removed.
+        Set it just above the band of the response for the best accuracy.
+    prefilter_order : int
+        2 or 4 (default).
     detect : bool
         Run the change detector (default True).
     amortize : bool
@@ -168,6 +178,16 @@ class ContinuousEstimator:
     def window_results(self) -> int:
         """Window results harvested so far."""
         return int(self._impl.window_results)
+
+    @property
+    def settle_samples(self) -> int:
+        """Samples skipped after a (re)start while the prefilter settles."""
+        return int(self._impl.settle_samples)
+
+    @property
+    def prefilter_hz(self) -> float:
+        """Prefilter cut-off in force [Hz] (0: off)."""
+        return float(self._impl.prefilter_hz)
 
     @property
     def window_samples(self) -> int:

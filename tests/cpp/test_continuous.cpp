@@ -243,6 +243,9 @@ void configuration_is_validated() {
   rejected([](Est::Config& c) { c.min_windows = 2; }, E::kBadMinWindows);
   rejected([](Est::Config& c) { c.overlap_efficiency = 0; }, E::kBadEfficiency);
   rejected([](Est::Config& c) { c.horizon_s = -1; }, E::kBadHorizon);
+  rejected([](Est::Config& c) { c.prefilter_hz = 450; }, E::kBadPrefilter);  // >= 0.45 fs
+  rejected([](Est::Config& c) { c.prefilter_hz = -2; }, E::kBadPrefilter);
+  rejected([](Est::Config& c) { c.prefilter_order = 3; }, E::kBadPrefilter);
   CHECK(Est::validate(Est::Config{}) == E::kNone);
 }
 
@@ -260,7 +263,8 @@ void schedule_and_aggregation_match_oracle() {
   using Est = algid::ContinuousEstimator<N>;
   Est::Config cfg;
   cfg.detect = false;
-  cfg.amortize = false;  // compare right at the window end
+  cfg.amortize = false;     // compare right at the window end
+  cfg.prefilter_hz = 0;     // raw samples into the windows (the prefilter is checked against scipy in Python)
   auto est = std::make_unique<Est>(cfg);
   const Record<N> rec(11, 8000, -1, 0, 1.0, 40.0);
   const long M = est->window_samples();
@@ -407,6 +411,35 @@ void free_end_and_single_dof() {
   }
 }
 
+
+void prefilter_keeps_the_model() {
+  // Noise-free closed-form record: with the default prefilter (fs/20, order 4) the window
+  // results still return the parameters (the same LTI filter on both sides of eq. 1), and
+  // windows start after the settle time ln(1e6) / decay.
+  constexpr int N = 3;
+  using Est = algid::ContinuousEstimator<N>;
+  Est::Config cfg;
+  cfg.amortize = false;
+  auto est = std::make_unique<Est>(cfg);
+  CHECK_NEAR(est->prefilter_hz(), 50.0, 1e-9);
+  CHECK(est->settle_samples() == 115);  // 13.8155 / (2 pi 50 sin(pi/8)) = 0.1149 s
+  const Record<N> rec(41, 3000, -1, 0, 1.0, 0.0);
+  long first = -1;
+  double worst = 0;
+  for (long s = 0; s < rec.T; ++s) {
+    const long before = est->window_results();
+    est->update(rec.a(s), rec.u(s));
+    if (est->window_results() == before) continue;
+    if (first < 0) first = s;
+    const auto truth = rec.truth(s);
+    for (int j = 0; j < Est::kParams; ++j)
+      worst = std::max(worst, std::abs(est->last_window()(j) / truth[static_cast<std::size_t>(j)] - 1.0));
+  }
+  std::printf("  prefilter on, noise-free: first window result at sample %ld, worst window error %.2e\n", first, worst);
+  CHECK(first == 115 + 300 - 1);
+  CHECK(worst < 1e-5);
+}
+
 }  // namespace
 
 int main() {
@@ -420,5 +453,6 @@ int main() {
   constant_system_no_alarm_and_accuracy();
   step_is_tracked();
   free_end_and_single_dof();
+  prefilter_keeps_the_model();
   return algid_test::finish("test_continuous");
 }

@@ -8,6 +8,12 @@
 /// windows and the window results are aggregated.
 ///
 /// Pipeline, per sample:
+///   0. Prefilter. The accelerations and the forces pass through the same Butterworth
+///      low-pass (`prefilter_hz`, default fs/20; order 4). Eq. 1 is linear and time-invariant,
+///      so the filtered signals obey it with the same parameters, while the white noise above
+///      the cut-off, which biases the windows (noise in the regressors: -5 % on masses at
+///      20 dB without it) and scatters them, is gone. The windows start once the filter's
+///      start-up transient has decayed to 1e-6 (115 ms at 50 Hz).
 ///   1. Windows. K (`stagger`) ChainEstimators run side by side on windows of M samples
 ///      (`window_s`), started M/K samples apart; each is reseeded when its window is full,
 ///      so a window result arrives every M/K samples (K = 4, 0.3 s: every 75 ms).
@@ -41,10 +47,12 @@
 /// samples until the next result (`amortize`), so no single sample pays for all 3n+1
 /// parameters; the estimates therefore lag the window end by at most M/K samples.
 ///
-/// Storage: K ChainEstimator<N> plus, per parameter, two rings of Capacity scalars (window
-/// results and their z-scores): 2 (3N+1) Capacity scalars (N = 3, Capacity 64: 10 KiB).
+/// Storage: MaxStagger ChainEstimator<N>, the prefilter (8 states per channel), and per
+/// parameter two rings of Capacity scalars (window results and their z-scores):
+/// 2 (3N+1) Capacity scalars. sizeof: 52 KiB for N = 3, 0.9 MiB for N = 64 (defaults).
 
 #include "algid/chain_estimator.hpp"
+#include "algid/detail/prefilter.hpp"
 #include "algid/detail/robust.hpp"
 #include "algid/types.hpp"
 
@@ -93,6 +101,8 @@ struct ContinuousConfig {
   int min_windows = 8;                            ///< window results since a restart before the tests are armed
   Scalar overlap_efficiency = Scalar(0.5);        ///< independent fraction of the staggered window results, (0, 1]
   Scalar horizon_s = Scalar(0);                   ///< forgetting time constant of the block mean [s]; 0: none
+  Scalar prefilter_hz = Scalar(-1);               ///< low-pass on accelerations and forces alike [Hz]; -1: 0.05 / dt, 0: off
+  int prefilter_order = 4;                        ///< Butterworth order of the prefilter: 2 or 4
   bool detect = true;                             ///< run the change detector
   bool amortize = true;                           ///< spread the per-parameter work over the samples
 };
@@ -112,6 +122,7 @@ enum class ContinuousConfigError {
   kBadMinWindows,
   kBadEfficiency,
   kBadHorizon,
+  kBadPrefilter,
 };
 
 /// Human-readable text of a ContinuousConfigError.
@@ -132,6 +143,8 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
     case ContinuousConfigError::kBadMinWindows: return "min_windows must be in [3, Capacity]";
     case ContinuousConfigError::kBadEfficiency: return "overlap_efficiency must be in (0, 1]";
     case ContinuousConfigError::kBadHorizon: return "horizon_s must be finite and >= 0 [s]";
+    case ContinuousConfigError::kBadPrefilter:
+      return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in (0, 0.45/dt) [Hz], prefilter_order 2 or 4";
   }
   return "unknown";
 }
@@ -191,6 +204,9 @@ class ContinuousEstimator {
     if (!(c.overlap_efficiency > Scalar(0) && c.overlap_efficiency <= Scalar(1)))
       return ContinuousConfigError::kBadEfficiency;
     if (!(c.horizon_s >= Scalar(0)) || !std::isfinite(c.horizon_s)) return ContinuousConfigError::kBadHorizon;
+    if (!std::isfinite(c.prefilter_hz) || (c.prefilter_hz < Scalar(0) && c.prefilter_hz != Scalar(-1)) ||
+        !(c.prefilter_hz * c.dt < Scalar(0.45)) || (c.prefilter_order != 2 && c.prefilter_order != 4))
+      return ContinuousConfigError::kBadPrefilter;
     return ContinuousConfigError::kNone;
   }
 
@@ -198,6 +214,13 @@ class ContinuousEstimator {
   explicit ContinuousEstimator(const Config& config)
       : config_(checked(config)), windows_(make_windows(window_config(config), std::make_index_sequence<MaxStagger>{})) {
     window_samples_ = std::lround(config_.window_s / config_.dt);
+    const Scalar fc = config_.prefilter_hz < Scalar(0) ? Scalar(0.05) / config_.dt : config_.prefilter_hz;
+    if (fc > Scalar(0)) {
+      filter_.configure(fc, config_.dt, config_.prefilter_order);
+      filtered_ = true;
+      // ln(1e6) / decay: the start-up transient is below 1e-6 of the signal when windows start
+      settle_ = static_cast<long>(std::ceil(Scalar(13.815510557964274) / filter_.decay() / config_.dt));
+    }
     for (int e = 0; e < config_.stagger; ++e) offset_[e] = window_samples_ * e / config_.stagger;
     long spacing = window_samples_;  // fewest samples between two window results
     for (int e = 0; e < config_.stagger; ++e) {
@@ -251,12 +274,23 @@ class ContinuousEstimator {
         return Status::kBadInput;
       }
     }
+    const Scalar* a = accel;
+    const Scalar* f = force;
+    if (filtered_) {
+      for (int i = 0; i < N; ++i) {
+        io_[static_cast<std::size_t>(i)] = accel[i];
+        io_[static_cast<std::size_t>(N + i)] = force[i];
+      }
+      filter_.process(io_.data(), io_.data());
+      a = io_.data();
+      f = io_.data() + N;
+    }
     for (int e = 0; e < config_.stagger; ++e) {
       if (phase_[e] < 0) {
         ++phase_[e];
         continue;
       }
-      windows_[e].update(accel, force);
+      windows_[e].update(a, f);
       if (++phase_[e] == window_samples_) {
         harvest(windows_[e]);
         windows_[e].reseed();
@@ -311,6 +345,12 @@ class ContinuousEstimator {
   long samples() const noexcept { return samples_; }
   /// Window length M [samples].
   long window_samples() const noexcept { return window_samples_; }
+  /// Samples skipped after a (re)start while the prefilter settles (0 without prefilter).
+  long settle_samples() const noexcept { return settle_; }
+  /// Prefilter cut-off in force [Hz] (0: off).
+  Scalar prefilter_hz() const noexcept {
+    return filtered_ ? (config_.prefilter_hz < Scalar(0) ? Scalar(0.05) / config_.dt : config_.prefilter_hz) : Scalar(0);
+  }
   /// Window results in the step test (config.confirm, or 2K+1).
   int confirm() const noexcept { return confirm_; }
   /// Parameters aggregated per sample (kParams when not amortized).
@@ -357,9 +397,10 @@ class ContinuousEstimator {
   }
 
   void restart_windows() noexcept {
+    filter_.reset();
     for (int e = 0; e < MaxStagger; ++e) {
       windows_[e].reseed();
-      phase_[e] = e < config_.stagger ? -offset_[e] : 0;
+      phase_[e] = e < config_.stagger ? -(offset_[e] + settle_) : 0;
     }
   }
 
@@ -540,6 +581,10 @@ class ContinuousEstimator {
 
   Config config_;
   std::array<Window, MaxStagger> windows_;
+  detail::ButterworthLowpass<Scalar, 2 * N> filter_{};
+  std::array<Scalar, 2 * N> io_{};
+  bool filtered_ = false;
+  long settle_ = 0;
   std::array<long, MaxStagger> phase_{};
   std::array<long, MaxStagger> offset_{};
   long window_samples_ = 0;
