@@ -53,7 +53,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "python"))
 
 from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402

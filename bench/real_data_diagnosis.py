@@ -29,7 +29,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "python"))
 
 from algid.diagnosis import diagnose  # noqa: E402
 from algid.diagnosis.report import to_json, to_text  # noqa: E402

@@ -198,11 +198,9 @@ def test_unforced_dof_has_parameters_per_unit_mass():
 
 
 def _run_cli(*argv):
-    code = ("import sys; from argparse import ArgumentParser; from algid.diagnosis import cli; "
-            "p = ArgumentParser(prog='algid'); s = p.add_subparsers(); cli.add_parser(s); "
-            "a = p.parse_args(sys.argv[1:]); sys.exit(a.func(a))")
-    return subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, cwd=ROOT,
-                          env={"PYTHONPATH": str(ROOT / "python"), "PATH": "/usr/bin:/bin"})
+    """The installed ``algid`` command line, as a user runs it."""
+    return subprocess.run([sys.executable, "-m", "algid.cli", *argv], capture_output=True, text=True,
+                          cwd=ROOT, timeout=300)
 
 
 def test_cli_json_contract_and_figures(tmp_path):
