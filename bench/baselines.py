@@ -123,17 +123,26 @@ def rls(a: np.ndarray, u: np.ndarray, dt: float, read: np.ndarray, *, window_s: 
     M = int(round(window_s / dt))
     results = []
     for mem in np.atleast_1d(memory_s):
-        lam = 1.0 if not np.isfinite(mem) else float(np.exp(-dt / mem))
-        Rc = lfilter([1.0], [1.0, -lam], R_t, axis=0)
-        rc = lfilter([1.0], [1.0, -lam], r_t, axis=0)
         out = np.full((len(read), p), np.nan)
         done = (np.asarray(read) + 1) // M * M - 1  # last sample of the last complete window
         have = np.nonzero(done >= 0)[0]
+        if not np.isfinite(mem):
+            Rc, rc = np.cumsum(R_t, axis=0), np.cumsum(r_t, axis=0)
+        else:  # filter along contiguous rows (time last), then back
+            lam = float(np.exp(-dt / mem))
+            Rc = lfilter([1.0], [1.0, -lam], np.ascontiguousarray(R_t.T), axis=-1).T
+            rc = lfilter([1.0], [1.0, -lam], np.ascontiguousarray(r_t.T), axis=-1).T
         R = Rc[done[have]].reshape(-1, p, p)[:, idx][:, :, idx]
         r = rc[done[have]][:, idx]
-        ok = np.linalg.cond(R) < 1e14
         sol = np.full((have.size, idx.size), np.nan)
-        sol[ok] = np.linalg.solve(R[ok], r[ok][..., None])[..., 0]  # the common decay cancels
+        try:  # batch solve; if a start-up system is singular, one by one (that one stays NaN)
+            sol = np.linalg.solve(R, r[..., None])[..., 0]  # the common decay cancels
+        except np.linalg.LinAlgError:
+            for q in range(have.size):
+                try:
+                    sol[q] = np.linalg.solve(R[q], r[q])
+                except np.linalg.LinAlgError:
+                    pass
         out[np.ix_(have, idx)] = sol
         if boundary == "free":
             out[:, -1] = 0.0
