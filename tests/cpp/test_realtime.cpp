@@ -1,19 +1,7 @@
 // The firmware contract, proved: update() and reseed() never allocate (Eigen's runtime malloc
 // guard with a throwing eigen_assert, plus a counting global operator new), and are noexcept.
 // Negative controls show that both guards fire.
-#include <stdexcept>
-
-namespace algid_test {
-struct EigenAssertion : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-}  // namespace algid_test
-// Must precede every Eigen include; not compiled away by NDEBUG.
-#define eigen_assert(x)                                                     \
-  do {                                                                      \
-    if (!(x)) throw ::algid_test::EigenAssertion("eigen_assert: " #x);      \
-  } while (0)
-#define EIGEN_RUNTIME_NO_MALLOC
+#include "alloc_guard.hpp"  // first: before any Eigen header
 
 #include <algid/algid.hpp>
 
@@ -22,33 +10,9 @@ struct EigenAssertion : std::runtime_error {
 
 #include <Eigen/Dense>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
-namespace {
-std::atomic<long> g_allocations{0};
-}
-
-void* operator new(std::size_t size) {
-  ++g_allocations;
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-#pragma GCC diagnostic pop
-
 namespace {
 
-struct NoAllocationScope {
-  long before;
-  NoAllocationScope() : before(g_allocations.load()) { Eigen::internal::set_is_malloc_allowed(false); }
-  ~NoAllocationScope() { Eigen::internal::set_is_malloc_allowed(true); }
-  long allocations() const { return g_allocations.load() - before; }
-};
+using algid_test::NoAllocationScope;
 
 template <int N, class Scalar>
 void no_allocation_in_hot_path() {

@@ -1,0 +1,47 @@
+#pragma once
+// Allocation guards for the real-time tests. Include FIRST in a test binary (before any Eigen
+// header), once per executable: it replaces the global operator new.
+//  - eigen_assert throws (so EIGEN_RUNTIME_NO_MALLOC's check fires even under NDEBUG);
+//  - a counting global operator new sees every heap allocation, Eigen's or not;
+//  - NoAllocationScope switches Eigen's guard off-limits and counts allocations in its scope.
+#include <stdexcept>
+
+namespace algid_test {
+struct EigenAssertion : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+}  // namespace algid_test
+
+#define eigen_assert(x)                                                \
+  do {                                                                 \
+    if (!(x)) throw ::algid_test::EigenAssertion("eigen_assert: " #x); \
+  } while (0)
+#define EIGEN_RUNTIME_NO_MALLOC
+
+#include <Eigen/Core>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+namespace algid_test {
+inline std::atomic<long> g_allocations{0};
+
+struct NoAllocationScope {
+  long before;
+  NoAllocationScope() : before(g_allocations.load()) { Eigen::internal::set_is_malloc_allowed(false); }
+  ~NoAllocationScope() { Eigen::internal::set_is_malloc_allowed(true); }
+  long allocations() const { return g_allocations.load() - before; }
+};
+}  // namespace algid_test
+
+void* operator new(std::size_t size) {
+  ++algid_test::g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#pragma GCC diagnostic pop
