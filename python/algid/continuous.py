@@ -53,7 +53,29 @@ def parameter_names(n: int) -> list[str]:
     return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
 
 
-class ContinuousEstimator:
+class PackedParameters:
+    """Mass, damping and stiffness views of a packed ``estimate`` vector
+    ``m1..mn, c1..cn, k1..k{n+1}`` (the order of :func:`parameter_names`)."""
+
+    n: int
+
+    @property
+    def mass(self) -> np.ndarray:
+        """Masses m_i [kg] (n,)."""
+        return self.estimate[: self.n]
+
+    @property
+    def damping(self) -> np.ndarray:
+        """Dampings c_i [N s/m] (n,)."""
+        return self.estimate[self.n: 2 * self.n]
+
+    @property
+    def stiffness(self) -> np.ndarray:
+        """Springs k_1..k_{n+1} [N/m] (n+1,)."""
+        return self.estimate[2 * self.n:]
+
+
+class ContinuousEstimator(PackedParameters):
     """Continuous algebraic estimator of an n-DOF chain: reseeded staggered windows, a running
     estimate with uncertainty per parameter, change events.
 
@@ -148,21 +170,6 @@ class ContinuousEstimator:
     def sigma(self) -> np.ndarray:
         """One-sigma statistical uncertainty of :attr:`estimate` (noise-induced bias excluded)."""
         return self._impl.sigma
-
-    @property
-    def mass(self) -> np.ndarray:
-        """Running masses m_i [kg]."""
-        return self.estimate[: self.n]
-
-    @property
-    def damping(self) -> np.ndarray:
-        """Running dampings c_i [N s/m]."""
-        return self.estimate[self.n: 2 * self.n]
-
-    @property
-    def stiffness(self) -> np.ndarray:
-        """Running springs k_1..k_{n+1} [N/m]."""
-        return self.estimate[2 * self.n:]
 
     @property
     def ready(self) -> bool:

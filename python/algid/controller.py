@@ -82,6 +82,8 @@ from typing import Any, Callable, Optional, Sequence, Union
 
 import numpy as np
 
+from .continuous import PackedParameters
+
 __all__ = [
     "BEZIER_COEFFS",
     "ContinuousAdapter",
@@ -247,7 +249,7 @@ class Multisine:
         return self.amplitude_n * np.sin(self._w * t + self.phases).sum(axis=1)
 
 
-class ContinuousAdapter:
+class ContinuousAdapter(PackedParameters):
     """:class:`algid.ContinuousEstimator` behind the ChainEstimator-like face the controller
     reads (``update``, ``mass``, ``damping``, ``stiffness``, ``valid``, ``delay_samples``),
     with a per-DOF validity from the running estimate's uncertainty.
@@ -303,21 +305,6 @@ class ContinuousAdapter:
         if boundary == "free" or self.n == 1:
             absent[-1] = True  # k_{n+1}: known 0 (free end) or folded into k_1 (n = 1, walls)
         self._absent = absent
-
-    @property
-    def mass(self) -> np.ndarray:
-        """Masses [kg] served (n,)."""
-        return self.estimate[: self.n]
-
-    @property
-    def damping(self) -> np.ndarray:
-        """Dampings [N s/m] served (n,)."""
-        return self.estimate[self.n: 2 * self.n]
-
-    @property
-    def stiffness(self) -> np.ndarray:
-        """Springs k_1..k_{n+1} [N/m] served (n+1,)."""
-        return self.estimate[2 * self.n:]
 
     @property
     def rel_sigma(self) -> np.ndarray:
