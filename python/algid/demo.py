@@ -280,7 +280,9 @@ def estimator_drift(res: Any, times_s: tuple = DRIFT_TIMES_S) -> dict[str, Any]:
         worst = lambda r: float(np.max(np.where(np.isfinite(r), r, np.inf)))  # noqa: E731
         out["single"].append(worst(rel_s[k]))
         out["continuous"].append(worst(rel_c[k]))
-        out["continuous_rel_sigma"].append(float(np.nanmax(rs_c[k][keep])))
+        sig = rs_c[k][keep]
+        # no uncertainty yet (the running estimate starts after its first windows): NaN
+        out["continuous_rel_sigma"].append(float(np.max(sig[np.isfinite(sig)])) if np.isfinite(sig).any() else float("nan"))
     out["single_history"], out["continuous_history"] = rel_s, rel_c
     return out
 
