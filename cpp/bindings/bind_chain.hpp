@@ -17,6 +17,19 @@ namespace py = pybind11;
 
 using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
+/// (n,) accelerations and forces for a per-sample update(); a ValueError otherwise.
+inline void require_sample(const Array& accel, const Array& force, int n) {
+  if (accel.ndim() != 1 || accel.shape(0) != n || force.ndim() != 1 || force.shape(0) != n)
+    throw py::value_error("update() takes accel and force of shape (" + std::to_string(n) + ",)");
+}
+
+/// (T, n) accelerations and forces of one record for run(); a ValueError otherwise.
+inline void require_record(const Array& accel, const Array& force, int n) {
+  if (accel.ndim() != 2 || accel.shape(1) != n || force.ndim() != 2 || force.shape(1) != n ||
+      accel.shape(0) != force.shape(0))
+    throw py::value_error("run() takes accel and force of the same shape (T, " + std::to_string(n) + ")");
+}
+
 inline algid::Boundary parse_boundary(const std::string& b) {
   if (b == "fixed") return algid::Boundary::kFixed;
   if (b == "free") return algid::Boundary::kFree;
@@ -44,8 +57,7 @@ void bind_chain(py::module_& m) {
       .def(
           "update",
           [](Est& e, const Array& accel, const Array& force) {
-            if (accel.ndim() != 1 || accel.shape(0) != N || force.ndim() != 1 || force.shape(0) != N)
-              throw py::value_error("update() takes accel and force of shape (" + std::to_string(N) + ",)");
+            require_sample(accel, force, N);
             return static_cast<int>(e.update(accel.data(), force.data()));
           },
           py::arg("accel"), py::arg("force"))
@@ -62,9 +74,7 @@ void bind_chain(py::module_& m) {
       .def(
           "run",
           [](Est& e, const Array& accel, const Array& force, bool full) {
-            if (accel.ndim() != 2 || accel.shape(1) != N || force.ndim() != 2 || force.shape(1) != N ||
-                accel.shape(0) != force.shape(0))
-              throw py::value_error("run() takes accel and force of the same shape (T, " + std::to_string(N) + ")");
+            require_record(accel, force, N);
             const py::ssize_t T = accel.shape(0);
             py::array_t<std::int8_t> status(T);
             Array mass({T, static_cast<py::ssize_t>(N)}), damping({T, static_cast<py::ssize_t>(N)});

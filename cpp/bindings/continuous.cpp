@@ -1,6 +1,6 @@
 // pybind11 bindings of ContinuousEstimator<N>: conversion only, no logic. One generic helper
 // binds every fixed-size instantiation; python/algid/continuous.py dispatches on n.
-#include <algid/algid.hpp>
+#include "bind_chain.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -16,13 +16,9 @@ namespace py = pybind11;
 
 namespace {
 
-using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-algid::Boundary boundary_of(const std::string& b) {
-  if (b == "fixed") return algid::Boundary::kFixed;
-  if (b == "free") return algid::Boundary::kFree;
-  throw py::value_error("boundary must be 'fixed' or 'free', got '" + b + "'");
-}
+using algid_bindings::Array;
+using algid_bindings::require_record;
+using algid_bindings::require_sample;
 
 template <class Est>
 py::tuple event_tuple(const typename Est::Event& ev) {
@@ -43,7 +39,7 @@ void bind_one(py::module_& m) {
                        double min_hadamard) {
              typename Est::Config c;
              c.dt = dt;
-             c.boundary = boundary_of(boundary);
+             c.boundary = algid_bindings::parse_boundary(boundary);
              c.window_s = window_s;
              c.stagger = stagger;
              c.block = block;
@@ -79,8 +75,7 @@ void bind_one(py::module_& m) {
       .def(
           "update",
           [](Est& e, const Array& accel, const Array& force) {
-            if (accel.ndim() != 1 || accel.shape(0) != N || force.ndim() != 1 || force.shape(0) != N)
-              throw py::value_error("update() takes accel and force of shape (" + std::to_string(N) + ",)");
+            require_sample(accel, force, N);
             return static_cast<int>(e.update(accel.data(), force.data()));
           },
           py::arg("accel"), py::arg("force"))
@@ -113,9 +108,7 @@ void bind_one(py::module_& m) {
       .def(
           "run",
           [](Est& e, const Array& accel, const Array& force, long stride) {
-            if (accel.ndim() != 2 || accel.shape(1) != N || force.ndim() != 2 || force.shape(1) != N ||
-                accel.shape(0) != force.shape(0))
-              throw py::value_error("run() takes accel and force of the same shape (T, " + std::to_string(N) + ")");
+            require_record(accel, force, N);
             if (stride < 1) throw py::value_error("stride must be >= 1");
             const py::ssize_t T = accel.shape(0);
             const py::ssize_t rows = (T + stride - 1) / stride;
