@@ -17,7 +17,7 @@
 namespace algid {
 
 /// Integrator chains of one signal. Storage: a (2 * 2P) x 3 ring of Delta^p f samples, a
-/// 5 x 3 state and its 5 x 3 Kahan compensation; nothing else. Do not build with -ffast-math
+/// 5 x 3 state and its 5 x 3 Kahan compensation (used in single precision); nothing else. Do not build with -ffast-math
 /// (it would remove the compensation).
 /// @tparam P interpolation points of the quadrature (see InterpolatoryRule).
 template <int P, class Scalar = double>
@@ -27,6 +27,9 @@ class IntegratorChain {
   static constexpr int kOrders = 5;
   /// Powers of Delta the signals are multiplied by (eq. 4 needs Delta^0..Delta^2).
   static constexpr int kPowers = 3;
+  /// Kahan-compensated state update: on for single precision (where the state, growing like
+  /// tau^(r+p), otherwise loses the small per-step increments), off for double.
+  static constexpr bool kCompensated = sizeof(Scalar) < sizeof(double);
   /// The rule this chain is advanced with.
   using Rule = InterpolatoryRule<P, kOrders, Scalar>;
 
@@ -58,15 +61,20 @@ class IntegratorChain {
     // triangular, so update in place from the highest order down (the lower orders are still
     // the old ones), with Kahan compensation: the state grows like tau^(r+p) while each step
     // adds a small amount, which is where single precision loses its digits.
+    // (Double precision keeps its digits without the compensation: it is skipped there.)
     const auto& prop = rule.propagate();
     for (int p = 0; p < kPowers; ++p) {
       for (int r = kOrders - 1; r >= 0; --r) {
         Scalar step = increment(r, p);
         for (int q = 0; q < r; ++q) step += prop(r, q) * state_(q, p);
-        const Scalar y = step - compensation_(r, p);
-        const Scalar t = state_(r, p) + y;
-        compensation_(r, p) = (t - state_(r, p)) - y;
-        state_(r, p) = t;
+        if constexpr (kCompensated) {
+          const Scalar y = step - compensation_(r, p);
+          const Scalar t = state_(r, p) + y;
+          compensation_(r, p) = (t - state_(r, p)) - y;
+          state_(r, p) = t;
+        } else {
+          state_(r, p) += step;
+        }
       }
     }
     const int end = static_cast<int>((j + 1) % kRing);
