@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _core
-from .estimator import SIZES, Status
+from .estimator import SIZES, Status, as_record, as_sample
 
 ChangeKind = _core.ChangeKind
 
@@ -146,10 +146,7 @@ class ContinuousEstimator(PackedParameters):
     def update(self, accel, force) -> Status:
         """Consume one simultaneous sample: accelerations [m/s^2] and forces [N], shape (n,).
         Change events raised by this sample are in :meth:`events`."""
-        a = np.ascontiguousarray(accel, dtype=float).reshape(-1)
-        u = np.ascontiguousarray(force, dtype=float).reshape(-1)
-        if a.size != self.n or u.size != self.n:
-            raise ValueError(f"update() takes accel and force with {self.n} entries, got {a.size} and {u.size}")
+        a, u = as_sample(accel, force, self.n)
         return Status(self._impl.update(a, u))
 
     def events(self) -> list[ChangeEvent]:
@@ -232,13 +229,7 @@ class ContinuousEstimator(PackedParameters):
             ``windows`` (W, 3n+1) every window result and ``window_sample`` (W,) the sample
             at which it was harvested; ``names``.
         """
-        a = np.ascontiguousarray(accel, dtype=float)
-        u = np.ascontiguousarray(force, dtype=float)
-        if a.ndim == 1 and self.n == 1:
-            a, u = a[:, None], u.reshape(-1, 1)
-        if a.ndim != 2 or a.shape[1] != self.n or u.shape != a.shape:
-            raise ValueError(f"run() takes accel and force of the same shape (T, {self.n}); "
-                             f"got {a.shape} and {u.shape}")
+        a, u = as_record(accel, force, self.n)
         if int(stride) < 1:
             raise ValueError("stride must be >= 1")
         out = dict(self._impl.run(a, u, int(stride)))

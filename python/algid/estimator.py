@@ -18,6 +18,26 @@ SIZES: tuple[int, ...] = tuple(_core.SIZES)
 Status = _core.Status
 
 
+def as_sample(accel, force, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """One simultaneous sample as contiguous float arrays of n entries; ValueError otherwise."""
+    a = np.ascontiguousarray(accel, dtype=float).reshape(-1)
+    u = np.ascontiguousarray(force, dtype=float).reshape(-1)
+    if a.size != n or u.size != n:
+        raise ValueError(f"update() takes accel and force with {n} entries, got {a.size} and {u.size}")
+    return a, u
+
+
+def as_record(accel, force, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A whole record as contiguous float arrays of shape (T, n) (1-D accepted for n = 1)."""
+    a = np.ascontiguousarray(accel, dtype=float)
+    u = np.ascontiguousarray(force, dtype=float)
+    if a.ndim == 1 and n == 1:
+        a, u = a[:, None], u.reshape(-1, 1)
+    if a.ndim != 2 or a.shape[1] != n or u.shape != a.shape:
+        raise ValueError(f"run() takes accel and force of the same shape (T, {n}); got {a.shape} and {u.shape}")
+    return a, u
+
+
 class ChainEstimator:
     """On-line algebraic estimator of an n-DOF chain (eqs. 2-7 of the paper).
 
@@ -59,10 +79,7 @@ class ChainEstimator:
 
     def update(self, accel, force) -> Status:
         """Consume one simultaneous sample: accelerations [m/s^2] and forces [N], shape (n,)."""
-        a = np.ascontiguousarray(accel, dtype=float).reshape(-1)
-        u = np.ascontiguousarray(force, dtype=float).reshape(-1)
-        if a.size != self.n or u.size != self.n:
-            raise ValueError(f"update() takes accel and force with {self.n} entries, got {a.size} and {u.size}")
+        a, u = as_sample(accel, force, self.n)
         return Status(self._impl.update(a, u))
 
     def reseed(self) -> None:
@@ -124,13 +141,7 @@ class ChainEstimator:
         (T, n+1), ``valid`` (T, n) and ``time_index`` (T,): the sample index whose window
         end the row describes (``k - delay_samples``).
         """
-        a = np.ascontiguousarray(accel, dtype=float)
-        u = np.ascontiguousarray(force, dtype=float)
-        if a.ndim == 1 and self.n == 1:
-            a, u = a[:, None], u.reshape(-1, 1)
-        if a.ndim != 2 or a.shape[1] != self.n or u.shape != a.shape:
-            raise ValueError(f"run() takes accel and force of the same shape (T, {self.n}); "
-                             f"got {a.shape} and {u.shape}")
+        a, u = as_record(accel, force, self.n)
         out = dict(self._impl.run(a, u, bool(full)))
         out["time_index"] = np.arange(a.shape[0]) - self.delay_samples
         return out

@@ -18,7 +18,9 @@ struct EigenAssertion : std::runtime_error {
   } while (0)
 #define EIGEN_RUNTIME_NO_MALLOC
 
-#include <Eigen/Core>
+#include <Eigen/Dense>
+
+#include "check.hpp"
 
 #include <atomic>
 #include <cstdlib>
@@ -33,6 +35,29 @@ struct NoAllocationScope {
   ~NoAllocationScope() { Eigen::internal::set_is_malloc_allowed(true); }
   long allocations() const { return g_allocations.load() - before; }
 };
+
+/// Negative controls: both guards fire (call from a test; needs check.hpp's CHECK).
+inline void guards_fire() {
+  // The Eigen guard fires on a dynamic allocation...
+  bool eigen_fired = false;
+  try {
+    NoAllocationScope scope;
+    Eigen::MatrixXd m(4, 4);
+    m.setZero();
+  } catch (const algid_test::EigenAssertion&) {
+    eigen_fired = true;
+  }
+  CHECK(eigen_fired);
+  // ...and the counting operator new sees a plain new.
+  long allocations = 0;
+  {
+    NoAllocationScope scope;
+    int* p = new int(3);
+    allocations = scope.allocations();
+    delete p;
+  }
+  CHECK(allocations == 1);
+}
 }  // namespace algid_test
 
 void* operator new(std::size_t size) {
