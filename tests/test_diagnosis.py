@@ -16,10 +16,12 @@ from algid.diagnosis import EFFECTS, MAIN_PARAM, diagnose
 from algid.diagnosis.candidates import lowpass
 from algid.diagnosis.core import (
     EqSpec,
+    band_filter,
     cross_validate,
     detrend,
     integrals,
     prepare,
+    signal_band,
     window_stats,
 )
 from algid.recording import Recording, save_recording
@@ -102,6 +104,66 @@ def test_gram_cross_validation_equals_explicit_least_squares():
         np.testing.assert_allclose(cv.test_sse[test], (r**2).sum(axis=1), rtol=1e-9)
 
 
+def test_band_rule_finds_the_excited_band_and_the_noise_floor():
+    """Forces flat on 0.5-50 Hz with white noise of known level: f_exc ~ 50 Hz, the noise
+    floor (one-sided PSD 2 sigma^2 / fs) within 10 %, the edge at 3 f_exc, widened to the
+    modes, the whole band for white noise alone; accelerations when nothing is forced."""
+    fs, dt, sig = 1000.0, 1e-3, 0.05
+    rng = np.random.default_rng(7)
+    u = multisine(2, 10.0, fs, seed=3) + sig * rng.standard_normal((10000, 2))
+    a = rng.standard_normal((10000, 2))
+    b = signal_band(a, u, dt, natural_hz=[12.0, 31.0])
+    assert b.source == "forces"
+    assert 48.0 <= b.f_exc <= 51.0
+    assert b.f_hi == pytest.approx(3 * b.f_exc)
+    for fl in b.floors:
+        assert fl == pytest.approx(2 * sig**2 / fs, rel=0.1)
+    assert signal_band(a, u, dt, natural_hz=[140.0]).f_hi == pytest.approx(1.25 * 140.0)
+    assert signal_band(a, u, dt, natural_hz=[450.0]).f_hi == 500.0  # capped at Nyquist
+    b0 = signal_band(u, np.zeros_like(u), dt)
+    assert b0.source == "accelerations" and 48.0 <= b0.f_exc <= 51.0
+    bw = signal_band(a, np.zeros_like(a), dt)  # white noise: no bin 10x above its floor
+    assert bw.full and bw.f_hi == 500.0
+
+
+def test_band_filter_is_an_orthogonal_projection():
+    rng = np.random.default_rng(2)
+    P = prepare(rng.standard_normal((2000, 1)), rng.standard_normal((2000, 1)), 1e-3, 200, band_hz=150.0)
+    x, y = rng.standard_normal((2, P.nw, P.L, 3))
+    Mx, My = band_filter(P, x), band_filter(P, y)
+    np.testing.assert_allclose(band_filter(P, Mx), Mx, atol=1e-12)  # idempotent
+    np.testing.assert_allclose(np.sum(Mx * y), np.sum(x * My), rtol=1e-10)  # symmetric
+    # Kept bins 0..150 Hz of a 0.2 s window (5 Hz apart): 31 of 101, DC once, others twice.
+    assert P.band_mask.sum() == 31 and P.band_fraction == pytest.approx(61 / 200)
+    f = np.fft.rfftfreq(P.L, P.dt)
+    F = np.fft.rfft(Mx, axis=1)
+    assert np.abs(F[:, f > 150.0]).max() < 1e-10  # nothing left above the band
+
+
+def test_in_band_withheld_error_equals_explicit_masked_residual_and_noise_fraction():
+    """In-band withheld errors from the masked Grams against plain lstsq + FFT masking,
+    and for white noise the in-band share of the withheld error is the band fraction."""
+    rng = np.random.default_rng(5)
+    T, L = 40000, 200
+    P = prepare(rng.standard_normal((T, 1)), rng.standard_normal((T, 1)), 1e-3, L, band_hz=150.0)
+    N = P.nw * P.L
+    t = P.dt * np.arange(N)
+    X = np.stack([np.sin(2 * np.pi * 7 * t), np.cos(2 * np.pi * 23 * t), np.sin(2 * np.pi * 41 * t) ** 3], axis=1)
+    y = X @ np.array([1.5, -2.0, 0.3]) + rng.standard_normal(N)
+    cv = cross_validate(P, window_stats(P, [EqSpec(e=0, X=X, y=y, E=None)]))
+    Xd, yd = detrend(P, X), detrend(P, y[:, None])[..., 0]
+    for k in range(P.nfolds):
+        test = P.folds == k
+        coef = np.linalg.lstsq(Xd[~test].reshape(-1, 3), yd[~test].ravel(), rcond=None)[0]
+        r = (yd[test] - Xd[test] @ coef)[..., None]
+        np.testing.assert_allclose(cv.test_sse[test], (band_filter(P, r) ** 2).sum(axis=(1, 2)), rtol=1e-8)
+        np.testing.assert_allclose(cv.test_sub_full.sum(axis=(1, 2))[test], (r**2).sum(axis=(1, 2)), rtol=1e-8)
+    # White residual: in-band / full-band withheld error = band fraction (61/200), within 3 %.
+    ratio = cv.test_sse.sum() / cv.test_sub_full.sum()
+    assert ratio == pytest.approx(P.band_fraction, rel=0.03)
+    assert np.all(cv.test_sse <= cv.test_sub_full.sum(axis=(1, 2)) * (1 + 1e-12))
+
+
 @pytest.mark.parametrize("fc", [20.0, 150.0, 450.0])
 def test_lowpass_matches_the_steady_state_of_a_first_order_filter(fc):
     dt = 1e-3
@@ -146,6 +208,11 @@ def test_each_effect_is_found_located_and_sized(name, loc, params):
     main = MAIN_PARAM[name]
     assert d.params[main] == pytest.approx(params[main], rel=0.05)
     assert d.gap_after < 0.8 * d.gap_before
+    # In-band gaps never exceed the full-band ones; the effect shrinks both.
+    assert d.gap_before <= d.gap_before_full and d.gap_after <= d.gap_after_full
+    assert d.gap_after_full < d.gap_before_full
+    assert d.band.f_hi == pytest.approx(min(500.0, max(3 * d.band.f_exc, 1.25 * d.band.f_modes)))
+    assert 48.0 <= d.band.f_exc <= 51.0
     # The jackknife standard deviation is an honest scale of the error (within 5 sigma).
     assert abs(d.params[main] - params[main]) < 5 * d.params_std[main] + 0.01 * abs(params[main])
 
@@ -216,6 +283,11 @@ def test_cli_json_contract_and_figures(tmp_path):
     assert js["effect"] == "cubic_stiffness" and js["location"] == {"spring": 3}
     assert set(js["ranking"][0]) >= {"effect", "location", "params", "gap_after"}
     assert js["gap_after"] < js["gap_before"]
+    assert js["gap_before"] <= js["gap_before_fullband"] and js["gap_after"] <= js["gap_after_fullband"]
+    assert js["gap_after_fullband"] < js["gap_before_fullband"]
+    assert js["band"]["band_hz"][0] == 0.0 and 140.0 < js["band"]["band_hz"][1] <= 500.0
+    assert "in_band" in js["metric"] and "gap_after_fullband" in js["ranking"][0]
+    assert "signal band" in p.stdout
     assert "cubic_stiffness" in p.stdout and "Where the linear model fails" in p.stdout
     pngs = sorted(f.name for f in (tmp_path / "figs").iterdir())
     assert pngs == sorted(["residuals_time.png", "residuals_spectrum.png", "restoring_force.png",

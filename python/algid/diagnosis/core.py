@@ -31,9 +31,30 @@ others.
 
 Metric. The error of every equation is the difference between the measured acceleration
 and the acceleration the model predicts from the recorded force and the reconstructed
-displacement and velocity. ``gap = sqrt(sum of squared withheld errors over all DOF) /
-sqrt(sum of squared measured accelerations)``, i.e. the normalised RMS acceleration
-equation error on withheld windows (after the per-window initial-condition terms).
+displacement and velocity. ``gap = sqrt(sum of squared withheld in-band errors over all
+DOF) / sqrt(sum of squared measured accelerations)``, i.e. the normalised RMS acceleration
+equation error on withheld windows (after the per-window initial-condition terms),
+restricted to the signal band ``[0, f_hi]`` of the recording (:func:`signal_band`): on
+every window the detrended error is projected onto the DFT bins of the window at or
+below ``f_hi`` (:func:`band_filter`; an orthogonal projection, so the in-band squared
+error of a window is a quadratic form of the same kind as the full-band one and the
+whole fold machinery carries over). The fits themselves stay full-band least squares;
+only the scoring of withheld windows is restricted. Outside the band the recording
+carries no signal, only the accelerometer's white noise, which no model can explain and
+which would otherwise bound the gap shrink by the ratio of the full-band to the in-band
+noise. The full-band gap (the same without the projection) is reported alongside.
+
+Band rule (from the recording alone, :func:`signal_band`): Welch PSD (Hann, segments of
+about 1 s) of every recorded force (every measured acceleration when no DOF is forced);
+per signal a noise floor = median PSD over the upper third of the spectrum; the bins
+more than :data:`BAND_DETECT` times above it carry signal; the excitation frequency
+``f_exc`` is the frequency below which :data:`BAND_POWER` of that signal's above-floor
+power lies (maximum over the signals). ``f_hi = min(f_Nyquist, max(BAND_HARMONICS f_exc,
+BAND_MODES f_n,max))`` with ``f_n,max`` the highest natural frequency of the linear chain
+fitted first: the band keeps the harmonics up to the third that polynomial nonlinearities
+(cubic spring, clearance, Coulomb friction, quadratic damping) create from the
+excitation, and every mode. The low edge is 0 (bias and drift live there; the
+per-window detrending removes the lines).
 """
 
 from __future__ import annotations
@@ -53,11 +74,22 @@ N_FOLDS = 8
 #: Sub-blocks per window on which withheld errors are also reported (the unit of the
 #: paired significance test; the fits and the detrending stay per window).
 N_SUB = 4
+#: Band rule (see the module docstring): a PSD bin carries signal above this multiple of
+#: the noise floor; f_exc holds this share of the above-floor power; the band edge is at
+#: least this multiple of f_exc and of the highest natural frequency.
+BAND_DETECT = 10.0
+BAND_POWER = 0.99
+BAND_HARMONICS = 3.0
+BAND_MODES = 1.25
 METRIC = (
-    "nrms_accel_equation_error: RMS over the withheld windows and all DOF of "
+    "nrms_accel_equation_error_in_band: RMS over the withheld windows and all DOF of "
     "(measured acceleration - acceleration predicted by each DOF's equation from the "
     "recorded force and reconstructed displacement/velocity, after the per-window "
-    "initial-condition terms), divided by the RMS of the measured accelerations"
+    "initial-condition terms), projected per window onto the DFT bins in the signal band "
+    "[0, f_hi] of the recording (f_hi = min(Nyquist, max(3 f_exc, 1.25 f_n,max)), f_exc: "
+    "99 % of the force power above 10x its noise floor, f_n,max: highest natural "
+    "frequency of the linear fit), divided by the RMS of the measured accelerations; "
+    "*_fullband: the same without the band projection"
 )
 
 
@@ -80,6 +112,79 @@ def window_length(dt: float, f_low_hz: float, T: int) -> int:
 
 
 @dataclass
+class Band:
+    """Signal band ``[0, f_hi]`` of a recording (:func:`signal_band`).
+
+    f_hi : upper edge [Hz]; f_exc : excitation frequency [Hz] (nan if no signal found);
+    f_modes : highest natural frequency used [Hz] (nan if none); nyquist [Hz];
+    source : "forces" or "accelerations"; floors : noise-floor PSD of every signal used.
+    """
+
+    f_hi: float
+    f_exc: float
+    f_modes: float
+    nyquist: float
+    source: str
+    floors: list
+
+    @property
+    def full(self) -> bool:
+        return bool(self.f_hi >= self.nyquist)
+
+    def to_json(self) -> dict:
+        return {"band_hz": [0.0, self.f_hi], "f_excitation_hz": self.f_exc,
+                "f_natural_max_hz": self.f_modes, "nyquist_hz": self.nyquist, "source": self.source,
+                "noise_floor_psd": self.floors,
+                "rule": f"f_hi = min(Nyquist, max({BAND_HARMONICS:g} f_exc, {BAND_MODES:g} f_n,max)); f_exc: "
+                        f"{BAND_POWER:.0%} of the {self.source}' PSD power in bins above {BAND_DETECT:g}x "
+                        "the median PSD of the upper third of the spectrum"}
+
+
+def excitation_frequency(x: np.ndarray, dt: float) -> tuple[float, float]:
+    """``(f_exc, floor)`` of one signal: Welch PSD (Hann, ~1 s segments), noise floor =
+    median PSD over the upper third of the spectrum, f_exc = frequency below which
+    :data:`BAND_POWER` of the power in bins above :data:`BAND_DETECT` x floor lies (above
+    the floor); nan when no bin is above."""
+    from scipy.signal import welch
+
+    x = np.asarray(x, dtype=float)
+    T = x.size
+    nper = int(min(T, max(256, min(T // 4, round(1.0 / dt)))))
+    f, S = welch(x, fs=1.0 / dt, nperseg=nper)
+    floor = float(np.median(S[f >= (2.0 / 3.0) * f[-1]]))
+    exc = np.where(S > BAND_DETECT * floor, S - floor, 0.0)
+    tot = exc.sum()
+    if not tot > 0:
+        return float("nan"), floor
+    c = np.cumsum(exc) / tot
+    return float(f[min(int(np.searchsorted(c, BAND_POWER)), f.size - 1)]), floor
+
+
+def signal_band(a: np.ndarray, u: np.ndarray, dt: float, natural_hz=()) -> Band:
+    """The band ``[0, f_hi]`` in which the recording carries signal (module docstring):
+    from the forces of the forced DOFs (the accelerations when no DOF is forced) and the
+    natural frequencies of a first linear fit. Never uses anything but the recording."""
+    a = np.atleast_2d(np.asarray(a, dtype=float).T).T
+    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+    nyq = 0.5 / dt
+    forced = np.any(u != 0.0, axis=0)
+    cols, source = ([u[:, i] for i in np.nonzero(forced)[0]], "forces") if forced.any() else \
+        ([a[:, i] for i in range(a.shape[1])], "accelerations")
+    res = [excitation_frequency(c, dt) for c in cols]
+    fe = [f for f, _ in res if np.isfinite(f)]
+    f_exc = max(fe) if fe else float("nan")
+    fn = np.asarray(natural_hz, dtype=float)
+    fn = fn[np.isfinite(fn) & (fn > 0)]
+    f_modes = float(fn.max()) if fn.size else float("nan")
+    if not fe:
+        f_hi = nyq
+    else:
+        f_hi = min(nyq, max(BAND_HARMONICS * f_exc, BAND_MODES * f_modes if fn.size else 0.0))
+    return Band(f_hi=float(f_hi), f_exc=f_exc, f_modes=f_modes, nyquist=nyq, source=source,
+                floors=[fl for _, fl in res])
+
+
+@dataclass
 class Prepared:
     """Signals cut into ``nw`` windows of ``L`` samples after ``skip`` leading samples
     (the tail ``T - skip - nw L`` is dropped).
@@ -97,6 +202,10 @@ class Prepared:
     L, nw : window length [samples] and number of windows.
     boundary : "fixed" or "free".
     folds : (nw,) fold index of every window.
+    band_hz : upper edge of the signal band [Hz] (None: the whole band); the withheld
+        errors are scored on the DFT bins of every window at or below it
+        (``band_mask``, (L//2+1,) bool; ``band_fraction``: share of a window's white
+        noise power on those bins; ``full_band``: every bin kept).
     """
 
     a_full: np.ndarray
@@ -109,6 +218,7 @@ class Prepared:
     nw: int
     boundary: str
     folds: np.ndarray
+    band_hz: float | None = None
     tau: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -122,6 +232,11 @@ class Prepared:
         self.t = self.dt * np.arange(sl.start, sl.stop)
         self.duration = self.dt * self.a_full.shape[0]
         self.forced = np.any(self.u_full != 0.0, axis=0)
+        fk = np.fft.rfftfreq(self.L, self.dt)
+        self.band_mask = np.ones(fk.size, dtype=bool) if self.band_hz is None else fk <= self.band_hz * (1 + 1e-12)
+        self.band_mask[0] = True
+        self.full_band = bool(self.band_mask.all())
+        self.band_fraction = float(np.sum(parseval_weights(self.L) * self.band_mask) / self.L)
 
     @property
     def sl(self) -> slice:
@@ -172,11 +287,22 @@ def integrals(a: np.ndarray, dt: float, points: int = QUAD_POINTS) -> tuple[np.n
     return A1, A2
 
 
+def parseval_weights(L: int) -> np.ndarray:
+    """Weights of the one-sided DFT bins of a real window of L samples in Parseval's sum
+    (``sum x^2 = sum_k w_k |X_k|^2 / L``): 1 for DC (and Nyquist for even L), 2 else."""
+    w = np.full(L // 2 + 1, 2.0)
+    w[0] = 1.0
+    if L % 2 == 0:
+        w[-1] = 1.0
+    return w
+
+
 def prepare(a: np.ndarray, u: np.ndarray, dt: float, L: int, boundary: str = "fixed",
             skip: int = 0, nfolds: int = N_FOLDS, A: tuple[np.ndarray, np.ndarray] | None = None,
-            ) -> Prepared:
+            band_hz: float | None = None) -> Prepared:
     """Integrate the accelerations (unless ``A = (A1, A2)`` is given) and cut the record
-    into windows of ``L`` samples, starting ``skip`` samples in."""
+    into windows of ``L`` samples, starting ``skip`` samples in; withheld errors are
+    scored on ``[0, band_hz]`` (the whole band if None)."""
     a = np.ascontiguousarray(a, dtype=float)
     u = np.ascontiguousarray(u, dtype=float)
     T = a.shape[0]
@@ -187,7 +313,7 @@ def prepare(a: np.ndarray, u: np.ndarray, dt: float, L: int, boundary: str = "fi
     K = min(nfolds, nw)
     folds = np.arange(nw) % K
     return Prepared(a_full=a, u_full=u, A1_full=A1, A2_full=A2, skip=skip, dt=dt, L=L, nw=nw,
-                    boundary=boundary, folds=folds)
+                    boundary=boundary, folds=folds, band_hz=band_hz)
 
 
 def detrend(P: Prepared, x: np.ndarray) -> np.ndarray:
@@ -196,6 +322,16 @@ def detrend(P: Prepared, x: np.ndarray) -> np.ndarray:
     B = P.basis  # (L, 2) orthonormal {1, t - t_w}
     C = np.matmul(B.T[None], X)  # (nw, 2, c)
     return X - np.matmul(B[None], C)
+
+
+def band_filter(P: Prepared, Z: np.ndarray) -> np.ndarray:
+    """Orthogonal projection of every window of (nw, L, c) data onto the DFT bins of the
+    signal band (``P.band_mask``); the identity when the band is the whole spectrum."""
+    if P.full_band:
+        return Z
+    F = np.fft.rfft(Z, axis=1)
+    F[:, ~P.band_mask] = 0.0
+    return np.fft.irfft(F, n=P.L, axis=1)
 
 
 def window_lines(P: Prepared, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -292,7 +428,9 @@ class WindowStats:
     G : (nw, P+1, P+1); the last row/column is the target. ``slices[k]`` are the
     parameter indices of equation k; ``shared`` those of the shared effect parameters.
     ``per_sub`` : (nw, S, E, P+1, P+1) contribution of each sub-block and equation;
-    ``per_eq`` : (nw, E, P+1, P+1) its sum over sub-blocks.
+    ``per_eq`` : (nw, E, P+1, P+1) its sum over sub-blocks; ``per_sub_band`` : the same
+    for the band-projected columns (:func:`band_filter`; the scoring Grams; ``per_sub``
+    itself when the band is the whole spectrum).
     """
 
     G: np.ndarray
@@ -300,6 +438,7 @@ class WindowStats:
     shared: slice
     eqs: list[int]
     per_sub: np.ndarray
+    per_sub_band: np.ndarray
 
     @property
     def per_eq(self) -> np.ndarray:
@@ -317,32 +456,42 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
         off += p
     shared = slice(off, off + q)
     S = N_SUB
+    band = not P.full_band
     per_sub = np.zeros((P.nw, S, len(specs), Ptot + 1, Ptot + 1))
+    per_sub_band = np.zeros_like(per_sub) if band else per_sub
 
     def sub(Z):  # (nw, L, c) -> (nw, S, L/S, c)
         return Z.reshape(P.nw, S, P.L // S, Z.shape[-1])
 
-    for k, s in enumerate(specs):
-        rest = np.concatenate(([s.E] if q else []) + [s.y[:, None]], axis=1) * s.w
-        Zr = sub(detrend(P, rest))  # (nw, S, L/S, q+1)
-        cached = P._cache.get((s.key, s.w)) if s.key is not None else None
-        if cached is None:
-            Zx = sub(detrend(P, s.X * s.w))
-            cached = (Zx, np.matmul(Zx.swapaxes(-1, -2), Zx))
-            if s.key is not None:
-                P._cache[(s.key, s.w)] = cached
-        Zx, gxx = cached
-        gxr = np.matmul(Zx.swapaxes(-1, -2), Zr)
-        grr = np.matmul(Zr.swapaxes(-1, -2), Zr)
-        ix = np.arange(slices[k].start, slices[k].stop)
-        ir = np.r_[np.arange(shared.start, shared.stop), Ptot]
-        blk = per_sub[:, :, k]
+    def fill(blk, ix, ir, gxx, gxr, grr):
         blk[:, :, ix[:, None], ix[None, :]] = gxx
         blk[:, :, ix[:, None], ir[None, :]] = gxr
         blk[:, :, ir[:, None], ix[None, :]] = gxr.swapaxes(-1, -2)
         blk[:, :, ir[:, None], ir[None, :]] = grr
+
+    for k, s in enumerate(specs):
+        rest = np.concatenate(([s.E] if q else []) + [s.y[:, None]], axis=1) * s.w
+        Zr_w = detrend(P, rest)  # (nw, L, q+1)
+        Zr = sub(Zr_w)  # (nw, S, L/S, q+1)
+        cached = P._cache.get((s.key, s.w)) if s.key is not None else None
+        if cached is None:
+            Zx_w = detrend(P, s.X * s.w)
+            Zx = sub(Zx_w)
+            Zxb = sub(band_filter(P, Zx_w)) if band else Zx
+            cached = (Zx, np.matmul(Zx.swapaxes(-1, -2), Zx), Zxb,
+                      np.matmul(Zxb.swapaxes(-1, -2), Zxb) if band else None)
+            if s.key is not None:
+                P._cache[(s.key, s.w)] = cached
+        Zx, gxx, Zxb, gxxb = cached
+        ix = np.arange(slices[k].start, slices[k].stop)
+        ir = np.r_[np.arange(shared.start, shared.stop), Ptot]
+        fill(per_sub[:, :, k], ix, ir, gxx, np.matmul(Zx.swapaxes(-1, -2), Zr), np.matmul(Zr.swapaxes(-1, -2), Zr))
+        if band:
+            Zrb = sub(band_filter(P, Zr_w))
+            fill(per_sub_band[:, :, k], ix, ir, gxxb, np.matmul(Zxb.swapaxes(-1, -2), Zrb),
+                 np.matmul(Zrb.swapaxes(-1, -2), Zrb))
     return WindowStats(G=per_sub.sum(axis=(1, 2)), slices=slices, shared=shared,
-                       eqs=[s.e for s in specs], per_sub=per_sub)
+                       eqs=[s.e for s in specs], per_sub=per_sub, per_sub_band=per_sub_band)
 
 
 def solve_gram(G: np.ndarray) -> np.ndarray:
@@ -368,9 +517,10 @@ class CVResult:
     """Cross-validated fit of a stacked model.
 
     theta : (P,) fit on all windows; theta_folds : (K, P) fits with fold k withheld;
-    test_sub : (nw, S, E) squared error of every sub-block and equation under the fit
-    that withheld its window; fit_sse : (nw,) in-sample error of ``theta``; extra :
-    model-specific values (e.g. the nonlinear parameter).
+    test_sub : (nw, S, E) in-band squared error (the metric's, see the module docstring)
+    of every sub-block and equation under the fit that withheld its window;
+    test_sub_full : the same over the whole band; fit_sse : (nw,) in-sample error of
+    ``theta``; extra : model-specific values (e.g. the nonlinear parameter).
     """
 
     theta: np.ndarray
@@ -379,6 +529,7 @@ class CVResult:
     fit_sse: np.ndarray
     stats: WindowStats
     extra: dict = field(default_factory=dict)
+    test_sub_full: np.ndarray | None = None
 
     @property
     def test_sse_eq(self) -> np.ndarray:
@@ -387,8 +538,13 @@ class CVResult:
 
     @property
     def test_sse(self) -> np.ndarray:
-        """(nw,) withheld squared error per window."""
+        """(nw,) withheld (in-band) squared error per window."""
         return self.test_sub.sum(axis=(1, 2))
+
+    @property
+    def test_sse_eq_full(self) -> np.ndarray:
+        """(nw, E) withheld full-band squared error per window and equation."""
+        return self.test_sub_full.sum(axis=1)
 
 
 def cross_validate(P: Prepared, st: WindowStats) -> CVResult:
@@ -398,18 +554,22 @@ def cross_validate(P: Prepared, st: WindowStats) -> CVResult:
     theta = solve_gram(Gsum)
     thetas = np.zeros((K, theta.size))
     test = np.zeros(st.per_sub.shape[:3])
+    full = np.zeros_like(test)
     for k in range(K):
         mask = P.folds == k
         th = solve_gram(Gsum - st.G[mask].sum(axis=0))
         thetas[k] = th
-        test[mask] = sse(st.per_sub[mask], th)
-    return CVResult(theta=theta, theta_folds=thetas, test_sub=test, fit_sse=sse(st.G, theta), stats=st)
+        full[mask] = sse(st.per_sub[mask], th)
+        test[mask] = full[mask] if st.per_sub_band is st.per_sub else sse(st.per_sub_band[mask], th)
+    return CVResult(theta=theta, theta_folds=thetas, test_sub=test, fit_sse=sse(st.G, theta), stats=st,
+                    test_sub_full=full)
 
 
 def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray) -> CVResult:
     """Cross-validation of a model with one nonlinear parameter known on ``grid``.
 
-    For every fold the grid value is chosen by the error on the training windows (refined
+    For every fold the grid value is chosen by the (full-band) error on the training
+    windows, as the fit itself (refined
     by a parabola through the three best neighbours, reported in ``extra["g_folds"]``),
     and the withheld windows are scored at the chosen grid point. The all-window fit is
     reported at the best grid point (``extra["g"]`` refined, ``extra["g_index"]``).
@@ -423,6 +583,7 @@ def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray)
     best = int(np.argmin(fit_all))
     res = cross_validate(P, stats[best])
     test = np.zeros(stats[best].per_sub.shape[:3])
+    full = np.zeros_like(test)
     thetas = np.zeros((K, thetas_all.shape[1]))
     g_folds = np.zeros(K)
     gb_folds = np.zeros(K, dtype=int)
@@ -435,9 +596,11 @@ def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray)
         gb_folds[k] = gb
         thetas[k] = ths[gb]
         g_folds[k] = refine_min(grid, tr, gb)
-        test[mask] = sse(stats[gb].per_sub[mask], ths[gb])
+        test[mask] = sse(stats[gb].per_sub_band[mask], ths[gb])
+        full[mask] = sse(stats[gb].per_sub[mask], ths[gb])
     res.theta_folds = thetas
     res.test_sub = test
+    res.test_sub_full = full
     res.extra = {"g": refine_min(grid, fit_all, best), "g_index": best, "g_folds": g_folds,
                  "g_index_folds": gb_folds, "grid_sse": fit_all}
     return res

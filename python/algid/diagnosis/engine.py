@@ -4,7 +4,9 @@
    half the lowest natural period (from a first fit on 0.5 s windows); the first
    ``max(0.1 s, 100 samples)`` are kept out of the windows as lead-in for delays and
    filters.
-2. The linear chain, cross-validated (``gap_before``), and the states it reconstructs.
+2. The signal band of the recording (:func:`.core.signal_band`, from the forces and the
+   natural frequencies of the first fit), the linear chain, cross-validated
+   (``gap_before``, in-band; ``gap_before_fullband``), and the states it reconstructs.
 3. Every candidate effect at every location (:mod:`.candidates`), cross-validated, scored
    by its withheld error reduction and tested against noise (:func:`noise_z`); the
    state-dependent leaders are refitted with the states reconstructed under them.
@@ -33,7 +35,18 @@ from .candidates import (
     fit_candidate,
     raw_residual,
 )
-from .core import METRIC, Prepared, base_design, detrend, integrals, prepare, window_length
+from .core import (
+    METRIC,
+    Band,
+    Prepared,
+    base_design,
+    detrend,
+    integrals,
+    parseval_weights,
+    prepare,
+    signal_band,
+    window_length,
+)
 from .linear import LinearFit, fit_linear, reconstruct_states
 from .locate import locate, noise_floor
 
@@ -68,6 +81,7 @@ class Scored:
 
     fit: CandidateFit
     gap_after: float
+    gap_after_full: float
     reduction: np.ndarray  # (nw * S,) per-sub-block reduction of the withheld squared error
     t_stat: float
     rel_reduction: float
@@ -89,6 +103,9 @@ class Diagnosis:
     params_std: dict[str, float]
     gap_before: float
     gap_after: float
+    gap_before_full: float
+    gap_after_full: float
+    band: Band
     ranking: list[Scored]
     P: Prepared
     lin: LinearFit
@@ -117,14 +134,16 @@ def _progress(cb: Callable[[str], None] | None, msg: str) -> None:
 
 
 def score(P: Prepared, lin: LinearFit, fit: CandidateFit, denom: float) -> Scored:
-    """Withheld-error reduction of a candidate against the linear model."""
+    """Withheld-error reduction (in-band) of a candidate against the linear model."""
     # Per sub-block reduction of the withheld error over the candidate's equations.
     red = (lin.cv.test_sub[:, :, fit.eqs].sum(axis=2) - fit.cv.test_sub.sum(axis=2)).ravel()
     total_lin = lin.cv.test_sse.sum()
     after = total_lin - red.sum()
+    after_full = lin.cv.test_sub_full.sum() - (lin.cv.test_sub_full[:, :, fit.eqs].sum() - fit.cv.test_sub_full.sum())
     sd = red.std(ddof=1)
     t = float(red.mean() / (sd / np.sqrt(red.size))) if sd > 0 else (np.inf if red.mean() > 0 else 0.0)
-    return Scored(fit=fit, gap_after=float(np.sqrt(max(after, 0.0) / denom)), reduction=red, t_stat=t,
+    return Scored(fit=fit, gap_after=float(np.sqrt(max(after, 0.0) / denom)),
+                  gap_after_full=float(np.sqrt(max(after_full, 0.0) / denom)), reduction=red, t_stat=t,
                   rel_reduction=float(red.sum() / total_lin))
 
 
@@ -151,6 +170,11 @@ def noise_z(P: Prepared, lin: LinearFit, fit: CandidateFit) -> float:
     noise spectrum estimated from the candidate's own withheld errors (Bartlett over the
     windows, per equation; whatever the candidate leaves unexplained counts as noise,
     coloured or not). Returns ``z = sum_w d_w / (2 sqrt(var))``.
+
+    Everything is on the DFT bins of the signal band (the metric's projection ``M``,
+    ``P.band_mask``): ``d_w = |M r_lin|^2 - |M r_lin - M Delta_w|^2``, whose noise-only
+    variance is ``4 sum_w (M Delta_w)' Sigma (M Delta_w)``, i.e. the same frequency-domain
+    sums restricted to the band bins.
     """
     K = P.nfolds
     st = fit.cv.stats
@@ -171,15 +195,14 @@ def noise_z(P: Prepared, lin: LinearFit, fit: CandidateFit) -> float:
             coef = np.concatenate([th[sl], th[st.shared]])
             rc[mask] = yd[mask] - Zc[mask] @ coef
             rl[mask] = yd[mask] - Zl[mask] @ lin.cv.theta_folds[k][lsl]
-        delta = rl - rc
-        total_d += float(np.sum(rl**2 - rc**2))
-        S = np.mean(np.abs(np.fft.rfft(rc, axis=1)) ** 2, axis=0) / P.L  # noise spectrum per bin
-        D2 = np.abs(np.fft.rfft(delta, axis=1)) ** 2  # (nw, L//2+1)
-        # Parseval weights of the one-sided spectrum: interior bins count twice.
-        wts = np.full(S.size, 2.0)
-        wts[0] = 1.0
-        if P.L % 2 == 0:
-            wts[-1] = 1.0
+        RC = np.fft.rfft(rc, axis=1)
+        RL = np.fft.rfft(rl, axis=1)
+        # Parseval weights of the one-sided spectrum (interior bins count twice), zero
+        # outside the band.
+        wts = parseval_weights(P.L) * P.band_mask
+        total_d += float(np.sum(wts * (np.abs(RL) ** 2 - np.abs(RC) ** 2)) / P.L)
+        S = np.mean(np.abs(RC) ** 2, axis=0) / P.L  # noise spectrum per bin
+        D2 = np.abs(RL - RC) ** 2  # (nw, L//2+1) spectrum of delta
         var += float(np.sum(wts * S * D2) / P.L)
     if var <= 0:
         return float("inf") if total_d > 0 else 0.0
@@ -226,14 +249,16 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     lin0 = fit_linear(prepare(a, u, dt, L0, boundary, skip, A=A))
     f_low = lowest_frequency_hz(lin0, boundary)
     L = window_length(dt, f_low if np.isfinite(f_low) else 1.0, T - skip)
-    P = prepare(a, u, dt, L, boundary, skip, A=A)
+    band = signal_band(a, u, dt, natural_frequencies(lin0, boundary))
+    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi)
     lin = fit_linear(P)
     timings["linear"] = time.perf_counter() - clock
     denom = float(np.sum(P.a**2))
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
+    gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))
 
     ctx = Context(P=P, lin=lin, x=lin.x, v=lin.v)
-    floor = noise_floor(P, lin.resid)  # (n,) white sensor-noise RMS per DOF [m/s^2]
+    floor = noise_floor(P, lin.resid)  # (n,) white sensor-noise RMS per DOF [m/s^2], full band
     todo = [(e, loc) for e, loc in all_candidates(P) if e in effects]
     scored: list[Scored] = []
     for k, (eff, loc) in enumerate(todo):
@@ -272,13 +297,16 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     _progress(progress, "locating the gap")
     natural = natural_frequencies(lin, boundary)
     where = locate(P, lin, natural, floor)
-    floor_rel = float(np.sqrt(sum(p["noise_floor"] ** 2 * np.sum(P.a[:, p["dof"] - 1] ** 2)
-                                  for p in where["per_dof"]) / denom))
+    # In-band floor: the white noise's share of the band bins (P.band_fraction).
+    floor_rel_full = float(np.sqrt(sum(p["noise_floor_fullband"] ** 2 * np.sum(P.a[:, p["dof"] - 1] ** 2)
+                                       for p in where["per_dof"]) / denom))
+    floor_rel = floor_rel_full * np.sqrt(P.band_fraction)
     best = next((s for s in scored if s.significant), None)
     if gap_before < GAP_RESOLUTION:
         best = None
     floor_rel = max(floor_rel, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
     excess = gap_before**2 - floor_rel**2
+    gap_after_full = gap_before_full
     if best is None:
         effect, location, params, std, gap_after = "none", None, {}, {}, gap_before
         explained = 0.0
@@ -287,16 +315,19 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     else:
         effect, location = best.fit.effect, best.fit.location
         params, std, gap_after = best.fit.params, best.fit.params_std, best.gap_after
+        gap_after_full = best.gap_after_full
         explained = float((gap_before**2 - gap_after**2) / excess) if excess > 0 else 1.0
         if gap_after > UNKNOWN_FLOOR_RATIO * floor_rel and explained < MIN_EXPLAINED:
             effect, location, params, std, gap_after = "unknown", None, {}, {}, gap_before
+            gap_after_full = gap_before_full
             best = None
     timings["total"] = time.perf_counter() - clock
     return Diagnosis(effect=effect, location=location, params=params, params_std=std,
-                     gap_before=gap_before, gap_after=gap_after, ranking=scored, P=P, lin=lin,
+                     gap_before=gap_before, gap_after=gap_after, gap_before_full=gap_before_full,
+                     gap_after_full=gap_after_full, band=band, ranking=scored, P=P, lin=lin,
                      best=best, timings=timings, where=where,
                      extra={"natural_hz": natural.tolist(), "noise_floor": floor_rel,
-                            "explained_excess": explained, "ctx": ctx})
+                            "noise_floor_full": floor_rel_full, "explained_excess": explained, "ctx": ctx})
 
 
 def natural_frequencies(lin: LinearFit, boundary: str) -> np.ndarray:

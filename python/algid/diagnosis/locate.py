@@ -1,7 +1,8 @@
 """Where the linear model fails: per DOF equation, in time, in frequency, against amplitude.
 
 All indicators use the equation errors of the linear fit in acceleration units (see
-:mod:`.core` for the metric). They locate the gap; the decision between candidate effects
+:mod:`.core` for the metric; the per-DOF and per-window gaps are in-band like the metric,
+the per-DOF ones also full-band). They locate the gap; the decision between candidate effects
 is taken by cross-validation in :mod:`.engine`, not here.
 """
 
@@ -47,7 +48,8 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
     n = P.n
     resid = lin.resid  # (N, n) acceleration units
     a_rms = np.sqrt(np.mean(P.a**2, axis=0))
-    eq_sse = lin.cv.test_sse_eq.sum(axis=0)  # withheld, acceleration units^2
+    eq_sse = lin.cv.test_sse_eq.sum(axis=0)  # withheld, in-band, acceleration units^2
+    eq_full = lin.cv.test_sse_eq_full.sum(axis=0)  # withheld, full band
     floor = noise_floor(P, resid) if floor is None else floor
     per_dof = []
     for i in range(n):
@@ -55,7 +57,10 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
             "dof": i + 1,
             "gap": float(np.sqrt(eq_sse[i] / (P.nw * P.L)) / a_rms[i]),
             "share_of_gap": float(eq_sse[i] / eq_sse.sum()),
-            "noise_floor": float(floor[i] / a_rms[i]),
+            # White noise on the band bins: its band fraction of the full-band floor.
+            "noise_floor": float(floor[i] * np.sqrt(P.band_fraction) / a_rms[i]),
+            "gap_fullband": float(np.sqrt(eq_full[i] / (P.nw * P.L)) / a_rms[i]),
+            "noise_floor_fullband": float(floor[i] / a_rms[i]),
         })
     # Time: withheld gap per window.
     a_w = (P.windows(P.a) ** 2).sum(axis=(1, 2))

@@ -31,11 +31,13 @@ def to_json(d) -> dict:
     """The issue-6 JSON: ``effect, location, params, gap_before, gap_after, metric,
     ranking`` (each ranking entry ``effect, location, params, gap_after``), plus
     ``params_std`` (1-sigma, delete-a-group jackknife over the folds), the significance of
-    every ranked candidate, the linear model, the location indicators and timings."""
+    every ranked candidate, the signal band and the full-band gaps (``*_fullband``), the
+    linear model, the location indicators and timings."""
     ranking = []
     for s in d.ranking:
         ranking.append({"effect": s.fit.effect, "location": s.fit.location, "params": s.fit.params,
-                        "gap_after": s.gap_after, "params_std": s.fit.params_std,
+                        "gap_after": s.gap_after, "gap_after_fullband": s.gap_after_full,
+                        "params_std": s.fit.params_std,
                         "z_noise": s.z, "t_stat": s.t_stat, "rel_reduction": s.rel_reduction,
                         "significant": s.significant})
     lin = d.lin
@@ -46,6 +48,11 @@ def to_json(d) -> dict:
         "gap_before": d.gap_before,
         "gap_after": d.gap_after,
         "metric": METRIC,
+        "gap_before_fullband": d.gap_before_full,
+        "gap_after_fullband": d.gap_after_full,
+        "band": d.band.to_json() | {"window_bins_kept": int(d.P.band_mask.sum()),
+                                    "window_bins": int(d.P.band_mask.size),
+                                    "white_noise_fraction": d.P.band_fraction},
         "ranking": ranking,
         "params_std": d.params_std,
         "main_param": MAIN_PARAM.get(d.effect),
@@ -56,6 +63,7 @@ def to_json(d) -> dict:
                          "natural_frequencies_hz": d.extra.get("natural_hz", [])},
         "analysis": {"windows": d.P.nw, "window_s": d.P.L * d.P.dt, "skipped_s": d.P.skip * d.P.dt,
                      "folds": d.P.nfolds, "noise_floor": d.extra.get("noise_floor"),
+                     "noise_floor_fullband": d.extra.get("noise_floor_full"),
                      "explained_excess": d.extra.get("explained_excess")},
         "where": d.where,
         "timings_s": d.timings,
@@ -102,17 +110,25 @@ def to_text(d, source: str = "") -> str:
         L.append("  natural frequencies [Hz]: " + ", ".join(f"{f:.3g}" for f in nat))
     L.append("")
     shrink = d.gap_before / d.gap_after if d.gap_after > 0 else float("inf")
-    L.append("Gap (normalised RMS acceleration equation error on withheld windows):")
-    L.append(f"  linear model        {d.gap_before:.4g}")
+    b = d.band
+    L.append(f"Gap (normalised RMS acceleration equation error on withheld windows, in the signal band "
+             f"0-{b.f_hi:.4g} Hz of 0-{b.nyquist:.4g}; full band in brackets):")
+    exc = f"{b.f_exc:.3g} Hz" if np.isfinite(b.f_exc) else "none found"
+    modes = f", highest natural frequency {b.f_modes:.3g} Hz" if np.isfinite(b.f_modes) else ""
+    L.append(f"  band: excitation up to {exc} in the {b.source}{modes}; "
+             f"{P.band_fraction:.0%} of the white sensor noise")
+    L.append(f"  linear model        {d.gap_before:.4g}  [{d.gap_before_full:.4g}]")
     nf = d.extra.get("noise_floor")
     if nf is not None:
-        L.append(f"  sensor-noise floor  {nf:.4g}")
+        L.append(f"  sensor-noise floor  {nf:.4g}  [{d.extra.get('noise_floor_full', float('nan')):.4g}]")
     if d.effect in ("none", "unknown"):
         L.append(f"  diagnosis: {d.effect.upper()}"
                  + (" - the linear model explains the data within noise" if d.effect == "none"
                     else " - the gap is real but no candidate effect explains it"))
     else:
-        L.append(f"  with {d.effect} at {_fmt_loc(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)")
+        shrink_f = d.gap_before_full / d.gap_after_full if d.gap_after_full > 0 else float("inf")
+        L.append(f"  with {d.effect} at {_fmt_loc(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)  "
+                 f"[{d.gap_after_full:.4g}, {shrink_f:.3g}x]")
         L.append(f"  fitted: {_fmt_params(d.params, d.params_std)}")
     L.append("")
     w = d.where

@@ -7,7 +7,7 @@ recording and the linear chain:
   after the reported effect, with its withheld RMS per window;
 * ``residuals_spectrum.png`` — at which frequencies: spectra of the measured acceleration
   and of the equation errors against the white sensor-noise floor, natural frequencies
-  marked;
+  marked, the signal band on which the gap is scored shaded;
 * ``restoring_force.png`` — against deformation: for every spring, the force the linear
   spring carries plus the unexplained force of the adjacent equations, against the
   spring's deformation (a straight line when the spring is linear);
@@ -71,7 +71,8 @@ def fig_residuals_time(d):
         ax.grid(alpha=0.3)
     axes[0, 0].legend(loc="upper right", fontsize=7, ncol=3)
     axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(f"Acceleration equation error over time (gap {d.gap_before:.3g} -> {d.gap_after:.3g})", fontsize=10)
+    fig.suptitle(f"Acceleration equation error over time (in-band gap {d.gap_before:.3g} -> {d.gap_after:.3g}; "
+                 f"full band {d.gap_before_full:.3g} -> {d.gap_after_full:.3g})", fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -91,15 +92,17 @@ def fig_residuals_spectrum(d):
         ax.loglog(f[1:], Sb[1:, i], color=C_BEFORE, lw=0.8, label="error, linear model")
         if d.best is not None:
             ax.loglog(f[1:], Sf[1:, i], color=C_AFTER, lw=0.8, label="error, " + _label(d))
-        floor = d.where["per_dof"][i]["noise_floor"] * np.sqrt(np.mean(P.a[:, i] ** 2))
+        floor = d.where["per_dof"][i]["noise_floor_fullband"] * np.sqrt(np.mean(P.a[:, i] ** 2))
         ax.axhline(floor**2 / (fs / 2), color="k", ls="--", lw=0.8, label="sensor-noise floor")
+        ax.axvspan(f[1], d.band.f_hi, color="#f4d03f", alpha=0.18, lw=0,
+                   label=f"signal band 0-{d.band.f_hi:.3g} Hz (gap scored here)" if i == 0 else None)
         for fn in d.extra.get("natural_hz", []):
             ax.axvline(fn, color="k", ls=":", lw=0.6)
         ax.set_ylabel(f"DOF {i + 1}\n[(m/s$^2$)$^2$/Hz]")
         ax.grid(alpha=0.3, which="both")
     axes[0, 0].legend(loc="lower left", fontsize=7, ncol=2)
     axes[-1, 0].set_xlabel("frequency [Hz]  (dotted: natural frequencies of the fitted chain)")
-    fig.suptitle("Spectrum of the equation error", fontsize=10)
+    fig.suptitle(f"Spectrum of the equation error (in-band gap {d.gap_before:.3g} -> {d.gap_after:.3g})", fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -215,10 +218,10 @@ def fig_ranking(d, top: int = 12):
     ax.axvline(d.gap_before, color=C_BEFORE, lw=1.5, label=f"linear model {d.gap_before:.3g}")
     nf = d.extra.get("noise_floor")
     if nf:
-        ax.axvline(nf, color="k", ls="--", lw=1, label=f"sensor-noise floor {nf:.3g}")
+        ax.axvline(nf, color="k", ls="--", lw=1, label=f"sensor-noise floor (in band) {nf:.3g}")
     ax.set_yticks(y, labels, fontsize=8)
     ax.set_xscale("log")
-    ax.set_xlabel("withheld gap (NRMS acceleration equation error); blue = beyond noise")
+    ax.set_xlabel(f"withheld gap (NRMS acceleration equation error, 0-{d.band.f_hi:.3g} Hz); blue = beyond noise")
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title(f"Candidates ranked - diagnosis: {d.effect}", fontsize=10)
     fig.tight_layout()
