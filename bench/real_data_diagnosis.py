@@ -72,9 +72,11 @@ def f16_modal_recording(data: Path, level: int, channel: int = 1) -> Recording:
 
 def _summary(d) -> dict:
     js = to_json(d)
-    keep = ("effect", "location", "params", "params_std", "gap_before", "gap_after", "linear_model", "analysis")
+    keep = ("effect", "location", "params", "params_std", "gap_before", "gap_after", "gap_before_fullband",
+            "gap_after_fullband", "band", "linear_model", "analysis")
     out = {k: js[k] for k in keep}
-    out["ranking_top3"] = [{k: r[k] for k in ("effect", "location", "params", "gap_after", "z_noise")}
+    out["ranking_top3"] = [{k: r[k] for k in ("effect", "location", "params", "gap_after", "gap_after_fullband",
+                                              "z_noise")}
                            for r in js["ranking"][:3]]
     out["where"] = {"per_dof": js["where"]["per_dof"], "frequency": js["where"]["frequency"],
                     "amplitude": js["where"]["amplitude"]}
@@ -98,7 +100,7 @@ def level_figure(rows: list[dict], path: Path) -> None:
     ax[1].plot(lv, np.array(zeta) * 100, "o-", color="C3")
     ax[1].set_ylabel("damping ratio [%]")
     ax[2].plot(lv, gb, "o-", color="C2")
-    ax[2].set_ylabel("withheld gap of the linear model")
+    ax[2].set_ylabel("withheld in-band gap, linear model")
     for a in ax:
         a.set_xlabel("excitation level")
         a.grid(alpha=0.3)
