@@ -45,11 +45,12 @@ which would otherwise bound the gap shrink by the ratio of the full-band to the 
 noise. The full-band gap (the same without the projection) is reported alongside.
 
 Band rule (from the recording alone, :func:`signal_band`): Welch PSD (Hann, segments of
-about 1 s) of every recorded force (every measured acceleration when no DOF is forced);
-per signal a noise floor = median PSD over the upper third of the spectrum; the bins
-more than :data:`BAND_DETECT` times above it carry signal; the excitation frequency
-``f_exc`` is the frequency below which :data:`BAND_POWER` of that signal's above-floor
-power lies (maximum over the signals). ``f_hi = min(f_Nyquist, max(BAND_HARMONICS f_exc,
+about 1 s) of every recorded force and every measured acceleration; per signal a noise
+floor = median PSD over the upper third of the spectrum; the bins more than
+:data:`BAND_DETECT` times above it carry signal; the signal frequency ``f_exc`` is the
+frequency below which :data:`BAND_POWER` of that signal's above-floor power lies
+(maximum over the signals: the band is never narrower than where either the forces or
+the responses carry signal). ``f_hi = min(f_Nyquist, max(BAND_HARMONICS f_exc,
 BAND_MODES f_n,max))`` with ``f_n,max`` the highest natural frequency of the linear chain
 fitted first: the band keeps the harmonics up to the third that polynomial nonlinearities
 (cubic spring, clearance, Coulomb friction, quadratic damping) create from the
@@ -87,7 +88,8 @@ METRIC = (
     "recorded force and reconstructed displacement/velocity, after the per-window "
     "initial-condition terms), projected per window onto the DFT bins in the signal band "
     "[0, f_hi] of the recording (f_hi = min(Nyquist, max(3 f_exc, 1.25 f_n,max)), f_exc: "
-    "99 % of the force power above 10x its noise floor, f_n,max: highest natural "
+    "largest over the recorded forces and accelerations of the frequency below which 99 % "
+    "of the PSD power above 10x the signal's noise floor lies, f_n,max: highest natural "
     "frequency of the linear fit), divided by the RMS of the measured accelerations; "
     "*_fullband: the same without the band projection"
 )
@@ -115,9 +117,11 @@ def window_length(dt: float, f_low_hz: float, T: int) -> int:
 class Band:
     """Signal band ``[0, f_hi]`` of a recording (:func:`signal_band`).
 
-    f_hi : upper edge [Hz]; f_exc : excitation frequency [Hz] (nan if no signal found);
+    f_hi : upper edge [Hz]; f_exc : signal frequency [Hz] (nan if no signal found);
     f_modes : highest natural frequency used [Hz] (nan if none); nyquist [Hz];
-    source : "forces" or "accelerations"; floors : noise-floor PSD of every signal used.
+    source : the signal that sets f_exc ("force 1", "acceleration 2", ...; "" if none);
+    f_signals : f_exc of every signal used (nan: nothing above its floor);
+    floors : noise-floor PSD of every signal used [unit^2/Hz].
     """
 
     f_hi: float
@@ -126,6 +130,7 @@ class Band:
     nyquist: float
     source: str
     floors: list
+    f_signals: dict = field(default_factory=dict)
 
     @property
     def full(self) -> bool:
@@ -134,10 +139,11 @@ class Band:
     def to_json(self) -> dict:
         return {"band_hz": [0.0, self.f_hi], "f_excitation_hz": self.f_exc,
                 "f_natural_max_hz": self.f_modes, "nyquist_hz": self.nyquist, "source": self.source,
-                "noise_floor_psd": self.floors,
+                "f_signals_hz": self.f_signals, "noise_floor_psd": self.floors,
                 "rule": f"f_hi = min(Nyquist, max({BAND_HARMONICS:g} f_exc, {BAND_MODES:g} f_n,max)); f_exc: "
-                        f"{BAND_POWER:.0%} of the {self.source}' PSD power in bins above {BAND_DETECT:g}x "
-                        "the median PSD of the upper third of the spectrum"}
+                        f"largest over the forces and accelerations of the frequency below which "
+                        f"{BAND_POWER:.0%} of the PSD power in bins above {BAND_DETECT:g}x the median PSD of "
+                        "the upper third of the spectrum lies"}
 
 
 def excitation_frequency(x: np.ndarray, dt: float) -> tuple[float, float]:
@@ -162,17 +168,18 @@ def excitation_frequency(x: np.ndarray, dt: float) -> tuple[float, float]:
 
 def signal_band(a: np.ndarray, u: np.ndarray, dt: float, natural_hz=()) -> Band:
     """The band ``[0, f_hi]`` in which the recording carries signal (module docstring):
-    from the forces of the forced DOFs (the accelerations when no DOF is forced) and the
-    natural frequencies of a first linear fit. Never uses anything but the recording."""
+    from the forces of the forced DOFs, the accelerations and the natural frequencies of a
+    first linear fit. Never uses anything but the recording."""
     a = np.atleast_2d(np.asarray(a, dtype=float).T).T
     u = np.atleast_2d(np.asarray(u, dtype=float).T).T
     nyq = 0.5 / dt
     forced = np.any(u != 0.0, axis=0)
-    cols, source = ([u[:, i] for i in np.nonzero(forced)[0]], "forces") if forced.any() else \
-        ([a[:, i] for i in range(a.shape[1])], "accelerations")
-    res = [excitation_frequency(c, dt) for c in cols]
-    fe = [f for f, _ in res if np.isfinite(f)]
-    f_exc = max(fe) if fe else float("nan")
+    cols = {f"force {i + 1}": u[:, i] for i in np.nonzero(forced)[0]}
+    cols.update({f"acceleration {i + 1}": a[:, i] for i in range(a.shape[1])})
+    res = {name: excitation_frequency(c, dt) for name, c in cols.items()}
+    fe = {name: f for name, (f, _) in res.items() if np.isfinite(f)}
+    source = max(fe, key=fe.get) if fe else ""
+    f_exc = fe[source] if fe else float("nan")
     fn = np.asarray(natural_hz, dtype=float)
     fn = fn[np.isfinite(fn) & (fn > 0)]
     f_modes = float(fn.max()) if fn.size else float("nan")
@@ -181,7 +188,7 @@ def signal_band(a: np.ndarray, u: np.ndarray, dt: float, natural_hz=()) -> Band:
     else:
         f_hi = min(nyq, max(BAND_HARMONICS * f_exc, BAND_MODES * f_modes if fn.size else 0.0))
     return Band(f_hi=float(f_hi), f_exc=f_exc, f_modes=f_modes, nyquist=nyq, source=source,
-                floors=[fl for _, fl in res])
+                floors=[fl for _, fl in res.values()], f_signals={k: f for k, (f, _) in res.items()})
 
 
 @dataclass

@@ -4,8 +4,8 @@
    half the lowest natural period (from a first fit on 0.5 s windows); the first
    ``max(0.1 s, 100 samples)`` are kept out of the windows as lead-in for delays and
    filters.
-2. The signal band of the recording (:func:`.core.signal_band`, from the forces and the
-   natural frequencies of the first fit), the linear chain, cross-validated
+2. The signal band of the recording (:func:`.core.signal_band`, from the forces, the
+   accelerations and the natural frequencies of the first fit), the linear chain, cross-validated
    (``gap_before``, in-band; ``gap_before_fullband``), and the states it reconstructs.
 3. Every candidate effect at every location (:mod:`.candidates`), cross-validated, scored
    by its withheld error reduction and tested against noise (:func:`noise_z`); the

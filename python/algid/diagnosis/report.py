@@ -115,7 +115,7 @@ def to_text(d, source: str = "") -> str:
              f"0-{b.f_hi:.4g} Hz of 0-{b.nyquist:.4g}; full band in brackets):")
     exc = f"{b.f_exc:.3g} Hz" if np.isfinite(b.f_exc) else "none found"
     modes = f", highest natural frequency {b.f_modes:.3g} Hz" if np.isfinite(b.f_modes) else ""
-    L.append(f"  band: excitation up to {exc} in the {b.source}{modes}; "
+    L.append(f"  band: signal up to {exc} ({b.source}){modes}; "
              f"{P.band_fraction:.0%} of the white sensor noise")
     L.append(f"  linear model        {d.gap_before:.4g}  [{d.gap_before_full:.4g}]")
     nf = d.extra.get("noise_floor")
