@@ -37,6 +37,53 @@ def test_cpp_agrees_with_numpy_reference(table1_record):
     assert np.nanmedian(inst_rel) < 1e-9
 
 
+def test_delta_power_identity_against_direct_quadrature():
+    """The core integrates f once and gets I^r(Delta^p f) by integration by parts. On a
+    polynomial of degree P-1 that is exact while the direct quadrature of Delta^p f is not
+    (its integrand has degree P-1+p); on a smooth signal both converge to the same integrals,
+    the difference shrinking at the rule's order P."""
+    h, P = 0.1, 8  # a coarse step, so that the direct rule's truncation error is far above rounding
+    t = h * np.arange(80)
+    f = 0.3 + t - 2 * t**3 + 0.5 * t**7  # degree P - 1
+    G = reference.moments(f, t, h, P)
+    Gd = reference.moments_direct(f, t, h, P)
+    # exact: I^r(t^d) = d!/(d+r)! t^(d+r), term by term, with Delta^p raising every degree by p
+    coeffs = {0: 0.3, 1: 1.0, 3: -2.0, 7: 0.5}
+    from math import factorial
+
+    def exact(p, r):
+        return sum(c * factorial(d + p) / factorial(d + p + r) * t ** (d + p + r) for d, c in coeffs.items())
+
+    late = slice(20, None)
+    worst = 0.0
+    for p in range(3):
+        for r in range(6):
+            e = exact(p, r)[late]
+            worst = max(worst, np.max(np.abs(G[p, r][late] - e) / np.abs(e)))
+    assert worst < 1e-11
+    direct_err = np.max(np.abs(Gd[2, 3][late] - exact(2, 3)[late]) / np.abs(exact(2, 3)[late]))
+    assert direct_err > 1e3 * worst  # the direct rule is not exact for Delta^2 f at this degree
+
+    # Smooth signal: I^3(Delta^2 g)(1) against the exact value; the identity converges at the
+    # rule's order P and beats the direct quadrature at every step.
+    from scipy.integrate import quad
+
+    def g(s):
+        return np.sin(7 * s) + 0.5 * np.cos(3 * s)
+
+    exact_value = quad(lambda s: (1 - s) ** 2 / 2 * s**2 * g(s), 0, 1, epsabs=1e-15, epsrel=1e-14, limit=200)[0]
+    errors = []
+    for step in (1 / 16, 1 / 32, 1 / 64):
+        tt = step * np.arange(int(round(1 / step)) + 1)
+        ident = reference.moments(g(tt), tt, step, P)[2, 3, -1]
+        direct = reference.moments_direct(g(tt), tt, step, P)[2, 3, -1]
+        errors.append(abs(ident - exact_value))
+        if step > 1 / 64:  # at 1/64 both reach rounding
+            assert abs(ident - exact_value) < abs(direct - exact_value) / 10
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all((orders > P - 0.6) & (orders < P + 1.5)), orders
+
+
 def test_table1_accuracy_figures(table1_record):
     """Issue 2: within 1 % by t0 + 0.05 s and 1e-6 by t0 + 0.5 s (noise-free multisine)."""
     t, a, u = table1_record

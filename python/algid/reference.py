@@ -12,8 +12,13 @@ It implements the same discretisation, so both agree to rounding:
       I^r(t_{j+1}) = sum_{q=1..r} h^(r-q)/(r-q)! I^q(t_j) + int_{t_j}^{t_{j+1}} (t_{j+1}-s)^(r-1)/(r-1)! p_j(s) ds
 
   ``P = 2`` is piecewise-linear (the trapezoidal baseline).
-* Eq. 4 with ``Delta = t - t0``, rows 2-4 of eq. 5 by eq. 6, Cramer on a time-scaled
-  copy of the 4x4 system, eq. 7 as the weighted mean of the Cramer solutions with weight
+* The integrals of ``Delta^p f`` (``Delta = t - t0``) that eq. 4 needs are not integrated
+  separately: integration by parts gives exactly
+  ``I^r(Delta f) = Delta I^r f - r I^(r+1) f`` and
+  ``I^r(Delta^2 f) = Delta^2 I^r f - 2 r Delta I^(r+1) f + r (r+1) I^(r+2) f``,
+  so one chain of ``f`` up to order 7 serves every power (:func:`moments`; the direct
+  quadrature of ``Delta^p f``, :func:`moments_direct`, agrees to the rule's truncation error).
+* Eq. 4, rows 2-4 of eq. 5 by eq. 6, Cramer on a time-scaled copy of the 4x4 system, eq. 7 as the weighted mean of the Cramer solutions with weight
   ``|det A|`` (identical to the paper's ratio of double integrals of determinants).
 """
 
@@ -24,7 +29,8 @@ from math import factorial
 
 import numpy as np
 
-#: Highest iterated-integral order eqs. 4-6 need (row 4 of a_13: I^3 of I^2).
+#: Highest iterated-integral order eqs. 4-6 need of a ``Delta^p``-weighted signal (row 4 of
+#: a_13: I^3 of I^2); through the identity that is order ``MAX_ORDER + 2`` of the signal.
 MAX_ORDER = 5
 
 
@@ -75,8 +81,21 @@ def iterated_integrals(f: np.ndarray, h: float, points: int, max_order: int = MA
     return out
 
 
-def _moments(f: np.ndarray, delta: np.ndarray, h: float, points: int) -> np.ndarray:
-    """``G[p, r, j] = I^r(Delta^p f)(t_j)`` for p = 0, 1, 2."""
+def moments(f: np.ndarray, delta: np.ndarray, h: float, points: int) -> np.ndarray:
+    """``G[p, r, j] = I^r(Delta^p f)(t_j)`` for p = 0, 1, 2, r = 0..MAX_ORDER, from the chain
+    of ``f`` alone and the integration-by-parts identity (what the C++ core does)."""
+    I = iterated_integrals(f, h, points, MAX_ORDER + 2)
+    r = np.arange(MAX_ORDER + 1)[:, None]
+    G = np.empty((3, MAX_ORDER + 1, f.size))
+    G[0] = I[: MAX_ORDER + 1]
+    G[1] = delta * I[: MAX_ORDER + 1] - r * I[1 : MAX_ORDER + 2]
+    G[2] = delta**2 * I[: MAX_ORDER + 1] - 2 * r * delta * I[1 : MAX_ORDER + 2] + r * (r + 1) * I[2 : MAX_ORDER + 3]
+    return G
+
+
+def moments_direct(f: np.ndarray, delta: np.ndarray, h: float, points: int) -> np.ndarray:
+    """The same ``G`` by integrating each ``Delta^p f`` with the rule (exact for ``f`` of
+    degree ``points - 1 - p`` only): the cross-check of :func:`moments`."""
     return np.stack([iterated_integrals(delta**p * f, h, points) for p in range(3)])
 
 
@@ -99,8 +118,8 @@ def system(y: np.ndarray, u: np.ndarray, dt: float, boundary: str = "fixed", poi
         raise ValueError("accel and force must have the same shape")
     T, n = y.shape
     tau = dt * np.arange(T)
-    Gy = [_moments(y[:, i], tau, dt, points) for i in range(n)]
-    Gu = [_moments(u[:, i], tau, dt, points) for i in range(n)]
+    Gy = [moments(y[:, i], tau, dt, points) for i in range(n)]
+    Gu = [moments(u[:, i], tau, dt, points) for i in range(n)]
     zero = np.zeros_like(Gy[0])
     A = np.zeros((T, n, 4, 4))
     B = np.zeros((T, n, 4))

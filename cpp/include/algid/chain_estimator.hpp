@@ -55,10 +55,15 @@ class ChainEstimator {
   static_assert(N >= 1, "a chain has at least one DOF");
 
  public:
-  using Chain = IntegratorChain<P, Scalar>;
+  /// Integrator chains of the N accelerations (orders 1..7 needed, 8 kept) and of the N forces
+  /// (1..5 needed, 6 kept): the extra order pads to the SIMD width and costs nothing.
+  using AccelChain = IntegratorChain<P, kAccelOrders + 1, Scalar, N>;
+  using ForceChain = IntegratorChain<P, kForceOrders + 1, Scalar, N>;
+  /// The quadrature rule both are advanced with.
+  using Rule = typename AccelChain::Rule;
   using Config = ChainConfig<Scalar>;
   /// Samples by which the estimates lag the newest sample.
-  static constexpr int kDelay = Chain::Rule::kDelay;
+  static constexpr int kDelay = Rule::kDelay;
   /// Number of DOF.
   static constexpr int kDofs = N;
 
@@ -82,8 +87,8 @@ class ChainEstimator {
   /// Restart at a new t0: the next sample is the first of a new window.
   /// @realtime no allocation, no throw
   void reseed() noexcept {
-    for (auto& c : accel_) c.reset();
-    for (auto& c : force_) c.reset();
+    accel_.reset();
+    force_.reset();
     for (auto& d : full_) d.reset();
     last_.reset();
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
@@ -104,22 +109,36 @@ class ChainEstimator {
         return Status::kBadInput;
       }
     }
-    const Scalar delta = static_cast<Scalar>(samples_) * config_.dt;
     ++samples_;
-    bool advanced = false;
-    for (int i = 0; i < N; ++i) {
-      advanced = accel_[i].push(accel[i], delta, rule_);
-      force_[i].push(force[i], delta, rule_);
-    }
+    const bool advanced = accel_.push(accel, rule_);
+    force_.push(force, rule_);
     if (!advanced) return Status::kWarmup;
-    const Scalar tau = static_cast<Scalar>(samples_ - P + 1) * config_.dt;
+    // Everything the DOFs share at this instant, once per sample.
+    Instant<Scalar> now;
+    now.tau = static_cast<Scalar>(samples_ - P + 1) * config_.dt;
+    const Scalar prev_tau = static_cast<Scalar>(samples_ - P) * config_.dt;
+    now.inv_tau = Scalar(1) / now.tau;
+    now.h = config_.dt;
+    now.decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, now.tau);
+    now.decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, now.tau);
+    now.samples = samples_;
+    Vector<Scalar, AccelChain::kOrders + 1> inv_pow;
+    inv_pow(0) = Scalar(1);
+    for (int r = 1; r <= AccelChain::kOrders; ++r) inv_pow(r) = inv_pow(r - 1) * now.inv_tau;
+    // Each signal's rows once: an acceleration enters its own DOF and both neighbours'.
+    accel_.scaled(inv_pow, accel_scaled_);
+    force_.scaled(inv_pow, force_scaled_);
     for (int i = 0; i < N; ++i) {
-      const Chain* left = i > 0 ? &accel_[i - 1] : nullptr;
-      const Chain* right = i + 1 < N ? &accel_[i + 1] : nullptr;
+      signal_rows(accel_scaled_.col(i).data(), accel_rows_[i]);
+      signal_rows(force_scaled_.col(i).data(), force_rows_[i]);
+    }
+    for (int i = 0; i < N; ++i) {
+      const auto* left = i > 0 ? &accel_rows_[i - 1] : nullptr;
+      const auto* right = i + 1 < N ? &accel_rows_[i + 1] : nullptr;
       if (i == N - 1 && reduced_last()) {
-        last_.update(left, accel_[i], right, force_[i], tau, config_.dt, samples_, config_.validity);
+        last_.update(left, accel_rows_[i], right, force_rows_[i], now, config_.validity);
       } else {
-        full_[i].update(left, accel_[i], right, force_[i], tau, config_.dt, samples_, config_.validity);
+        full_[i].update(left, accel_rows_[i], right, force_rows_[i], now, config_.validity);
       }
     }
     collect();
@@ -188,32 +207,40 @@ class ChainEstimator {
   bool reduced_last() const noexcept { return N == 1 || free_end(); }
   bool is_reduced(int i) const noexcept { return i == N - 1 && reduced_last(); }
 
+  // Eq. 7 estimates of every DOF into the physical views (one division per DOF); an interior
+  // spring is the mean of its two DOFs' estimates, or the one that is valid.
   void collect() noexcept {
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    std::array<Scalar, N + 1> sum{};
-    std::array<int, N + 1> votes{};
+    Scalar right_spring = nan;  // k_{i+1} from DOF i, for the fusion at DOF i + 1
     for (int i = 0; i < N; ++i) {
-      const Vector<Scalar, 4> t = theta(i);
-      valid_[i] = is_reduced(i) ? last_.valid() : full_[i].valid();
+      Vector<Scalar, 4> t;
+      if (is_reduced(i)) {
+        valid_[i] = last_.valid();
+        const Vector<Scalar, 3> e = last_.estimates();
+        t = Vector<Scalar, 4>(e(0), e(1), e(2), nan);
+      } else {
+        valid_[i] = full_[i].valid();
+        t = full_[i].estimates();
+      }
+      if (!valid_[i]) t.setConstant(nan);
       mass_(i) = t(0);
       damping_(i) = t(1);
-      if (valid_[i]) {
-        sum[i] += t(2);
-        ++votes[i];
-        if (!is_reduced(i)) {
-          sum[i + 1] += t(3);
-          ++votes[i + 1];
-        }
-      }
+      // k_i: this DOF's estimate, fused with DOF i-1's estimate of the same spring.
+      const bool left_ok = !std::isnan(right_spring);
+      stiffness_(i) = valid_[i] ? (left_ok ? Scalar(0.5) * (t(2) + right_spring) : t(2)) : right_spring;
+      right_spring = t(3);
     }
-    for (int j = 0; j <= N; ++j) stiffness_(j) = votes[j] ? sum[j] / static_cast<Scalar>(votes[j]) : nan;
-    if (free_end()) stiffness_(N) = Scalar(0);
+    stiffness_(N) = free_end() ? Scalar(0) : right_spring;
   }
 
   Config config_;
-  typename Chain::Rule rule_;
-  std::array<Chain, N> accel_{};
-  std::array<Chain, N> force_{};
+  Rule rule_;
+  AccelChain accel_{};
+  ForceChain force_{};
+  typename AccelChain::Scaled accel_scaled_ = AccelChain::Scaled::Zero();
+  typename ForceChain::Scaled force_scaled_ = ForceChain::Scaled::Zero();
+  std::array<Matrix<Scalar, 4, 3>, N> accel_rows_{};
+  std::array<Matrix<Scalar, 4, 1>, N> force_rows_{};
   std::array<DofEstimator<4, Scalar>, N> full_{};
   DofEstimator<3, Scalar> last_{};
   Vector<Scalar, N> mass_ = Vector<Scalar, N>::Zero();

@@ -10,6 +10,19 @@
 ///   S phi = s,   theta = [phi_1, phi_2 / tau, phi_3 / tau^2, phi_4 / tau^2],
 /// so every entry of S is of the order of the accelerations whatever tau is.
 ///
+/// Entries. Row q (q = 0..3) of eq. 5 is the q-fold integral (eq. 6) of eq. 4, whose
+/// operators on a signal f are Delta^2 f - 4 I(Delta f) + 2 I^2 f (mass column on y_i, and
+/// the right-hand side on u_i), I(Delta^2 f) - 2 I^2(Delta f) (damping) and I^2(Delta^2 f)
+/// (springs, on y_i minus a neighbour's). With the identity of integrator_chain.hpp and the
+/// time-scaled integrals J_k = I^k f / tau^k all three are one three-term recurrence,
+///
+///   R(q, s) = J_s - 2 (q+2) J_(s+1) + (q+2)(q+3) J_(s+2),
+///   S(q, 0) = R_yi(q, q),  S(q, 1) = R_yi(q, q+1),
+///   S(q, 2) = R_yi(q, q+2) - R_y(i-1)(q, q+2),  S(q, 3) = R_yi(q, q+2) - R_y(i+1)(q, q+2),
+///   s(q) = R_ui(q, q),
+///
+/// so a signal's rows are computed once (`signal_rows()`) and shared by the DOFs it enters.
+///
 /// Validity rule: a sample is *trusted* when (i) at least `min_samples` samples have been
 /// consumed since t0, (ii) det S is finite and non-zero, and (iii) the Hadamard ratio of S
 /// after scaling every column and then every row to unit norm, |det| / prod(norms), is at
@@ -34,72 +47,107 @@ struct ValidityRule {
   Scalar min_hadamard = Scalar(1e-9);    ///< lowest doubly equilibrated Hadamard ratio trusted
 };
 
+/// Time-scaled integrals a signal's rows need: J_0 .. J_7 of an acceleration (the spring
+/// column reaches R(3, 5), i.e. J_7), J_0 .. J_5 of a force.
+inline constexpr int kAccelOrders = 7;
+inline constexpr int kForceOrders = 5;
+
+/// The rows of one signal at one instant: column c holds R(q, q + c), q = 0..3 (the recurrence
+/// in the file comment), for c < Cols.
+/// @tparam Cols 3 for an acceleration (mass, damping, spring columns), 1 for a force.
+/// @param J time-scaled integrals J_0 .. J_(Cols + 4).
+/// @realtime no allocation, no throw
+template <int Cols, class Scalar>
+inline void signal_rows(const Scalar* J, Matrix<Scalar, 4, Cols>& rows) noexcept {
+  using Column = Eigen::Array<Scalar, 4, 1>;
+  const Column a(Scalar(4), Scalar(6), Scalar(8), Scalar(10));   // 2 (q + 2)
+  const Column b(Scalar(6), Scalar(12), Scalar(20), Scalar(30));  // (q + 2)(q + 3)
+  const Eigen::Map<const Eigen::Array<Scalar, Cols + 5, 1>> j(J);
+  for (int c = 0; c < Cols; ++c) {
+    rows.col(c).array() =
+        j.template segment<4>(c) - a * j.template segment<4>(c + 1) + b * j.template segment<4>(c + 2);
+  }
+}
+
+/// What every DOF of a chain shares at one instant (computed once per sample).
+template <class Scalar>
+struct Instant {
+  Scalar tau = Scalar(0);      ///< t - t0 [s] of the interval end
+  Scalar inv_tau = Scalar(0);  ///< 1 / tau [1/s]
+  Scalar h = Scalar(0);        ///< sample period [s]
+  Scalar decay4 = Scalar(0);   ///< RatioEstimator<4>::decay(previous tau, tau)
+  Scalar decay3 = Scalar(0);   ///< RatioEstimator<3>::decay(previous tau, tau)
+  long samples = 0;            ///< samples consumed since t0
+};
+
 /// Estimator of theta_i = [m_i, c_i, k_i, k_{i+1}] for one DOF.
 /// @tparam M 4 (the paper) or 3 (k_{i+1} known to be zero, or n = 1 where only k_1 + k_2 is
 /// identifiable: then theta = [m, c, k_1 + k_2]).
 template <int M, class Scalar = double>
 class DofEstimator {
+  static_assert(M == 3 || M == 4, "eq. 5 systems are 3x3 or 4x4");
+
  public:
+  /// Rows of an acceleration signal (see signal_rows()).
+  using AccelRows = Matrix<Scalar, 4, 3>;
+  /// Rows of a force signal.
+  using ForceRows = Matrix<Scalar, 4, 1>;
+
   /// Start a new window. @realtime no allocation, no throw
   void reset() noexcept {
     ratio_.reset();
-    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    instant_.setConstant(nan);
-    hadamard_ = Scalar(0);
+    numerator_.setZero();
+    det_ = Scalar(0);
+    hadamard2_num_ = Scalar(0);
+    hadamard2_den_ = Scalar(1);
     trusted_ = false;
   }
 
-  /// Advance to the interval end tau = t - t0 [s]. `left` and `right` are the neighbours'
-  /// acceleration chains (nullptr at a wall), `self` this DOF's, `force` its force chain.
-  /// @realtime no allocation, no throw
-  template <class Chain>
-  void update(const Chain* left, const Chain& self, const Chain* right, const Chain& force, Scalar tau,
-              Scalar h, long samples, const ValidityRule<Scalar>& rule) noexcept {
-    const Scalar inv = Scalar(1) / tau;
-    const Scalar inv2 = inv * inv;
-    const Scalar inv3 = inv2 * inv;
-    const Scalar inv4 = inv2 * inv2;
-    Scalar row_scale = Scalar(1);
-    for (int q = 0; q < M; ++q) {
-      // eq. 4 (row 1) and its q-fold integrals (eq. 6)
-      const Scalar a_m = self(2, q) - Scalar(4) * self(1, q + 1) + Scalar(2) * self(0, q + 2);
-      const Scalar a_c = self(2, q + 1) - Scalar(2) * self(1, q + 2);
-      const Scalar a_k = self(2, q + 2) - (left ? (*left)(2, q + 2) : Scalar(0));
-      const Scalar b = force(2, q) - Scalar(4) * force(1, q + 1) + Scalar(2) * force(0, q + 2);
-      system_(q, 0) = a_m * row_scale * inv2;
-      system_(q, 1) = a_c * row_scale * inv3;
-      system_(q, 2) = a_k * row_scale * inv4;
-      if constexpr (M == 4) {
-        const Scalar a_k1 = self(2, q + 2) - (right ? (*right)(2, q + 2) : Scalar(0));
-        system_(q, 3) = a_k1 * row_scale * inv4;
+  /// Advance to `now`. `left` and `right` are the neighbours' acceleration rows (nullptr at a
+  /// wall), `self` this DOF's, `force` its force rows. @realtime no allocation, no throw
+  void update(const AccelRows* left, const AccelRows& self, const AccelRows* right, const ForceRows& force,
+              const Instant<Scalar>& now, const ValidityRule<Scalar>& rule) noexcept {
+    system_.col(0) = self.col(0).template head<M>();
+    system_.col(1) = self.col(1).template head<M>();
+    if (left) {
+      system_.col(2) = (self.col(2) - left->col(2)).template head<M>();
+    } else {
+      system_.col(2) = self.col(2).template head<M>();
+    }
+    if constexpr (M == 4) {
+      if (right) {
+        system_.col(3) = self.col(2) - right->col(2);
+      } else {
+        system_.col(3) = self.col(2);
       }
-      rhs_(q) = b * row_scale * inv2;
-      row_scale *= inv;
     }
+    rhs_ = force.col(0).template head<M>();
     const CramerSolution<Scalar, M> sol = cramer(system_, rhs_);
-    hadamard_ = equilibrated_hadamard(sol.det);
-    Vector<Scalar, M> unscale;
-    unscale(0) = Scalar(1);
-    unscale(1) = inv;
-    unscale(2) = inv2;
-    if constexpr (M == 4) unscale(3) = inv2;
-    const bool solvable = std::isfinite(sol.det) && sol.det != Scalar(0);
-    trusted_ = solvable && samples >= rule.min_samples && hadamard_ >= rule.min_hadamard;
-    if (solvable) {
-      instant_ = sol.numerator.cwiseProduct(unscale) * (Scalar(1) / sol.det);
-    } else {
-      instant_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
-    }
+    det_ = sol.det;
+    const Scalar inv2 = now.inv_tau * now.inv_tau;
+    numerator_(0) = sol.numerator(0);
+    numerator_(1) = sol.numerator(1) * now.inv_tau;
+    numerator_(2) = sol.numerator(2) * inv2;
+    if constexpr (M == 4) numerator_(3) = sol.numerator(3) * inv2;
+    equilibrated_hadamard2();
+    const bool solvable = std::isfinite(det_) && det_ != Scalar(0);
+    trusted_ = solvable && now.samples >= rule.min_samples &&
+               hadamard2_num_ >= rule.min_hadamard * rule.min_hadamard * hadamard2_den_;
+    const Scalar decay = M == 4 ? now.decay4 : now.decay3;
     if (trusted_) {
-      const Scalar sign = sol.det > Scalar(0) ? Scalar(1) : Scalar(-1);
-      ratio_.add(tau, h, std::abs(sol.det), sign * sol.numerator.cwiseProduct(unscale));
+      const Scalar sign = det_ > Scalar(0) ? Scalar(1) : Scalar(-1);
+      ratio_.add_decayed(decay, now.h, std::abs(det_), sign * numerator_);
     } else {
-      ratio_.add(tau, h, Scalar(0), Vector<Scalar, M>::Zero());
+      ratio_.add_decayed(decay, now.h, Scalar(0), Vector<Scalar, M>::Zero());
     }
   }
 
   /// Instantaneous Cramer solution of eq. 5 at the last update (NaN if singular).
-  const Vector<Scalar, M>& instant() const noexcept { return instant_; }
+  Vector<Scalar, M> instant() const noexcept {
+    if (!(std::isfinite(det_) && det_ != Scalar(0)))
+      return Vector<Scalar, M>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+    return numerator_ * (Scalar(1) / det_);
+  }
   /// True if the last sample was trusted (see the validity rule).
   bool instant_valid() const noexcept { return trusted_; }
   /// Eq. 7 estimate of parameter j; meaningful when valid().
@@ -109,7 +157,10 @@ class DofEstimator {
   /// True once eq. 7 has integrated a trusted sample.
   bool valid() const noexcept { return ratio_.valid(); }
   /// Doubly equilibrated Hadamard ratio of the last system, in [0, 1].
-  Scalar hadamard() const noexcept { return hadamard_; }
+  Scalar hadamard() const noexcept {
+    const Scalar h2 = hadamard2_num_ / hadamard2_den_;
+    return std::isfinite(h2) && h2 > Scalar(0) ? std::sqrt(h2) : Scalar(0);
+  }
   /// The last time-scaled system S and right-hand side s.
   const Matrix<Scalar, M, M>& system() const noexcept { return system_; }
   const Vector<Scalar, M>& rhs() const noexcept { return rhs_; }
@@ -117,32 +168,37 @@ class DofEstimator {
   Scalar weight() const noexcept { return ratio_.denominator(); }
 
  private:
-  // |det| / prod(column norms) / prod(norms of the rows of the column-normalised matrix),
-  // with M reciprocals and three square roots (columns paired so that no product of squared
-  // norms leaves the range of single precision; normalised rows have squared norms <= M).
-  Scalar equilibrated_hadamard(Scalar det) const noexcept {
+  // Squared ratio as num / den: det^2 / prod(squared column norms) over prod(squared norms of
+  // the rows of the column-normalised matrix), with the determinant paired with two inverse
+  // column norms at a time so that nothing leaves the range of single precision (normalised
+  // rows have squared norms <= M). A zero column gives 0 / 1. No square root, one reciprocal
+  // per column; the ratio itself is formed only when asked for (hadamard()).
+  void equilibrated_hadamard2() noexcept {
+    const Matrix<Scalar, M, M> sq = system_.cwiseAbs2();
     Vector<Scalar, M> inv_col2;
     for (int c = 0; c < M; ++c) {
-      const Scalar col2 = system_.col(c).squaredNorm();
-      if (!(col2 > Scalar(0))) return Scalar(0);
+      const Scalar col2 = sq.col(c).sum();
+      if (!(col2 > Scalar(0))) {
+        hadamard2_num_ = Scalar(0);
+        hadamard2_den_ = Scalar(1);
+        return;
+      }
       inv_col2(c) = Scalar(1) / col2;
     }
-    Scalar row_product = Scalar(1);
-    for (int r = 0; r < M; ++r) {
-      Scalar row2 = Scalar(0);
-      for (int c = 0; c < M; ++c) row2 += system_(r, c) * system_(r, c) * inv_col2(c);
-      row_product *= row2;
-    }
+    const Vector<Scalar, M> row2 = sq * inv_col2;
     const Scalar tail = M == 4 ? inv_col2(2) * inv_col2(M - 1) : inv_col2(2);
-    const Scalar h = std::abs(det) * std::sqrt(inv_col2(0) * inv_col2(1)) * std::sqrt(tail) / std::sqrt(row_product);
-    return std::isfinite(h) ? h : Scalar(0);
+    const Scalar num = (det_ * inv_col2(0) * inv_col2(1)) * (det_ * tail);
+    hadamard2_num_ = std::isfinite(num) ? num : Scalar(0);
+    hadamard2_den_ = row2.prod();
   }
 
   RatioEstimator<M, Scalar> ratio_;
   Matrix<Scalar, M, M> system_ = Matrix<Scalar, M, M>::Zero();
   Vector<Scalar, M> rhs_ = Vector<Scalar, M>::Zero();
-  Vector<Scalar, M> instant_ = Vector<Scalar, M>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
-  Scalar hadamard_ = Scalar(0);
+  Vector<Scalar, M> numerator_ = Vector<Scalar, M>::Zero();  // Cramer numerators, time-unscaled
+  Scalar det_ = Scalar(0);
+  Scalar hadamard2_num_ = Scalar(0);
+  Scalar hadamard2_den_ = Scalar(1);
   bool trusted_ = false;
 };
 

@@ -1,100 +1,163 @@
 #pragma once
 /// @file integrator_chain.hpp
-/// The iterated integrator chains of eqs. 4 and 6 for one measured signal.
+/// The iterated integrator chain of eq. 6 for one measured signal, and the identity that
+/// turns it into every integral eqs. 4-6 need.
 ///
 /// For a signal f sampled at t_k = t_0 + k h the chain keeps, at the interval end t_{j+1},
 ///
-///   G(p, r) = I^r( Delta^p f )(t_{j+1}),   p = 0, 1, 2,   r = 0 .. 5,   Delta = t - t_0,
+///   I^r f (t_{j+1}),   r = 1 .. Orders,
 ///
-/// with I^0 the sample itself and I^r the r-fold integral from t_0 (zero initial conditions,
-/// eq. 6). These are all the signals eqs. 4-6 combine into the 4x4 system of one DOF.
-/// The interpolatory rule needs P samples around each interval, so the chain reports the
-/// instant t_{j+1} = t_k - (P-2) h when sample k arrives.
+/// the r-fold integral from t_0 (zero initial conditions, eq. 6), advanced with the
+/// interpolatory rule of quadrature.hpp; r = 0 is the sample itself. The rule needs P samples
+/// around each interval, so the chain reports the instant t_{j+1} = t_k - (P-2) h when sample k
+/// arrives.
+///
+/// Eq. 4 multiplies the signals by powers of Delta = t - t_0 before integrating. Those
+/// integrals are not advanced separately: integration by parts gives, exactly,
+///
+///   I^r(Delta^p f) = sum_{k=0..p} (-1)^k C(p, k) r (r+1) .. (r+k-1) Delta^(p-k) I^(r+k) f,
+///
+/// (p = 1: I^r(Delta f) = Delta I^r f - r I^(r+1) f), so one chain of f up to order r + p
+/// serves every power. Divided by tau^(r+p) (tau = Delta at the instant) the right-hand side
+/// only involves the time-scaled integrals J_k = I^k f / tau^k, with integer coefficients:
+/// see `scaled_moment()`. Compared with integrating Delta^p f directly, this is exact for
+/// polynomial signals of degree P-1 (not P-1-p) and costs a third of the work.
 
 #include "algid/quadrature.hpp"
 #include "algid/types.hpp"
 
 namespace algid {
 
-/// Integrator chains of one signal. Storage: a (2 * 2P) x 3 ring of Delta^p f samples, a
-/// 5 x 3 state and its 5 x 3 Kahan compensation (used in single precision); nothing else. Do not build with -ffast-math
-/// (it would remove the compensation).
+/// Iterated integrals I^1 .. I^Orders of K sampled signals that share one clock (the
+/// accelerations, or the forces, of a chain): one stencil offset and one rule for all, and the
+/// update of all K is two small dense products, vectorised across orders and signals.
+/// Storage: a doubled ring of 2P samples per signal (any stencil is a contiguous block), the
+/// Orders x K states and, in single precision, their Kahan compensation; nothing else. Do not
+/// build with -ffast-math (it would remove the compensation).
 /// @tparam P interpolation points of the quadrature (see InterpolatoryRule).
-template <int P, class Scalar = double>
+/// @tparam Orders highest order of iterated integral kept (a multiple of the SIMD width is
+/// cheapest: a padding order costs nothing and is a valid integral).
+/// @tparam K number of signals.
+template <int P, int Orders, class Scalar = double, int K = 1>
 class IntegratorChain {
+  static_assert(Orders >= 1, "at least one integral");
+  static_assert(K >= 1, "at least one signal");
+
  public:
-  /// Highest order of iterated integral kept (row 4 of eq. 5 needs I^3 of the I^2 in eq. 4).
-  static constexpr int kOrders = 5;
-  /// Powers of Delta the signals are multiplied by (eq. 4 needs Delta^0..Delta^2).
-  static constexpr int kPowers = 3;
+  /// Highest order of iterated integral kept.
+  static constexpr int kOrders = Orders;
+  /// Number of signals.
+  static constexpr int kSignals = K;
   /// Kahan-compensated state update: on for single precision (where the state, growing like
-  /// tau^(r+p), otherwise loses the small per-step increments), off for double.
+  /// tau^r, otherwise loses the small per-step increments), off for double.
   static constexpr bool kCompensated = sizeof(Scalar) < sizeof(double);
-  /// The rule this chain is advanced with.
-  using Rule = InterpolatoryRule<P, kOrders, Scalar>;
+  /// The smallest rule this chain can be advanced with (a rule of more orders works too).
+  using Rule = InterpolatoryRule<P, Orders, Scalar>;
+  /// Time-scaled integrals of every signal: column k holds J_0 .. J_Orders of signal k.
+  using Scaled = Matrix<Scalar, Orders + 1, K>;
 
   /// Forget everything: the next sample is t_0. @realtime no allocation, no throw.
   void reset() noexcept {
     count_ = 0;
-    state_.setZero();
     value_.setZero();
+    state_.setZero();
+    compensation_.setZero();
   }
 
-  /// Consume sample f_k taken at Delta_k = k h [s] from t_0. Returns true when the chain has
-  /// advanced to a new interval end (from the P-th sample on). @realtime no allocation, no throw.
-  bool push(Scalar f, Scalar delta, const Rule& rule) noexcept {
+  /// Consume the simultaneous samples f[0..K-1]. Returns true when the chains have advanced to
+  /// a new interval end (from the P-th sample on). @realtime no allocation, no throw.
+  template <int RuleOrders>
+  bool push(const Scalar* f, const InterpolatoryRule<P, RuleOrders, Scalar>& rule) noexcept {
+    static_assert(RuleOrders >= Orders, "the rule must cover every order of the chain");
     const int slot = static_cast<int>(count_ % kRing);
-    const Scalar g[kPowers] = {f, delta * f, delta * delta * f};
-    for (int p = 0; p < kPowers; ++p) {
-      ring_(slot, p) = g[p];
-      ring_(slot + kRing, p) = g[p];  // doubled ring: any stencil is a contiguous block
+    for (int k = 0; k < K; ++k) {
+      ring_(slot, k) = f[k];
+      ring_(slot + kRing, k) = f[k];
     }
     ++count_;
     if (count_ < P) return false;
-    const long j = count_ - P;                         // interval [t_j, t_{j+1}]
+    const long j = count_ - P;                                      // interval [t_j, t_{j+1}]
     const long start = j - (P / 2 - 1) > 0 ? j - (P / 2 - 1) : 0;  // centred, shifted near t_0
     const int off = static_cast<int>(j - start);
     const int first = static_cast<int>(start % kRing);
-    Matrix<Scalar, kOrders, kPowers> increment;
-    increment.noalias() = rule.weights(off) * ring_.template block<P, kPowers>(first, 0);
-    // I^r += sum_{q<r} h^(r-q)/(r-q)! I^q + increment: the propagation is unit lower
-    // triangular, so update in place from the highest order down (the lower orders are still
-    // the old ones), with Kahan compensation: the state grows like tau^(r+p) while each step
-    // adds a small amount, which is where single precision loses its digits.
-    // (Double precision keeps its digits without the compensation: it is skipped there.)
-    const auto& prop = rule.propagate();
-    for (int p = 0; p < kPowers; ++p) {
-      for (int r = kOrders - 1; r >= 0; --r) {
-        Scalar step = increment(r, p);
-        for (int q = 0; q < r; ++q) step += prop(r, q) * state_(q, p);
-        if constexpr (kCompensated) {
-          const Scalar y = step - compensation_(r, p);
-          const Scalar t = state_(r, p) + y;
-          compensation_(r, p) = (t - state_(r, p)) - y;
-          state_(r, p) = t;
-        } else {
-          state_(r, p) += step;
-        }
-      }
+    // I^r += sum_{q<r} h^(r-q)/(r-q)! I^q + h^r sum_m W(r, m) f_m, every order from the old
+    // lower orders: the step is computed whole before the state moves.
+    Matrix<Scalar, Orders, K> step;
+    step.noalias() = rule.weights(off).template topRows<Orders>().lazyProduct(
+        ring_.template block<P, K>(first, 0));
+    add_carry<0>(rule.carry(), step);
+    if constexpr (kCompensated) {
+      // The state grows like tau^r while each step adds a small amount: that is where
+      // single precision loses its digits; double keeps them without compensation.
+      const Matrix<Scalar, Orders, K> y = step - compensation_;
+      const Matrix<Scalar, Orders, K> t = state_ + y;
+      compensation_ = (t - state_) - y;
+      state_ = t;
+    } else {
+      state_ += step;
     }
-    const int end = static_cast<int>((j + 1) % kRing);
-    value_ = ring_.row(end).transpose();
+    value_ = ring_.row(static_cast<int>((j + 1) % kRing)).transpose();
     return true;
   }
 
-  /// I^r(Delta^p f) at the current interval end; r = 0 is the sample value itself.
-  Scalar operator()(int p, int r) const noexcept { return r == 0 ? value_(p) : state_(r - 1, p); }
+  /// push() for a single signal (K = 1). @realtime no allocation, no throw.
+  template <int RuleOrders>
+  bool push(Scalar f, const InterpolatoryRule<P, RuleOrders, Scalar>& rule) noexcept {
+    static_assert(K == 1, "one sample per signal");
+    return push(&f, rule);
+  }
+
+  /// I^r f_k at the current interval end, r = 0 .. Orders; r = 0 is the sample value itself.
+  Scalar integral(int r, int k = 0) const noexcept { return r == 0 ? value_(k) : state_(r - 1, k); }
+
+  /// Time-scaled integrals J_r = I^r f_k / tau^r, r = 0 .. Orders, of every signal, given
+  /// inv_tau_pow(r) = tau^-r. @realtime no allocation, no throw.
+  template <class Derived>
+  void scaled(const Eigen::MatrixBase<Derived>& inv_tau_pow, Scaled& out) const noexcept {
+    out.row(0) = value_.transpose();
+    out.template bottomRows<Orders>().noalias() =
+        inv_tau_pow.template segment<Orders>(1).asDiagonal() * state_;
+  }
 
   /// Samples consumed since the last reset.
   long count() const noexcept { return count_; }
 
  private:
+  // step(r) += sum_{q<r} carry(r, q) state(q), in blocks of kCarryBlock orders that each skip
+  // the zero upper triangle: about half the multiplications of the full product.
+  static constexpr int kCarryBlock = 2;
+  template <int Row0, class Carry>
+  void add_carry(const Carry& carry, Matrix<Scalar, Orders, K>& step) const noexcept {
+    constexpr int kRows = Orders - Row0 < kCarryBlock ? Orders - Row0 : kCarryBlock;
+    constexpr int kDepth = Row0 + kRows - 1;  // the lower orders the block's last row needs
+    if constexpr (kDepth > 0) {
+      step.template middleRows<kRows>(Row0).noalias() +=
+          carry.template block<kRows, kDepth>(Row0, 0).lazyProduct(state_.template topRows<kDepth>());
+    }
+    if constexpr (Row0 + kRows < Orders) add_carry<Row0 + kRows>(carry, step);
+  }
+
   static constexpr int kRing = 2 * P;  // >= 3P/2 - 1 samples: a centred stencil's span
-  Matrix<Scalar, 2 * kRing, kPowers> ring_ = Matrix<Scalar, 2 * kRing, kPowers>::Zero();
-  Matrix<Scalar, kOrders, kPowers> state_ = Matrix<Scalar, kOrders, kPowers>::Zero();
-  Matrix<Scalar, kOrders, kPowers> compensation_ = Matrix<Scalar, kOrders, kPowers>::Zero();  // Kahan
-  Vector<Scalar, kPowers> value_ = Vector<Scalar, kPowers>::Zero();
+  Matrix<Scalar, 2 * kRing, K> ring_ = Matrix<Scalar, 2 * kRing, K>::Zero();
+  Matrix<Scalar, Orders, K> state_ = Matrix<Scalar, Orders, K>::Zero();
+  // Kahan compensation: single precision only (a 1 x 1 placeholder otherwise)
+  Matrix<Scalar, kCompensated ? Orders : 1, kCompensated ? K : 1> compensation_ =
+      Matrix<Scalar, kCompensated ? Orders : 1, kCompensated ? K : 1>::Zero();
+  Vector<Scalar, K> value_ = Vector<Scalar, K>::Zero();
   long count_ = 0;
 };
+
+/// I^r(Delta^p f) / tau^(r+p) from the time-scaled integrals J_k = I^k f / tau^k (J[0] = f):
+/// the identity in the file comment, for p = 0, 1, 2. Needs J up to index r + p.
+/// @realtime no allocation, no throw
+template <class Scalar>
+inline Scalar scaled_moment(const Scalar* J, int p, int r) noexcept {
+  const Scalar rr = static_cast<Scalar>(r);
+  switch (p) {
+    case 0: return J[r];
+    case 1: return J[r] - rr * J[r + 1];
+    default: return J[r] - Scalar(2) * rr * J[r + 1] + rr * (rr + Scalar(1)) * J[r + 2];
+  }
+}
 
 }  // namespace algid

@@ -50,12 +50,12 @@ class InterpolatoryRule {
         for (int m = 0; m < P; ++m) weights_[off](r, m) = static_cast<Scalar>(hr * w[r][m]);
       }
     }
-    // Exact propagation of the chain of integrators over one interval (Taylor, lower triangular).
-    propagate_.setZero();
-    for (int r = 0; r < Orders; ++r) {
-      long double term = 1.0L;
-      for (int q = r; q >= 0; --q) {
-        propagate_(r, q) = static_cast<Scalar>(term);
+    // Exact carry of the lower orders over one interval (Taylor): strictly lower triangular.
+    carry_.setZero();
+    for (int r = 1; r < Orders; ++r) {
+      long double term = static_cast<long double>(h);
+      for (int q = r - 1; q >= 0; --q) {
+        carry_(r, q) = static_cast<Scalar>(term);
         term *= static_cast<long double>(h) / static_cast<long double>(r - q + 1);
       }
     }
@@ -64,8 +64,9 @@ class InterpolatoryRule {
   /// `h^r W[off](r-1, m)` as an Orders x P matrix.
   const Matrix<Scalar, Orders, P>& weights(int off) const noexcept { return weights_[off]; }
 
-  /// Lower-triangular Orders x Orders matrix `h^(r-q)/(r-q)!` that carries I^1..I^Orders over h.
-  const Matrix<Scalar, Orders, Orders>& propagate() const noexcept { return propagate_; }
+  /// Strictly lower-triangular Orders x Orders matrix `h^(r-q)/(r-q)!` (q < r): what the lower
+  /// orders add to I^r over one interval, I^r(t+h) = I^r(t) + sum_q carry(r, q) I^q(t) + h^r W f.
+  const Matrix<Scalar, Orders, Orders>& carry() const noexcept { return carry_; }
 
   /// Unscaled weights (h = 1) in long double: `W[off](r, m)`, r = 0 .. Orders-1.
   static std::array<std::array<long double, P>, Orders> unit_weights(int off) noexcept {
@@ -105,7 +106,7 @@ class InterpolatoryRule {
   }
 
   std::array<Matrix<Scalar, Orders, P>, kOffsets> weights_{};
-  Matrix<Scalar, Orders, Orders> propagate_ = Matrix<Scalar, Orders, Orders>::Zero();
+  Matrix<Scalar, Orders, Orders> carry_ = Matrix<Scalar, Orders, Orders>::Zero();
 };
 
 }  // namespace algid

@@ -36,17 +36,31 @@ class RatioEstimator {
     prev_tau_ = Scalar(0);
   }
 
-  /// Add the sample at `tau` = t - t0 [s] with sample period `h` [s], `weight` = |det S| (0 for
-  /// a sample that is not trusted) and `weighted` = weight * theta_instant.
-  /// @realtime no allocation, no throw
-  void add(Scalar tau, Scalar h, Scalar weight, const Vector<Scalar, M>& weighted) noexcept {
-    Scalar ratio = prev_tau_ / tau;
-    // rho = ratio^q by repeated squaring (q is a small compile-time constant).
+  /// Factor (prev_tau / tau)^q that carries the tau^-q-scaled states from prev_tau to tau
+  /// (0 from prev_tau = 0, i.e. at the first sample of a window). The same for every DOF of a
+  /// chain: compute it once per sample. @realtime no allocation, no throw
+  static Scalar decay(Scalar prev_tau, Scalar tau) noexcept {
+    Scalar ratio = prev_tau / tau;
+    // ratio^q by repeated squaring (q is a small compile-time constant).
     Scalar rho = Scalar(1);
     for (int e = kTimeExponent; e > 0; e >>= 1) {
       if (e & 1) rho *= ratio;
       ratio *= ratio;
     }
+    return rho;
+  }
+
+  /// Add the sample at `tau` = t - t0 [s] with sample period `h` [s], `weight` = |det S| (0 for
+  /// a sample that is not trusted) and `weighted` = weight * theta_instant.
+  /// @realtime no allocation, no throw
+  void add(Scalar tau, Scalar h, Scalar weight, const Vector<Scalar, M>& weighted) noexcept {
+    add_decayed(decay(prev_tau_, tau), h, weight, weighted);
+    prev_tau_ = tau;
+  }
+
+  /// add() with the decay factor computed by the caller (`rho` = decay(previous tau, tau)).
+  /// @realtime no allocation, no throw
+  void add_decayed(Scalar rho, Scalar h, Scalar weight, const Vector<Scalar, M>& weighted) noexcept {
     const Scalar half = Scalar(0.5) * h;
     const Scalar den1 = rho * (den_(0) + half * prev_weight_) + half * weight;
     den_(1) = rho * (den_(1) + half * den_(0)) + half * den1;
@@ -58,7 +72,6 @@ class RatioEstimator {
     }
     prev_weight_ = weight;
     prev_weighted_ = weighted;
-    prev_tau_ = tau;
   }
 
   /// True once a trusted sample has entered the double integral.
