@@ -11,7 +11,6 @@
 // 10 and 20 kHz run 1 s.
 #include <algid/chain_estimator.hpp>
 
-#include "chain_variants.hpp"
 #include "signals.hpp"
 
 #include <algorithm>
@@ -21,76 +20,6 @@
 #include <vector>
 
 namespace {
-
-// Diagnosis of the float error: the same algorithm as ChainEstimator<3> (walls at both ends,
-// every DOF full), assembled from the public DofEstimator and an integrator chain type:
-// algid::IntegratorChain<8, S> or a VariantChain (chain_variants.hpp). The system build,
-// Cramer and eq. 7 run in DofScalar. With IntegratorChain<8, float> and DofScalar = float it
-// reproduces ChainEstimator<3, float> (same errors at every checkpoint); swapping one part at a
-// time locates the loss.
-template <class Chain>
-struct ChainInput;
-template <int P, class S>
-struct ChainInput<algid::IntegratorChain<P, S>> {
-  using type = S;
-};
-template <int P, class S, class A, bool K>
-struct ChainInput<algid_bench::VariantChain<P, S, A, K>> {
-  using type = S;
-};
-
-template <class Chain, class DofScalar, bool kRoundInputToFloat = false>
-class HybridEstimator3 {
- public:
-  using Input = typename ChainInput<Chain>::type;
-  explicit HybridEstimator3(double dt) : dt_(dt), rule_(static_cast<Input>(dt)) {
-    for (auto& c : accel_) c.reset();
-    for (auto& c : force_) c.reset();
-    for (auto& d : dof_) d.reset();
-  }
-  void update(const double* accel, const double* force) {
-    const Input delta = static_cast<Input>(samples_) * static_cast<Input>(dt_);
-    ++samples_;
-    bool advanced = false;
-    for (int i = 0; i < 3; ++i) {
-      advanced = accel_[static_cast<std::size_t>(i)].push(input(accel[i]), delta, rule_);
-      force_[static_cast<std::size_t>(i)].push(input(force[i]), delta, rule_);
-    }
-    if (!advanced) return;
-    const DofScalar tau = static_cast<DofScalar>(samples_ - 8 + 1) * static_cast<DofScalar>(dt_);
-    for (std::size_t i = 0; i < 3; ++i) {
-      const Chain* left = i > 0 ? &accel_[i - 1] : nullptr;
-      const Chain* right = i + 1 < 3 ? &accel_[i + 1] : nullptr;
-      dof_[i].update(left, accel_[i], right, force_[i], tau, static_cast<DofScalar>(dt_), samples_, validity_);
-    }
-  }
-  // [m1 m2 m3 c1 c2 c3 k1 k2 k3 k4], interior springs fused as in ChainEstimator::collect().
-  std::array<double, 10> params() const {
-    std::array<double, 10> p{};
-    for (std::size_t i = 0; i < 3; ++i) {
-      p[i] = static_cast<double>(dof_[i].estimate(0));
-      p[3 + i] = static_cast<double>(dof_[i].estimate(1));
-    }
-    p[6] = static_cast<double>(dof_[0].estimate(2));
-    p[7] = static_cast<double>((dof_[0].estimate(3) + dof_[1].estimate(2)) / DofScalar(2));
-    p[8] = static_cast<double>((dof_[1].estimate(3) + dof_[2].estimate(2)) / DofScalar(2));
-    p[9] = static_cast<double>(dof_[2].estimate(3));
-    for (std::size_t i = 0; i < 3; ++i)
-      if (!dof_[i].valid()) p.fill(NAN);
-    return p;
-  }
-
- private:
-  static Input input(double v) {
-    return kRoundInputToFloat ? static_cast<Input>(static_cast<float>(v)) : static_cast<Input>(v);
-  }
-  double dt_;
-  typename Chain::Rule rule_;
-  algid::ValidityRule<DofScalar> validity_{};
-  std::array<Chain, 3> accel_{}, force_{};
-  std::array<algid::DofEstimator<4, DofScalar>, 3> dof_{};
-  long samples_ = 0;
-};
 
 constexpr double kM[3] = {2.0, 2.5, 3.0};
 constexpr double kC[3] = {5.5, 5.0, 4.5};
@@ -221,28 +150,9 @@ void run(const char* source, const char* scalar, const std::vector<double>& acce
 }
 
 void run_all(const char* source, const std::vector<double>& accel, const std::vector<double>& force, int samples,
-             double dt, bool diagnose) {
+             double dt) {
   run<CoreEstimator3<double>>(source, "double", accel, force, samples, dt);
   run<CoreEstimator3<float>>(source, "float", accel, force, samples, dt);
-  if (!diagnose) return;
-  using algid::IntegratorChain;
-  using algid_bench::VariantChain;
-  // Sanity: must equal "float" above.
-  run<HybridEstimator3<IntegratorChain<8, float>, float>>(source, "hybrid:chain_float,dof_float", accel, force,
-                                                          samples, dt);
-  // Which half loses the precision.
-  run<HybridEstimator3<IntegratorChain<8, double>, float>>(source, "hybrid:chain_double,dof_float", accel, force,
-                                                           samples, dt);
-  run<HybridEstimator3<IntegratorChain<8, float>, double>>(source, "hybrid:chain_float,dof_double", accel, force,
-                                                           samples, dt);
-  // Float sensor samples into double chains: input rounding alone.
-  run<HybridEstimator3<IntegratorChain<8, double>, float, true>>(source, "hybrid:float_input,chain_double,dof_float",
-                                                                 accel, force, samples, dt);
-  // Candidate fixes inside the chain, everything else float.
-  run<HybridEstimator3<VariantChain<8, float, double, false>, float>>(
-      source, "fix:chain_float_ring+double_state,dof_float", accel, force, samples, dt);
-  run<HybridEstimator3<VariantChain<8, float, float, true>, float>>(source, "fix:chain_float+kahan_state,dof_float",
-                                                                    accel, force, samples, dt);
 }
 
 }  // namespace
@@ -255,10 +165,10 @@ int main() {
     {
       // Closed form with Table 1 parameters (set_table1 overrides SineChain's random ones).
       const auto s = algid_bench::make_signals<3, double>(samples, 7, dt);
-      run_all("closed_form", s.accel, s.force, samples, dt, true);
+      run_all("closed_form", s.accel, s.force, samples, dt);
     }
     simulate_rk4(samples, dt, accel, force);
-    run_all("rk4", accel, force, samples, dt, true);
+    run_all("rk4", accel, force, samples, dt);
   }
   return 0;
 }

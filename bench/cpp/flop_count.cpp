@@ -8,7 +8,7 @@
 //
 // Cross-check of the hand count in docs/performance.md; the same counter measures the RLS
 // baseline. Phases are separated by counting the parts of one update through the public
-// IntegratorChain / DofEstimator with the same inputs.
+// IntegratorChain (the estimator's banks) / signal_rows / DofEstimator with the same inputs.
 // Counted and its std overloads must be declared before the core headers: the core calls
 // std::isfinite / std::abs / std::sqrt by qualified name.
 #include <cmath>
@@ -101,7 +101,6 @@ struct NumTraits<algid_bench::Counted> : GenericNumTraits<algid_bench::Counted> 
 
 #include <algid/algid.hpp>
 
-#include "chain_variants.hpp"
 #include "rls.hpp"
 #include "signals.hpp"
 
@@ -143,56 +142,65 @@ void count_estimator() {
   print("default", N, kCounted, g_ops);
 }
 
-// The phases of one DOF-sample, on the DOF in the middle of a 3-DOF chain.
+// The phases of one DOF-sample: the chain banks of a 3-DOF chain (per DOF), the time scaling
+// and eq. 4-6 rows (per DOF), and the update of the DOF in the middle.
 void count_phases() {
   constexpr int N = 3;
+  using Est = algid::ChainEstimator<N, Counted>;
   const auto sig = algid_bench::make_signals<N, double>(kWarm + kCounted);
-  using Chain = algid::IntegratorChain<8, Counted>;
-  typename Chain::Rule rule(Counted(algid_bench::kDt));
-  Chain ya[N], fa[N];
+  typename Est::Rule rule(Counted(algid_bench::kDt));
+  typename Est::AccelChain ya;
+  typename Est::ForceChain fa;
+  typename Est::AccelChain::Scaled ys;
+  typename Est::ForceChain::Scaled fs;
+  algid::Matrix<Counted, 4, 3> yrows[N];
+  algid::Matrix<Counted, 4, 1> frows[N];
   algid::DofEstimator<4, Counted> dof;
   algid::ValidityRule<Counted> validity;
-  for (auto& c : ya) c.reset();
-  for (auto& c : fa) c.reset();
+  ya.reset();
+  fa.reset();
   dof.reset();
-  algid_bench::OpCount push{}, update{};
+  algid_bench::OpCount push{}, rows{}, update{};
+  const auto add = [](algid_bench::OpCount& to, long div) {
+    to.add += g_ops.add / div, to.mul += g_ops.mul / div, to.div += g_ops.div / div, to.sqrt += g_ops.sqrt / div;
+  };
   for (int k = 0; k < kWarm + kCounted; ++k) {
     const bool counting = k >= kWarm;
-    const Counted delta = Counted(static_cast<double>(k) * algid_bench::kDt);
-    g_ops = {};
+    Counted a[N], u[N];
     for (int i = 0; i < N; ++i) {
-      ya[i].push(Counted(sig.accel[static_cast<std::size_t>(k * N + i)]), delta, rule);
-      fa[i].push(Counted(sig.force[static_cast<std::size_t>(k * N + i)]), delta, rule);
+      a[i] = Counted(sig.accel[static_cast<std::size_t>(k * N + i)]);
+      u[i] = Counted(sig.force[static_cast<std::size_t>(k * N + i)]);
     }
-    if (counting) {
-      push.add += g_ops.add / N, push.mul += g_ops.mul / N, push.div += g_ops.div / N, push.sqrt += g_ops.sqrt / N;
-    }
-    if (k + 1 < 8) continue;
-    const Counted tau = Counted(static_cast<double>(k + 1 - 8 + 1) * algid_bench::kDt);
     g_ops = {};
-    dof.update(&ya[0], ya[1], &ya[2], fa[1], tau, Counted(algid_bench::kDt), k + 1, validity);
-    if (counting) update.add += g_ops.add, update.mul += g_ops.mul, update.div += g_ops.div, update.sqrt += g_ops.sqrt;
-  }
-  print("phase:two_chain_pushes", 1, kCounted, push);
-  // The Kahan-compensated chain of chain_variants.hpp (the float fix), same inputs: its
-  // triangular state update replaces the dense 5x5 propagation product.
-  {
-    using Variant = algid_bench::VariantChain<8, Counted, Counted, true>;
-    typename Variant::Rule vrule(algid_bench::kDt);
-    Variant vy, vf;
-    vy.reset();
-    vf.reset();
-    algid_bench::OpCount vpush{};
-    for (int k = 0; k < kWarm + kCounted; ++k) {
-      const Counted delta = Counted(static_cast<double>(k) * algid_bench::kDt);
-      g_ops = {};
-      vy.push(Counted(sig.accel[static_cast<std::size_t>(k * N + 1)]), delta, vrule);
-      vf.push(Counted(sig.force[static_cast<std::size_t>(k * N + 1)]), delta, vrule);
-      if (k >= kWarm) vpush.add += g_ops.add, vpush.mul += g_ops.mul, vpush.div += g_ops.div, vpush.sqrt += g_ops.sqrt;
+    const bool advanced = ya.push(a, rule);
+    fa.push(u, rule);
+    if (counting) add(push, N);
+    if (!advanced) continue;
+    const long samples = k + 1;
+    algid::Instant<Counted> now;
+    now.tau = Counted(static_cast<double>(samples - 8 + 1) * algid_bench::kDt);
+    now.inv_tau = Counted(1.0 / now.tau.value());
+    now.h = Counted(algid_bench::kDt);
+    now.decay4 = algid::RatioEstimator<4, Counted>::decay(Counted(now.tau.value() - algid_bench::kDt), now.tau);
+    now.samples = samples;
+    algid::Vector<Counted, Est::AccelChain::kOrders + 1> inv_pow;
+    inv_pow(0) = Counted(1.0);
+    for (int r = 1; r <= Est::AccelChain::kOrders; ++r) inv_pow(r) = Counted(inv_pow(r - 1).value() / now.tau.value());
+    g_ops = {};
+    ya.scaled(inv_pow, ys);
+    fa.scaled(inv_pow, fs);
+    for (int i = 0; i < N; ++i) {
+      algid::signal_rows(ys.col(i).data(), yrows[i]);
+      algid::signal_rows(fs.col(i).data(), frows[i]);
     }
-    print("phase:two_chain_pushes_kahan_variant", 1, kCounted, vpush);
+    if (counting) add(rows, N);
+    g_ops = {};
+    dof.update(&yrows[0], yrows[1], &yrows[2], frows[1], now, validity);
+    if (counting) add(update, 1);
   }
-  print("phase:dof_update(system+cramer+hadamard+eq7)", 1, kCounted, update);
+  print("phase:chain_banks_accel_and_force", 1, kCounted, push);
+  print("phase:time_scaling_and_rows", 1, kCounted, rows);
+  print("phase:dof_update(cramer+hadamard+eq7)", 1, kCounted, update);
   // Cramer alone, and the ratio estimator alone.
   g_ops = {};
   const auto sol = algid::cramer(dof.system(), dof.rhs());
@@ -201,7 +209,7 @@ void count_phases() {
   ratio.reset();
   ratio.add(Counted(0.01), Counted(1e-3), Counted(1.0), sol.numerator);
   g_ops = {};
-  ratio.add(Counted(0.011), Counted(1e-3), Counted(1.0), sol.numerator);
+  ratio.add_decayed(Counted(0.9), Counted(1e-3), Counted(1.0), sol.numerator);
   print("phase:eq7_ratio_add", 1, 1, g_ops);
 }
 
