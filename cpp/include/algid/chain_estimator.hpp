@@ -119,8 +119,8 @@ class ChainEstimator {
     const Scalar prev_tau = static_cast<Scalar>(samples_ - P) * config_.dt;
     now.inv_tau = Scalar(1) / now.tau;
     now.h = config_.dt;
-    now.decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, now.tau);
-    now.decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, now.tau);
+    if (N > 1 || !reduced_last()) now.decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, now.tau);
+    if (reduced_last()) now.decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, now.tau);
     now.samples = samples_;
     Vector<Scalar, AccelChain::kOrders + 1> inv_pow;
     inv_pow(0) = Scalar(1);

@@ -65,11 +65,9 @@ class RatioEstimator {
     const Scalar den1 = rho * (den_(0) + half * prev_weight_) + half * weight;
     den_(1) = rho * (den_(1) + half * den_(0)) + half * den1;
     den_(0) = den1;
-    for (int j = 0; j < M; ++j) {
-      const Scalar num1 = rho * (num_(j, 0) + half * prev_weighted_(j)) + half * weighted(j);
-      num_(j, 1) = rho * (num_(j, 1) + half * num_(j, 0)) + half * num1;
-      num_(j, 0) = num1;
-    }
+    const Vector<Scalar, M> num1 = rho * (num_.col(0) + half * prev_weighted_) + half * weighted;
+    num_.col(1) = rho * (num_.col(1) + half * num_.col(0)) + half * num1;
+    num_.col(0) = num1;
     prev_weight_ = weight;
     prev_weighted_ = weighted;
   }
