@@ -177,15 +177,15 @@ void count_phases() {
     if (counting) add(push, N);
     if (!advanced) continue;
     const long samples = k + 1;
+    const double tau = static_cast<double>(samples - 8 + 1) * algid_bench::kDt;
     algid::Instant<Counted> now;
-    now.tau = Counted(static_cast<double>(samples - 8 + 1) * algid_bench::kDt);
-    now.inv_tau = Counted(1.0 / now.tau.value());
+    now.inv_tau = Counted(1.0 / tau);
     now.h = Counted(algid_bench::kDt);
-    now.decay4 = algid::RatioEstimator<4, Counted>::decay(Counted(now.tau.value() - algid_bench::kDt), now.tau);
+    now.decay4 = algid::RatioEstimator<4, Counted>::decay(Counted(tau - algid_bench::kDt), Counted(tau));
     now.samples = samples;
     algid::Vector<Counted, Est::AccelChain::kOrders + 1> inv_pow;
     inv_pow(0) = Counted(1.0);
-    for (int r = 1; r <= Est::AccelChain::kOrders; ++r) inv_pow(r) = Counted(inv_pow(r - 1).value() / now.tau.value());
+    for (int r = 1; r <= Est::AccelChain::kOrders; ++r) inv_pow(r) = Counted(inv_pow(r - 1).value() / tau);
     g_ops = {};
     ya.scaled(inv_pow, ys);
     fa.scaled(inv_pow, fs);
@@ -207,9 +207,9 @@ void count_phases() {
   print("phase:cramer_4x4", 1, 1, g_ops);
   algid::RatioEstimator<4, Counted> ratio;
   ratio.reset();
-  ratio.add(Counted(0.01), Counted(1e-3), Counted(1.0), sol.numerator);
+  ratio.add(Counted(0.0), Counted(1e-3), Counted(1.0), sol.numerator);
   g_ops = {};
-  ratio.add_decayed(Counted(0.9), Counted(1e-3), Counted(1.0), sol.numerator);
+  ratio.add(Counted(0.9), Counted(1e-3), Counted(1.0), sol.numerator);
   print("phase:eq7_ratio_add", 1, 1, g_ops);
 }
 

@@ -18,8 +18,9 @@ It implements the same discretisation, so both agree to rounding:
   ``I^r(Delta^2 f) = Delta^2 I^r f - 2 r Delta I^(r+1) f + r (r+1) I^(r+2) f``,
   so one chain of ``f`` up to order 7 serves every power (:func:`moments`; the direct
   quadrature of ``Delta^p f``, :func:`moments_direct`, agrees to the rule's truncation error).
-* Eq. 4, rows 2-4 of eq. 5 by eq. 6, Cramer on a time-scaled copy of the 4x4 system, eq. 7 as the weighted mean of the Cramer solutions with weight
-  ``|det A|`` (identical to the paper's ratio of double integrals of determinants).
+* Eq. 4, rows 2-4 of eq. 5 by eq. 6, Cramer on a time-scaled copy of the 4x4 system,
+  eq. 7 as the weighted mean of the Cramer solutions with weight ``|det A|`` (identical to
+  the paper's ratio of double integrals of determinants).
 """
 
 from __future__ import annotations

@@ -114,13 +114,13 @@ class ChainEstimator {
     force_.push(force, rule_);
     if (!advanced) return Status::kWarmup;
     // Everything the DOFs share at this instant, once per sample.
-    Instant<Scalar> now;
-    now.tau = static_cast<Scalar>(samples_ - P + 1) * config_.dt;
+    const Scalar tau = static_cast<Scalar>(samples_ - P + 1) * config_.dt;
     const Scalar prev_tau = static_cast<Scalar>(samples_ - P) * config_.dt;
-    now.inv_tau = Scalar(1) / now.tau;
+    Instant<Scalar> now;
+    now.inv_tau = Scalar(1) / tau;
     now.h = config_.dt;
-    if (N > 1 || !reduced_last()) now.decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, now.tau);
-    if (reduced_last()) now.decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, now.tau);
+    if (N > 1) now.decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);  // DOF 1 is full
+    if (reduced_last()) now.decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
     now.samples = samples_;
     Vector<Scalar, AccelChain::kOrders + 1> inv_pow;
     inv_pow(0) = Scalar(1);
@@ -213,16 +213,8 @@ class ChainEstimator {
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     Scalar right_spring = nan;  // k_{i+1} from DOF i, for the fusion at DOF i + 1
     for (int i = 0; i < N; ++i) {
-      Vector<Scalar, 4> t;
-      if (is_reduced(i)) {
-        valid_[i] = last_.valid();
-        const Vector<Scalar, 3> e = last_.estimates();
-        t = Vector<Scalar, 4>(e(0), e(1), e(2), nan);
-      } else {
-        valid_[i] = full_[i].valid();
-        t = full_[i].estimates();
-      }
-      if (!valid_[i]) t.setConstant(nan);
+      const Vector<Scalar, 4> t = theta(i);  // NaN where not valid
+      valid_[i] = is_reduced(i) ? last_.valid() : full_[i].valid();
       mass_(i) = t(0);
       damping_(i) = t(1);
       // k_i: this DOF's estimate, fused with DOF i-1's estimate of the same spring.

@@ -72,8 +72,7 @@ inline void signal_rows(const Scalar* J, Matrix<Scalar, 4, Cols>& rows) noexcept
 /// What every DOF of a chain shares at one instant (computed once per sample).
 template <class Scalar>
 struct Instant {
-  Scalar tau = Scalar(0);      ///< t - t0 [s] of the interval end
-  Scalar inv_tau = Scalar(0);  ///< 1 / tau [1/s]
+  Scalar inv_tau = Scalar(0);  ///< 1 / tau, tau = t - t0 of the interval end [1/s]
   Scalar h = Scalar(0);        ///< sample period [s]
   Scalar decay4 = Scalar(0);   ///< RatioEstimator<4>::decay(previous tau, tau)
   Scalar decay3 = Scalar(0);   ///< RatioEstimator<3>::decay(previous tau, tau)
@@ -136,9 +135,9 @@ class DofEstimator {
     const Scalar decay = M == 4 ? now.decay4 : now.decay3;
     if (trusted_) {
       const Scalar sign = det_ > Scalar(0) ? Scalar(1) : Scalar(-1);
-      ratio_.add_decayed(decay, now.h, std::abs(det_), sign * numerator_);
+      ratio_.add(decay, now.h, std::abs(det_), sign * numerator_);
     } else {
-      ratio_.add_decayed(decay, now.h, Scalar(0), Vector<Scalar, M>::Zero());
+      ratio_.add(decay, now.h, Scalar(0), Vector<Scalar, M>::Zero());
     }
   }
 

@@ -46,8 +46,6 @@ class IntegratorChain {
  public:
   /// Highest order of iterated integral kept.
   static constexpr int kOrders = Orders;
-  /// Number of signals.
-  static constexpr int kSignals = K;
   /// Kahan-compensated state update: on for single precision (where the state, growing like
   /// tau^r, otherwise loses the small per-step increments), off for double.
   static constexpr bool kCompensated = sizeof(Scalar) < sizeof(double);

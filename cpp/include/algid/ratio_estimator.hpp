@@ -33,7 +33,6 @@ class RatioEstimator {
     num_ = Matrix<Scalar, M, 2>::Zero();
     prev_weight_ = Scalar(0);
     prev_weighted_ = Vector<Scalar, M>::Zero();
-    prev_tau_ = Scalar(0);
   }
 
   /// Factor (prev_tau / tau)^q that carries the tau^-q-scaled states from prev_tau to tau
@@ -50,17 +49,11 @@ class RatioEstimator {
     return rho;
   }
 
-  /// Add the sample at `tau` = t - t0 [s] with sample period `h` [s], `weight` = |det S| (0 for
-  /// a sample that is not trusted) and `weighted` = weight * theta_instant.
+  /// Add the sample at tau = t - t0 with sample period `h` [s], `weight` = |det S| (0 for a
+  /// sample that is not trusted) and `weighted` = weight * theta_instant; `rho` =
+  /// decay(previous tau, tau) carries the scaled states from the previous sample.
   /// @realtime no allocation, no throw
-  void add(Scalar tau, Scalar h, Scalar weight, const Vector<Scalar, M>& weighted) noexcept {
-    add_decayed(decay(prev_tau_, tau), h, weight, weighted);
-    prev_tau_ = tau;
-  }
-
-  /// add() with the decay factor computed by the caller (`rho` = decay(previous tau, tau)).
-  /// @realtime no allocation, no throw
-  void add_decayed(Scalar rho, Scalar h, Scalar weight, const Vector<Scalar, M>& weighted) noexcept {
+  void add(Scalar rho, Scalar h, Scalar weight, const Vector<Scalar, M>& weighted) noexcept {
     const Scalar half = Scalar(0.5) * h;
     const Scalar den1 = rho * (den_(0) + half * prev_weight_) + half * weight;
     den_(1) = rho * (den_(1) + half * den_(0)) + half * den1;
@@ -89,7 +82,6 @@ class RatioEstimator {
   Matrix<Scalar, M, 2> num_ = Matrix<Scalar, M, 2>::Zero();  // I^1, I^2 of sgn(Delta) Delta_j
   Scalar prev_weight_ = Scalar(0);
   Vector<Scalar, M> prev_weighted_ = Vector<Scalar, M>::Zero();
-  Scalar prev_tau_ = Scalar(0);
 };
 
 }  // namespace algid
