@@ -178,3 +178,65 @@ def test_run_releases_the_gil():
     elapsed = time.perf_counter() - start
     # with the GIL held the main thread would tick about once
     assert elapsed < 0.05 or len(ticks) > 5
+
+
+def _isa_builds() -> list[str]:
+    """Instruction-set builds of the chain estimators this machine can run."""
+    from algid import _core
+
+    builds = ["x86-64"]
+    try:
+        import algid._core_v3  # noqa: F401
+    except ImportError:
+        return builds
+    return builds + (["x86-64-v3"] if _core.cpu_supports("x86-64-v3") else [])
+
+
+@pytest.mark.parametrize("isa", _isa_builds())
+@pytest.mark.parametrize("n,boundary", [(1, "fixed"), (2, "free"), (3, "fixed"), (10, "fixed")])
+def test_run_is_update_bit_for_bit_in_every_build(isa, n, boundary):
+    """Within one build, run() (blocks of 8 instants in the v3 build) leaves every estimate,
+    instantaneous solution and Hadamard ratio exactly where update() does, sample by sample,
+    across a bad sample and a record length that is not a multiple of 8."""
+    from algid.estimator import chain_core
+
+    core = chain_core(isa)
+    chain = Chain.random(n, np.random.default_rng(n), boundary=boundary)
+    t, a, u, _ = simulate_chain(chain, multisine(n), 0.403)
+    a[211, 0] = np.nan  # reseeds inside what would be a block
+    make = getattr(core, f"ChainEstimator{n}")
+    batch = make(1e-3, boundary, 16, 1e-9).run(a, u, True)
+    one = make(1e-3, boundary, 16, 1e-9)
+    theta = np.empty_like(batch["theta"])
+    inst = np.empty_like(batch["theta_instant"])
+    had = np.empty_like(batch["hadamard"])
+    status = np.empty_like(batch["status"])
+    for k in range(len(t)):
+        status[k] = one.update(a[k], u[k])
+        theta[k] = [one.theta(i) for i in range(n)]
+        inst[k] = [one.theta_instant(i) for i in range(n)]
+        had[k] = [one.hadamard(i) for i in range(n)]
+    np.testing.assert_array_equal(status, batch["status"])
+    np.testing.assert_array_equal(theta, batch["theta"])  # NaN == NaN for this function
+    np.testing.assert_array_equal(inst, batch["theta_instant"])
+    np.testing.assert_array_equal(had, batch["hadamard"])
+    assert np.isfinite(batch["mass"][-1]).all()
+
+
+def test_isa_builds_agree_and_selection():
+    """The x86-64 and x86-64-v3 builds agree to rounding (FMA in the v3 chain products), the
+    default is the widest build this CPU runs, and asking for an unknown level is an error."""
+    from algid.estimator import chain_core
+
+    builds = _isa_builds()
+    assert algid.ISA == builds[-1]
+    with pytest.raises(ValueError, match="x86-64"):
+        chain_core("armv8")
+    if len(builds) < 2:
+        pytest.skip("no x86-64-v3 build or CPU here")
+    _, a, u, _ = simulate_chain(TABLE1, multisine(3), 0.3)
+    outs = [getattr(chain_core(isa), "ChainEstimator3")(1e-3, "fixed", 16, 1e-9).run(a, u) for isa in builds]
+    late = slice(60, None)
+    for key in ("mass", "damping", "stiffness"):
+        rel = np.abs(outs[1][key][late] / outs[0][key][late] - 1)
+        assert np.nanmax(rel) < 1e-9, key

@@ -12,7 +12,9 @@
 // Configurations: "default" = ChainEstimator<N, Scalar> (one window from t0, reseeded between
 // timing windows); "continuous" = ContinuousEstimator<N, Scalar> with its default configuration
 // (K = 4 staggered reseeded 0.3 s windows, block-median aggregation, change detection), fed one
-// uninterrupted signal (never reset between timing windows); "rls" = the baseline.
+// uninterrupted signal (never reset between timing windows); "rls" = the baseline; "batch" =
+// ChainEstimator::run() (the block path behind the Python run()), in 16-sample chunks and whole
+// windows, storing the estimate history of every sample.
 //
 // Timing protocol, per configuration: one untimed warm-up window, then W windows of T samples
 // each (default and rls: each starting from reset()/reseed(), not timed):
@@ -97,6 +99,7 @@ struct EstimatorSubject {
   using Est = algid::ChainEstimator<N, Scalar>;
   static constexpr int kDofs = N;
   static constexpr bool kContinuous = false;
+  static constexpr bool kChunked = false;
   static constexpr int kCallgrindWarmup = 64;
   const algid_bench::Signals<Scalar>* s;
   std::unique_ptr<Est> est;
@@ -113,12 +116,54 @@ struct EstimatorSubject {
   double observe() const { return static_cast<double>(est->mass()(0) + est->stiffness()(N)); }
 };
 
+// The batch path: ChainEstimator::run() over the same samples, called on chunks of kBatch
+// samples (two blocks), with an observer that stores the estimate history as the Python run()
+// does (masses, dampings, springs and validity of every sample).
+template <int N, class Scalar>
+struct BatchSubject {
+  using Est = algid::ChainEstimator<N, Scalar>;
+  static constexpr int kDofs = N;
+  static constexpr bool kContinuous = false;
+  static constexpr bool kChunked = true;
+  static constexpr int kCallgrindWarmup = 64;
+  const algid_bench::Signals<Scalar>* s;
+  std::unique_ptr<Est> est;
+  std::vector<Scalar> history;
+  std::vector<char> valid;
+  explicit BatchSubject(const algid_bench::Signals<Scalar>& sig)
+      : s(&sig),
+        history(static_cast<std::size_t>(sig.samples) * (3 * N + 1)),
+        valid(static_cast<std::size_t>(sig.samples) * N) {
+    typename Est::Config cfg;
+    cfg.dt = static_cast<Scalar>(algid_bench::kDt);
+    est = std::make_unique<Est>(cfg);
+  }
+  void begin(int) noexcept { est->reseed(); }
+  // Samples [k0, k0 + count).
+  void chunk(int k0, int count) noexcept {
+    const std::size_t at = static_cast<std::size_t>(k0) * N;
+    est->run(s->accel.data() + at, s->force.data() + at, count, [&](long t, algid::Status) {
+      const std::size_t k = static_cast<std::size_t>(k0 + t);
+      Scalar* h = history.data() + k * (3 * N + 1);
+      for (int i = 0; i < N; ++i) {
+        h[i] = est->mass()(i);
+        h[N + i] = est->damping()(i);
+        valid[k * N + static_cast<std::size_t>(i)] = est->valid()[static_cast<std::size_t>(i)];
+      }
+      for (int j = 0; j <= N; ++j) h[2 * N + j] = est->stiffness()(j);
+    });
+  }
+  void step(int k) noexcept { chunk(k, 1); }
+  double observe() const { return static_cast<double>(est->mass()(0) + est->stiffness()(N)) + history[history.size() / 2]; }
+};
+
 #if ALGID_BENCH_HAVE_CONTINUOUS
 template <int N, class Scalar>
 struct ContinuousSubject {
   using Est = algid::ContinuousEstimator<N, Scalar>;
   static constexpr int kDofs = N;
   static constexpr bool kContinuous = true;
+  static constexpr bool kChunked = false;
   // Past the first window results (0.3 s windows): every window in flight, aggregation running.
   static constexpr int kCallgrindWarmup = 400;
   const algid_bench::Signals<Scalar>* s;
@@ -145,6 +190,7 @@ template <int N, class Scalar>
 struct RlsSubject {
   static constexpr int kDofs = N;
   static constexpr bool kContinuous = false;
+  static constexpr bool kChunked = false;
   static constexpr int kCallgrindWarmup = 64;
   const algid_bench::Signals<Scalar>* s;
   std::array<algid_bench::Rls4<Scalar>, N> rls{};
@@ -210,6 +256,45 @@ Result measure(Subject& subject, int samples, int windows, double overhead) {
   return r;
 }
 
+// Batch timing: kBatch-sample chunks through run() (median / p99 per chunk, as the per-sample
+// protocol's batches) and whole windows in one run() call (window_min). No single-sample times:
+// a block is the unit of work; max is the slowest chunk.
+template <class Subject>
+Result measure_batch(Subject& subject, int samples, int windows) {
+  std::vector<double> batch;
+  const int batches = samples / kBatch;
+  Result r;
+  double slowest = 0;
+  for (int w = 0; w <= windows; ++w) {
+    const bool warmup = w == 0;
+    subject.begin(2 * w);
+    for (int b = 0; b < batches; ++b) {
+      const long long t0 = now_ns();
+      subject.chunk(b * kBatch, kBatch);
+      const long long t1 = now_ns();
+      if (!warmup && b > 0) {
+        batch.push_back(static_cast<double>(t1 - t0) / kBatch);
+        slowest = std::max(slowest, static_cast<double>(t1 - t0) / kBatch);
+      }
+    }
+    g_sink = g_sink + subject.observe();
+    subject.begin(2 * w + 1);
+    const long long t0 = now_ns();
+    subject.chunk(0, batches * kBatch);
+    const long long t1 = now_ns();
+    if (!warmup) r.window_min = std::min(r.window_min, static_cast<double>(t1 - t0) / (batches * kBatch));
+    g_sink = g_sink + subject.observe();
+  }
+  r.batch_median = percentile(batch, 0.5);
+  r.batch_p99 = percentile(batch, 0.99);
+  r.single_median = r.batch_median;
+  r.single_p99 = r.batch_p99;
+  r.max = slowest;
+  r.max_path = slowest;
+  r.timed = static_cast<long>(batch.size()) * kBatch;
+  return r;
+}
+
 void print(const char* config, int n, const char* scalar, const Result& r, double overhead) {
   const double dn = n;
   std::printf(
@@ -229,6 +314,10 @@ void bench_n(const char* scalar, int samples, int windows, double overhead) {
     {
       EstimatorSubject<N, Scalar> subject(sig);
       print("default", N, scalar, measure(subject, samples, windows, overhead), overhead);
+    }
+    {
+      BatchSubject<N, Scalar> subject(sig);
+      print("batch", N, scalar, measure_batch(subject, samples, windows), overhead);
     }
     {
       RlsSubject<N, Scalar> subject(sig);
@@ -259,7 +348,11 @@ int callgrind_run(int updates) {
   subject.begin(0);
   for (int k = 0; k < kWarm; ++k) subject.step(k);
   CALLGRIND_START_INSTRUMENTATION;
-  for (int k = kWarm; k < total; ++k) subject.step(k);
+  if constexpr (Subject::kChunked) {
+    subject.chunk(kWarm, updates);  // one run() call: the block path
+  } else {
+    for (int k = kWarm; k < total; ++k) subject.step(k);
+  }
   CALLGRIND_STOP_INSTRUMENTATION;
   g_sink = g_sink + subject.observe();
   std::printf("{\"callgrind_client_requests\": %d, \"updates\": %d, \"warmup\": %d}\n", ALGID_BENCH_HAVE_CALLGRIND,
@@ -271,6 +364,8 @@ template <int N>
 int callgrind_dispatch(const std::string& subject, const std::string& scalar, int updates) {
   if (subject == "default" && scalar == "double") return callgrind_run<EstimatorSubject<N, double>, double>(updates);
   if (subject == "default" && scalar == "float") return callgrind_run<EstimatorSubject<N, float>, float>(updates);
+  if (subject == "batch" && scalar == "double") return callgrind_run<BatchSubject<N, double>, double>(updates);
+  if (subject == "batch" && scalar == "float") return callgrind_run<BatchSubject<N, float>, float>(updates);
   if (subject == "rls" && scalar == "double") return callgrind_run<RlsSubject<N, double>, double>(updates);
   if (subject == "rls" && scalar == "float") return callgrind_run<RlsSubject<N, float>, float>(updates);
 #if ALGID_BENCH_HAVE_CONTINUOUS

@@ -11,6 +11,18 @@
 #include <string>
 #include <utility>
 
+// The ISA variants (module_isa.cpp) register their classes module-locally: the same C++ type
+// is bound by several extension modules, each with its own instruction set.
+#ifndef ALGID_BINDINGS_MODULE_LOCAL
+#define ALGID_BINDINGS_MODULE_LOCAL 0
+#endif
+// run() through ChainEstimator::run()'s blocks (the wide-register builds) or sample by sample
+// through update() (the baseline build: with two-lane SSE2 the blocks gain nothing there, and
+// they double the compile time of the 16 chain sizes). Both give the same bits.
+#ifndef ALGID_BINDINGS_BLOCK_RUN
+#define ALGID_BINDINGS_BLOCK_RUN 0
+#endif
+
 namespace algid_bindings {
 
 namespace py = pybind11;
@@ -40,7 +52,8 @@ template <int N>
 void bind_chain(py::module_& m) {
   using Est = algid::ChainEstimator<N, double>;
   const std::string name = "ChainEstimator" + std::to_string(N);
-  py::class_<Est>(m, name.c_str(), ("Algebraic estimator of a " + std::to_string(N) + "-DOF chain (C++ core).").c_str())
+  py::class_<Est>(m, name.c_str(), ("Algebraic estimator of a " + std::to_string(N) + "-DOF chain (C++ core).").c_str(),
+                  py::module_local(ALGID_BINDINGS_MODULE_LOCAL != 0))
       .def(py::init([](double dt, const std::string& boundary, int min_samples, double min_hadamard) {
              typename Est::Config c;
              c.dt = dt;
@@ -96,8 +109,8 @@ void bind_chain(py::module_& m) {
             double* ph = hadamard.mutable_data();
             {
               py::gil_scoped_release release;
-              for (py::ssize_t t = 0; t < T; ++t) {
-                st[t] = static_cast<std::int8_t>(e.update(a + t * N, f + t * N));
+              const auto record = [&](long t, algid::Status s) {
+                st[t] = static_cast<std::int8_t>(s);
                 for (int i = 0; i < N; ++i) {
                   pm[t * N + i] = e.mass()(i);
                   pc[t * N + i] = e.damping()(i);
@@ -115,7 +128,14 @@ void bind_chain(py::module_& m) {
                     ph[t * N + i] = e.hadamard(i);
                   }
                 }
-              }
+              };
+#if ALGID_BINDINGS_BLOCK_RUN
+              // The block path (ChainEstimator::run): 8 instants per wide register, the same
+              // bits as update() sample by sample.
+              e.run(a, f, static_cast<long>(T), record);
+#else
+              for (py::ssize_t t = 0; t < T; ++t) record(static_cast<long>(t), e.update(a + t * N, f + t * N));
+#endif
             }
             py::dict out;
             out["status"] = status;

@@ -3,6 +3,9 @@
 #include <algid/algid.hpp>
 
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <string>
 
 namespace py = pybind11;
 
@@ -12,6 +15,26 @@ void bind_chains_small(py::module_& m);
 void bind_chains_medium(py::module_& m);
 void bind_chains_large(py::module_& m);
 
+namespace {
+
+bool cpu_supports(const std::string& level) {
+#if (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
+  __builtin_cpu_init();
+  const bool v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                  __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
+                  __builtin_cpu_supports("avx") && __builtin_cpu_supports("popcnt");
+  if (level == "x86-64-v3") return v3;
+  if (level == "x86-64-v4")
+    return v3 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+           __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512dq") &&
+           __builtin_cpu_supports("avx512vl");
+#endif
+  (void)level;
+  return false;
+}
+
+}  // namespace
+
 PYBIND11_MODULE(_core, m) {
   m.doc() = "algid C++ core: on-line algebraic estimators of mass-spring-damper chains";
   bind_chains_small(m);
@@ -19,6 +42,10 @@ PYBIND11_MODULE(_core, m) {
   bind_chains_large(m);
   bind_continuous(m);
   m.attr("SIZES") = py::make_tuple(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 16, 20, 32, 50, 64);
+  m.attr("ISA") = "x86-64";
+  m.def("cpu_supports", &cpu_supports, py::arg("level"),
+        "Whether this CPU (and OS) runs code built for `level`: 'x86-64-v3' (AVX2, FMA, BMI) or "
+        "'x86-64-v4' (AVX-512 F/BW/CD/DQ/VL); False for other levels and architectures.");
   py::enum_<algid::Status>(m, "Status")
       .value("OK", algid::Status::kOk)
       .value("WARMUP", algid::Status::kWarmup)

@@ -2,9 +2,10 @@
 
 from .chain import TABLE1, Chain
 from .continuous import ChangeEvent, ContinuousEstimator
-from .estimator import SIZES, ChainEstimator, Status
+from .estimator import ISA, SIZES, ChainEstimator, Status
 
-__all__ = ["Chain", "ChainEstimator", "ChangeEvent", "ContinuousEstimator", "SIZES", "Status", "TABLE1", "get_include"]
+__all__ = ["Chain", "ChainEstimator", "ChangeEvent", "ContinuousEstimator", "ISA", "SIZES", "Status", "TABLE1",
+           "get_include"]
 __version__ = "0.1.0"
 
 

@@ -8,6 +8,9 @@ record with the GIL released.
 
 from __future__ import annotations
 
+import importlib
+import os
+
 import numpy as np
 
 from . import _core
@@ -16,6 +19,46 @@ from . import _core
 SIZES: tuple[int, ...] = tuple(_core.SIZES)
 
 Status = _core.Status
+
+#: Instruction-set builds of the chain estimators, widest first: module name and level.
+_BUILDS: tuple[tuple[str, str], ...] = (("_core_v3", "x86-64-v3"), ("_core", "x86-64"))
+
+
+def chain_core(isa: str | None = None):
+    """The extension module whose chain estimators this process uses.
+
+    On x86-64 the wheel carries the estimators built twice: for ``x86-64`` (SSE2, any x86-64
+    CPU) and for ``x86-64-v3`` (AVX2 and FMA, most CPUs since 2013), whose ``run()`` solves the
+    systems of 8 instants side by side (``ChainEstimator::run`` in C++). By default the widest
+    build this CPU runs is used; ``isa`` or the environment variable ``ALGID_ISA`` (``x86-64``
+    or ``x86-64-v3``) forces one, for benchmarks and comparisons. The two agree to rounding (the
+    v3 build's chain products use fused multiply-adds); within one build ``run()`` and
+    ``update()`` give the same bits.
+    """
+    wanted = isa or os.environ.get("ALGID_ISA") or None
+    levels = [level for _, level in _BUILDS]
+    if wanted is not None and wanted not in levels:
+        raise ValueError(f"ALGID_ISA / isa must be one of {levels}, got {wanted!r}")
+    for name, level in _BUILDS:
+        if wanted is not None and level != wanted:
+            continue
+        if level != "x86-64" and not _core.cpu_supports(level):
+            if wanted is not None:
+                raise RuntimeError(f"this CPU cannot run the {level} build of algid")
+            continue
+        try:
+            return importlib.import_module(f".{name}", __package__)
+        except ImportError:
+            if wanted is not None:
+                raise RuntimeError(f"the {level} build of algid is not in this installation "
+                                   "(only x86-64 machines with a recent compiler build it)") from None
+    return _core
+
+
+_chains = chain_core()
+
+#: Instruction-set level of the chain estimators in use (see :func:`chain_core`).
+ISA: str = str(_chains.ISA)
 
 
 def as_sample(accel, force, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -68,8 +111,8 @@ class ChainEstimator:
             raise ValueError(f"n = {n} is not compiled in; available chain sizes: {SIZES}")
         if boundary not in ("fixed", "free"):
             raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
-        self._impl = getattr(_core, f"ChainEstimator{n}")(float(dt), boundary, int(min_samples),
-                                                          float(min_hadamard))
+        self._impl = getattr(_chains, f"ChainEstimator{n}")(float(dt), boundary, int(min_samples),
+                                                            float(min_hadamard))
         self.n, self.dt, self.boundary = n, float(dt), boundary
 
     @property

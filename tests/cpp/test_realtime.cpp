@@ -52,6 +52,41 @@ void no_allocation_in_hot_path() {
 }
 
 
+// The block path too: run() over a whole record (with a bad sample and a reseed) allocates
+// nothing either.
+template <int N, class Scalar>
+void run_does_not_allocate() {
+  using Est = algid::ChainEstimator<N, Scalar>;
+  typename Est::Config cfg;
+  cfg.dt = Scalar(1e-3);
+  Est est(cfg);
+  algid_test::SineChain<N> truth(4);
+  constexpr int kT = 1500;
+  static Scalar accel[kT * N], force[kT * N];  // outside the guarded scope
+  for (int s = 0; s < kT; ++s) {
+    for (int i = 0; i < N; ++i) {
+      accel[s * N + i] = static_cast<Scalar>(truth.accel(i, s * 1e-3));
+      force[s * N + i] = static_cast<Scalar>(truth.force(i, s * 1e-3));
+    }
+  }
+  accel[700 * N] = Scalar(NAN);
+  bool threw = false;
+  long allocations = -1, blocked = 0;
+  double sink = 0;
+  try {
+    NoAllocationScope scope;
+    blocked = est.run(accel, force, kT, [&](long, algid::Status) { sink += static_cast<double>(est.mass()(0)); });
+    allocations = scope.allocations();
+  } catch (const algid_test::EigenAssertion&) {
+    threw = true;
+  }
+  CHECK(!threw);
+  CHECK(allocations == 0);
+  CHECK(blocked > kT - 40);
+  CHECK(est.all_valid());
+  (void)sink;
+}
+
 }  // namespace
 
 int main() {
@@ -60,5 +95,8 @@ int main() {
   no_allocation_in_hot_path<3, double>();
   no_allocation_in_hot_path<10, double>();
   no_allocation_in_hot_path<3, float>();
+  run_does_not_allocate<1, double>();
+  run_does_not_allocate<3, double>();
+  run_does_not_allocate<10, float>();
   return algid_test::finish("test_realtime");
 }

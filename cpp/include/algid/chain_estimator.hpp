@@ -113,15 +113,7 @@ class ChainEstimator {
     const bool advanced = accel_.push(accel, rule_);
     force_.push(force, rule_);
     if (!advanced) return Status::kWarmup;
-    // Everything the DOFs share at this instant, once per sample.
-    const Scalar tau = static_cast<Scalar>(samples_ - P + 1) * config_.dt;
-    const Scalar prev_tau = static_cast<Scalar>(samples_ - P) * config_.dt;
-    Instant<Scalar> now;
-    now.inv_tau = Scalar(1) / tau;
-    now.h = config_.dt;
-    if (N > 1) now.decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);  // DOF 1 is full
-    if (reduced_last()) now.decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
-    now.samples = samples_;
+    const Instant<Scalar> now = instant(samples_);
     Vector<Scalar, AccelChain::kOrders + 1> inv_pow;
     inv_pow(0) = Scalar(1);
     for (int r = 1; r <= AccelChain::kOrders; ++r) inv_pow(r) = inv_pow(r - 1) * now.inv_tau;
@@ -135,7 +127,7 @@ class ChainEstimator {
     for (int i = 0; i < N; ++i) {
       const auto* left = i > 0 ? &accel_rows_[i - 1] : nullptr;
       const auto* right = i + 1 < N ? &accel_rows_[i + 1] : nullptr;
-      if (i == N - 1 && reduced_last()) {
+      if (is_reduced(i)) {
         last_.update(left, accel_rows_[i], right, force_rows_[i], now, config_.validity);
       } else {
         full_[i].update(left, accel_rows_[i], right, force_rows_[i], now, config_.validity);
@@ -143,6 +135,41 @@ class ChainEstimator {
     }
     collect();
     return Status::kOk;
+  }
+
+  /// Samples per block of run(): the eq. 5 systems of kBlock consecutive instants are solved
+  /// side by side, one per SIMD lane (8 fills an AVX-512 register of doubles, two of AVX2,
+  /// four of SSE2).
+  static constexpr int kBlock = 8;
+
+  /// Consume a record of T simultaneous samples (`accel`, `force`: T x N, row-major, t fastest
+  /// last) and call `observe(t, status)` after each sample t, with the estimator in exactly
+  /// the state a call of update() would have left it in: every estimate, flag and accessor,
+  /// to the bit. Stretches of kBlock finite samples after the warm-up go through as a block:
+  /// the chains and eq. 7 still advance sample by sample, but the rows, the systems of eq. 5,
+  /// Cramer's rule and the Hadamard ratio are computed for the kBlock instants at once, lane
+  /// by lane with the operations of update() (cramer_lanes(), equilibrated_hadamard2()).
+  /// That is the batch path of the Python `run()`; firmware calls update().
+  /// Scratch is on the stack: about kBlock (9 + 7 + 7) N scalars (72 KiB for N = 50 in
+  /// double). Returns how many of the T samples went through blocks.
+  /// @realtime no allocation; no throw unless `observe` throws
+  template <class Observer>
+  long run(const Scalar* accel, const Scalar* force, long T, Observer&& observe) {
+    long t = 0, blocked = 0;
+    while (t < T) {
+      const Scalar* a = accel + t * N;
+      const Scalar* f = force + t * N;
+      if (samples_ >= P - 1 && T - t >= kBlock && finite(a, f, kBlock * N)) {
+        run_block(a, f, t, observe);
+        t += kBlock;
+        blocked += kBlock;
+      } else {
+        const Status s = update(a, f);
+        observe(t, s);
+        ++t;
+      }
+    }
+    return blocked;
   }
 
   /// Same as update(const Scalar*, const Scalar*) for Eigen vectors.
@@ -206,6 +233,137 @@ class ChainEstimator {
   bool free_end() const noexcept { return config_.boundary == Boundary::kFree; }
   bool reduced_last() const noexcept { return N == 1 || free_end(); }
   bool is_reduced(int i) const noexcept { return i == N - 1 && reduced_last(); }
+
+  static bool finite(const Scalar* a, const Scalar* f, int count) noexcept {
+    bool ok = true;
+    for (int e = 0; e < count; ++e) ok &= std::isfinite(a[e]) & std::isfinite(f[e]);
+    return ok;
+  }
+
+  // What every DOF shares at the interval end after `samples` samples (>= P), once per sample.
+  Instant<Scalar> instant(long samples) const noexcept {
+    const Scalar tau = static_cast<Scalar>(samples - P + 1) * config_.dt;
+    const Scalar prev_tau = static_cast<Scalar>(samples - P) * config_.dt;
+    Instant<Scalar> now;
+    now.inv_tau = Scalar(1) / tau;
+    now.h = config_.dt;
+    if (N > 1) now.decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);  // DOF 1 is full
+    if (reduced_last()) now.decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
+    now.samples = samples;
+    return now;
+  }
+
+  // kBlock finite samples past the warm-up (every push advances the chains): see run().
+  template <class Observer>
+  ALGID_FLATTEN void run_block(const Scalar* accel, const Scalar* force, long t0, Observer& observe) {
+    using Lanes = Eigen::Array<Scalar, kBlock, 1>;
+    constexpr int kA = AccelChain::kOrders + 1;  // J_0 .. J_8 of an acceleration
+    constexpr int kF = ForceChain::kOrders + 1;  // J_0 .. J_6 of a force
+    constexpr int kAO = AccelChain::kOrders, kFO = ForceChain::kOrders;
+    // The chains after each sample of the block, one contiguous column per sample (sample
+    // major, as the chains hold them); turned into lanes (instant major) signal by signal.
+    Matrix<Scalar, kAO * N, kBlock> astate;
+    Matrix<Scalar, kFO * N, kBlock> fstate;
+    Matrix<Scalar, N, kBlock> avalue, fvalue;
+    for (int b = 0; b < kBlock; ++b) {  // samples_ advances as each sample is observed, below
+      accel_.push(accel + b * N, rule_);
+      force_.push(force + b * N, rule_);
+      astate.col(b) = Eigen::Map<const Vector<Scalar, kAO * N>>(accel_.state().data());
+      fstate.col(b) = Eigen::Map<const Vector<Scalar, kFO * N>>(force_.state().data());
+      avalue.col(b) = accel_.value();
+      fvalue.col(b) = force_.value();
+    }
+    // What the DOFs share at each instant (instant()), and the time scaling J_r = I^r tau^-r,
+    // lane by lane as in update().
+    Lanes tau, prev_tau;
+    for (int b = 0; b < kBlock; ++b) {
+      tau(b) = static_cast<Scalar>(samples_ + 1 + b - P + 1);
+      prev_tau(b) = static_cast<Scalar>(samples_ + 1 + b - P);
+    }
+    tau = tau * config_.dt;
+    prev_tau = prev_tau * config_.dt;
+    const Lanes inv_tau = tau.inverse();
+    Lanes decay4 = Lanes::Zero(), decay3 = Lanes::Zero();
+    if (N > 1) decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);
+    if (reduced_last()) decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
+    Instant<Scalar> now[kBlock];
+    for (int b = 0; b < kBlock; ++b) {
+      now[b].inv_tau = inv_tau(b);
+      now[b].h = config_.dt;
+      now[b].decay4 = decay4(b);
+      now[b].decay3 = decay3(b);
+      now[b].samples = samples_ + 1 + b;
+    }
+    Lanes inv_pow[kA];
+    inv_pow[0].setConstant(Scalar(1));
+    for (int r = 1; r < kA; ++r) inv_pow[r] = inv_pow[r - 1] * inv_tau;
+    Lanes aj[kA * N], fj[kF * N];  // J_r of signal k at [k * kA + r]
+    for (int k = 0; k < N; ++k) {
+      aj[k * kA] = avalue.row(k).transpose();
+      fj[k * kF] = fvalue.row(k).transpose();
+      for (int r = 1; r < kA; ++r) aj[k * kA + r] = inv_pow[r] * astate.row(k * kAO + r - 1).transpose().array();
+      for (int r = 1; r < kF; ++r) fj[k * kF + r] = inv_pow[r] * fstate.row(k * kFO + r - 1).transpose().array();
+    }
+    // Eq. 5 of every DOF for the kBlock instants, one per lane. The rows of the accelerations
+    // i - 1, i, i + 1 (4 x 3 column-major each) roll through three slots, so the scratch stays
+    // small enough for the L1 cache at large N.
+    Lanes arows[3][12], frows[4];
+    Lanes det[N], numerator[4 * N], h2num[N], h2den[N];
+    lane_rows<3>(&aj[0], arows[0]);
+    for (int i = 0; i < N; ++i) {
+      if (i + 1 < N) lane_rows<3>(&aj[(i + 1) * kA], arows[(i + 1) % 3]);
+      lane_rows<1>(&fj[i * kF], frows);
+      const Lanes* left = i > 0 ? arows[(i + 2) % 3] : nullptr;
+      const Lanes* right = i + 1 < N ? arows[(i + 1) % 3] : nullptr;
+      if (is_reduced(i)) {
+        solve_lanes<3>(left, arows[i % 3], right, frows, det[i], &numerator[4 * i], h2num[i], h2den[i], last_);
+      } else {
+        solve_lanes<4>(left, arows[i % 3], right, frows, det[i], &numerator[4 * i], h2num[i], h2den[i],
+                       full_[static_cast<std::size_t>(i)]);
+      }
+    }
+    // Eq. 7 and the outputs, sample by sample.
+    for (int b = 0; b < kBlock; ++b) {
+      for (int i = 0; i < N; ++i) {
+        const Scalar num[4] = {numerator[4 * i](b), numerator[4 * i + 1](b), numerator[4 * i + 2](b),
+                               numerator[4 * i + 3](b)};
+        if (is_reduced(i)) {
+          last_.commit(det[i](b), num, h2num[i](b), h2den[i](b), now[b], config_.validity);
+        } else {
+          full_[static_cast<std::size_t>(i)].commit(det[i](b), num, h2num[i](b), h2den[i](b), now[b],
+                                                    config_.validity);
+        }
+      }
+      collect();
+      ++samples_;
+      observe(t0 + b, Status::kOk);
+    }
+  }
+
+  // signal_rows() for kBlock instants: column c of the rows holds R(q, q + c), q = 0..3, with
+  // the operations of signal_rows() (J_s - a J_(s+1)) + b J_(s+2).
+  template <int Cols, class Lanes>
+  static void lane_rows(const Lanes* J, Lanes* rows) noexcept {
+    constexpr Scalar a[4] = {4, 6, 8, 10};    // 2 (q + 2)
+    constexpr Scalar b[4] = {6, 12, 20, 30};  // (q + 2)(q + 3)
+    for (int c = 0; c < Cols; ++c) {
+      for (int q = 0; q < 4; ++q) rows[c * 4 + q] = J[c + q] - a[q] * J[c + q + 1] + b[q] * J[c + q + 2];
+    }
+  }
+
+  // One DOF's systems for kBlock instants; the last lane's system is what system() reports.
+  template <int M, class Lanes, class Dof>
+  static void solve_lanes(const Lanes* left, const Lanes* self, const Lanes* right, const Lanes* force, Lanes& det,
+                          Lanes* numerator, Lanes& h2num, Lanes& h2den, Dof& dof) noexcept {
+    Lanes S[M * M], s[M];
+    assemble_system<M>(left, self, right, force, S, s);
+    cramer_lanes<M>(S, s, det, numerator);
+    equilibrated_hadamard2<M>(S, det, h2num, h2den);
+    Scalar last_S[M * M], last_s[M];
+    for (int e = 0; e < M * M; ++e) last_S[e] = S[e](kBlock - 1);
+    for (int q = 0; q < M; ++q) last_s[q] = s[q](kBlock - 1);
+    dof.set_system(last_S, last_s);
+  }
 
   // Eq. 7 estimates of every DOF into the physical views (one division per DOF); an interior
   // spring is the mean of its two DOFs' estimates, or the one that is valid.

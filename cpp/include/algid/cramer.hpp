@@ -2,6 +2,12 @@
 /// @file cramer.hpp
 /// Cramer's rule for the 3x3 and 4x4 systems of eq. 5: the determinant Delta and the
 /// numerators Delta_j (determinant with column j replaced by the right-hand side).
+///
+/// Two forms of each: one system (`cramer()`, for the per-sample update) and many systems side
+/// by side (`cramer_lanes()`, for a block of samples: lane b of every entry belongs to system b,
+/// and an entry is a scalar or an Eigen array of lanes). The lane form performs, lane by lane,
+/// the same operations in the same order as the single-system form, so its results are
+/// bitwise identical (no FMA contraction: see CMakeLists.txt).
 
 #include "algid/types.hpp"
 
@@ -65,6 +71,55 @@ inline CramerSolution<Scalar, 3> cramer(const Matrix<Scalar, 3, 3>& a, const Vec
   out.numerator(1) = -a(0, 0) * m23 - b(0) * m02 + a(0, 2) * m03;  // columns (0, b, 2)
   out.numerator(2) = a(0, 0) * m13 - a(0, 1) * m03 + b(0) * m01;   // columns (0, 1, b)
   return out;
+}
+
+/// cramer() for a 4x4 system whose entries are lanes (`L`: a scalar or an Eigen array, one
+/// system per lane). `S` holds the 16 entries column-major, `b` the right-hand side; writes the
+/// determinant and the four numerators. Per lane the operations of the packet form above:
+/// t_ij / u_ij are its lane 0 / lane 1 (the minors of rows 0, 1 and of rows 2, 3) and every
+/// determinant is (its lane-0 sum) + (its lane-1 sum). @realtime no allocation, no throw
+template <class L>
+inline void cramer_lanes4(const L* S, const L* b, L& det, L* numerator) noexcept {
+  const auto a = [&](int r, int c) -> const L& { return c == 4 ? b[r] : S[c * 4 + r]; };
+  const auto t = [&](int i, int j) -> L { return a(0, i) * a(1, j) - a(0, j) * a(1, i); };
+  const auto u = [&](int i, int j) -> L { return a(2, i) * a(3, j) - a(2, j) * a(3, i); };
+  const L t01 = t(0, 1), t02 = t(0, 2), t03 = t(0, 3), t04 = t(0, 4), t12 = t(1, 2), t13 = t(1, 3),
+          t14 = t(1, 4), t23 = t(2, 3), t24 = t(2, 4), t34 = t(3, 4);
+  const L u01 = u(0, 1), u02 = u(0, 2), u03 = u(0, 3), u04 = u(0, 4), u12 = u(1, 2), u13 = u(1, 3),
+          u14 = u(1, 4), u23 = u(2, 3), u24 = u(2, 4), u34 = u(3, 4);
+  det = ((t01 * u23 - t02 * u13) + t03 * u12) + ((u01 * t23 - u02 * t13) + u03 * t12);
+  numerator[0] = ((t24 * u13 - t14 * u23) - t34 * u12) + ((u24 * t13 - u14 * t23) - u34 * t12);
+  numerator[1] = ((t04 * u23 + t02 * u34) - t03 * u24) + ((u04 * t23 + u02 * t34) - u03 * t24);
+  numerator[2] = ((t03 * u14 - t01 * u34) - t04 * u13) + ((u03 * t14 - u01 * t34) - u04 * t13);
+  numerator[3] = ((t01 * u24 - t02 * u14) + t04 * u12) + ((u01 * t24 - u02 * t14) + u04 * t12);
+}
+
+/// cramer() for a 3x3 system whose entries are lanes; the operations of the scalar form above.
+/// @realtime no allocation, no throw
+template <class L>
+inline void cramer_lanes3(const L* S, const L* b, L& det, L* numerator) noexcept {
+  const auto a = [&](int r, int c) -> const L& { return S[c * 3 + r]; };
+  const L m01 = a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0);
+  const L m02 = a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0);
+  const L m03 = a(1, 0) * b[2] - b[1] * a(2, 0);
+  const L m12 = a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1);
+  const L m13 = a(1, 1) * b[2] - b[1] * a(2, 1);
+  const L m23 = a(1, 2) * b[2] - b[1] * a(2, 2);
+  det = a(0, 0) * m12 - a(0, 1) * m02 + a(0, 2) * m01;
+  numerator[0] = b[0] * m12 + a(0, 1) * m23 - a(0, 2) * m13;
+  numerator[1] = -a(0, 0) * m23 - b[0] * m02 + a(0, 2) * m03;
+  numerator[2] = a(0, 0) * m13 - a(0, 1) * m03 + b[0] * m01;
+}
+
+/// cramer_lanes4 / cramer_lanes3 by size. @realtime no allocation, no throw
+template <int M, class L>
+inline void cramer_lanes(const L* S, const L* b, L& det, L* numerator) noexcept {
+  static_assert(M == 3 || M == 4, "eq. 5 systems are 3x3 or 4x4");
+  if constexpr (M == 4) {
+    cramer_lanes4(S, b, det, numerator);
+  } else {
+    cramer_lanes3(S, b, det, numerator);
+  }
 }
 
 }  // namespace algid

@@ -79,6 +79,70 @@ struct Instant {
   long samples = 0;            ///< samples consumed since t0
 };
 
+/// The time-scaled system of eq. 5 of one DOF from the rows of its signals (see the file
+/// comment): `self`, `left`, `right` are acceleration rows (4 x 3, column-major; `left` /
+/// `right` nullptr at a wall), `force` the force rows (4 x 1). Writes S (M x M, column-major)
+/// and s (M). Entries are scalars or Eigen arrays of lanes (one instant per lane).
+/// @realtime no allocation, no throw
+template <int M, class L>
+inline void assemble_system(const L* left, const L* self, const L* right, const L* force, L* S, L* s) noexcept {
+  for (int q = 0; q < M; ++q) {
+    S[0 * M + q] = self[0 * 4 + q];
+    S[1 * M + q] = self[1 * 4 + q];
+    S[2 * M + q] = left ? L(self[2 * 4 + q] - left[2 * 4 + q]) : self[2 * 4 + q];
+    if constexpr (M == 4) S[3 * M + q] = right ? L(self[2 * 4 + q] - right[2 * 4 + q]) : self[2 * 4 + q];
+    s[q] = force[q];
+  }
+}
+
+/// Squared doubly equilibrated Hadamard ratio of S (M x M, column-major) as num / den:
+/// det^2 / prod(squared column norms) over prod(squared norms of the rows of the
+/// column-normalised matrix), with the determinant paired with two inverse column norms at a
+/// time so that nothing leaves the range of single precision (normalised rows have squared
+/// norms <= M). No square root, one reciprocal per column. A zero column makes num non-finite
+/// (the caller reads that as 0) and det is then 0, so the system is never trusted. Entries are
+/// scalars or Eigen arrays of lanes; every sum is written out so both give the same bits.
+/// @realtime no allocation, no throw
+template <int M, class L>
+inline void equilibrated_hadamard2(const L* S, const L& det, L& num, L& den) noexcept {
+  L sq[M * M];
+  for (int e = 0; e < M * M; ++e) sq[e] = S[e] * S[e];
+  L inv_col2[M];
+  for (int c = 0; c < M; ++c) {
+    L col2 = sq[c * M];
+    for (int r = 1; r < M; ++r) col2 = col2 + sq[c * M + r];
+    inv_col2[c] = detail::reciprocal(col2);
+  }
+  L row2[M];
+  for (int r = 0; r < M; ++r) {
+    row2[r] = sq[r] * inv_col2[0];
+    for (int c = 1; c < M; ++c) row2[r] = row2[r] + sq[c * M + r] * inv_col2[c];
+  }
+  den = row2[0];
+  for (int r = 1; r < M; ++r) den = den * row2[r];
+  const L tail = M == 4 ? L(inv_col2[2] * inv_col2[M - 1]) : inv_col2[2];
+  num = (det * inv_col2[0] * inv_col2[1]) * (det * tail);
+}
+
+/// equilibrated_hadamard2() of one system, vectorised across columns and rows: every entry
+/// sees the operations of the lane form, in the same order (same bits), in fewer instructions.
+/// @realtime no allocation, no throw
+template <int M, class Scalar>
+inline void equilibrated_hadamard2(const Matrix<Scalar, M, M>& S, Scalar det, Scalar& num, Scalar& den) noexcept {
+  using Row = Eigen::Array<Scalar, 1, M>;
+  using Column = Eigen::Array<Scalar, M, 1>;
+  const Eigen::Array<Scalar, M, M> sq = S.array().square();
+  Row col2 = sq.row(0);
+  for (int r = 1; r < M; ++r) col2 = col2 + sq.row(r);
+  const Row inv_col2 = col2.inverse();
+  Column row2 = sq.col(0) * inv_col2(0);
+  for (int c = 1; c < M; ++c) row2 = row2 + sq.col(c) * inv_col2(c);
+  den = row2(0);
+  for (int r = 1; r < M; ++r) den = den * row2(r);
+  const Scalar tail = M == 4 ? inv_col2(2) * inv_col2(M - 1) : inv_col2(2);
+  num = (det * inv_col2(0) * inv_col2(1)) * (det * tail);
+}
+
 /// Estimator of theta_i = [m_i, c_i, k_i, k_{i+1}] for one DOF.
 /// @tparam M 4 (the paper) or 3 (k_{i+1} known to be zero, or n = 1 where only k_1 + k_2 is
 /// identifiable: then theta = [m, c, k_1 + k_2]).
@@ -106,6 +170,7 @@ class DofEstimator {
   /// wall), `self` this DOF's, `force` its force rows. @realtime no allocation, no throw
   void update(const AccelRows* left, const AccelRows& self, const AccelRows* right, const ForceRows& force,
               const Instant<Scalar>& now, const ValidityRule<Scalar>& rule) noexcept {
+    // assemble_system(), column by column.
     system_.col(0) = self.col(0).template head<M>();
     system_.col(1) = self.col(1).template head<M>();
     if (left) {
@@ -122,13 +187,25 @@ class DofEstimator {
     }
     rhs_ = force.col(0).template head<M>();
     const CramerSolution<Scalar, M> sol = cramer(system_, rhs_);
-    det_ = sol.det;
+    Scalar h2num, h2den;
+    equilibrated_hadamard2(system_, sol.det, h2num, h2den);
+    commit(sol.det, sol.numerator.data(), h2num, h2den, now, rule);
+  }
+
+  /// The second half of update() for a system solved elsewhere (the block path of
+  /// ChainEstimator::run(), which solves many instants side by side): `det` and `numerator`
+  /// from cramer() of the time-scaled system, `h2num` / `h2den` from equilibrated_hadamard2().
+  /// Applies the validity rule and feeds eq. 7. @realtime no allocation, no throw
+  void commit(Scalar det, const Scalar* numerator, Scalar h2num, Scalar h2den, const Instant<Scalar>& now,
+              const ValidityRule<Scalar>& rule) noexcept {
+    det_ = det;
     const Scalar inv2 = now.inv_tau * now.inv_tau;
-    numerator_(0) = sol.numerator(0);
-    numerator_(1) = sol.numerator(1) * now.inv_tau;
-    numerator_(2) = sol.numerator(2) * inv2;
-    if constexpr (M == 4) numerator_(3) = sol.numerator(3) * inv2;
-    equilibrated_hadamard2();
+    numerator_(0) = numerator[0];
+    numerator_(1) = numerator[1] * now.inv_tau;
+    numerator_(2) = numerator[2] * inv2;
+    if constexpr (M == 4) numerator_(3) = numerator[3] * inv2;
+    hadamard2_num_ = std::isfinite(h2num) ? h2num : Scalar(0);
+    hadamard2_den_ = h2den;
     const bool solvable = std::isfinite(det_) && det_ != Scalar(0);
     trusted_ = solvable && now.samples >= rule.min_samples &&
                hadamard2_num_ >= rule.min_hadamard * rule.min_hadamard * hadamard2_den_;
@@ -139,6 +216,13 @@ class DofEstimator {
     } else {
       ratio_.add(decay, now.h, Scalar(0), Vector<Scalar, M>::Zero());
     }
+  }
+
+  /// Set the system reported by system() / rhs() (the block path solves it elsewhere).
+  /// @realtime no allocation, no throw
+  void set_system(const Scalar* S, const Scalar* b) noexcept {
+    system_ = Eigen::Map<const Matrix<Scalar, M, M>>(S);
+    rhs_ = Eigen::Map<const Vector<Scalar, M>>(b);
   }
 
   /// Instantaneous Cramer solution of eq. 5 at the last update (NaN if singular).
@@ -167,30 +251,6 @@ class DofEstimator {
   Scalar weight() const noexcept { return ratio_.denominator(); }
 
  private:
-  // Squared ratio as num / den: det^2 / prod(squared column norms) over prod(squared norms of
-  // the rows of the column-normalised matrix), with the determinant paired with two inverse
-  // column norms at a time so that nothing leaves the range of single precision (normalised
-  // rows have squared norms <= M). A zero column gives 0 / 1. No square root, one reciprocal
-  // per column; the ratio itself is formed only when asked for (hadamard()).
-  void equilibrated_hadamard2() noexcept {
-    const Matrix<Scalar, M, M> sq = system_.cwiseAbs2();
-    Vector<Scalar, M> inv_col2;
-    for (int c = 0; c < M; ++c) {
-      const Scalar col2 = sq.col(c).sum();
-      if (!(col2 > Scalar(0))) {
-        hadamard2_num_ = Scalar(0);
-        hadamard2_den_ = Scalar(1);
-        return;
-      }
-      inv_col2(c) = Scalar(1) / col2;
-    }
-    const Vector<Scalar, M> row2 = sq * inv_col2;
-    const Scalar tail = M == 4 ? inv_col2(2) * inv_col2(M - 1) : inv_col2(2);
-    const Scalar num = (det_ * inv_col2(0) * inv_col2(1)) * (det_ * tail);
-    hadamard2_num_ = std::isfinite(num) ? num : Scalar(0);
-    hadamard2_den_ = row2.prod();
-  }
-
   RatioEstimator<M, Scalar> ratio_;
   Matrix<Scalar, M, M> system_ = Matrix<Scalar, M, M>::Zero();
   Vector<Scalar, M> rhs_ = Vector<Scalar, M>::Zero();

@@ -117,6 +117,11 @@ class IntegratorChain {
         inv_tau_pow.template segment<Orders>(1).asDiagonal() * state_;
   }
 
+  /// I^1 .. I^Orders of every signal (row r - 1: order r) at the current interval end.
+  const Matrix<Scalar, Orders, K>& state() const noexcept { return state_; }
+  /// The signals' samples at the current interval end (I^0).
+  const Vector<Scalar, K>& value() const noexcept { return value_; }
+
   /// Samples consumed since the last reset.
   long count() const noexcept { return count_; }
 

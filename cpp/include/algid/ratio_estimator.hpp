@@ -38,13 +38,20 @@ class RatioEstimator {
   /// Factor (prev_tau / tau)^q that carries the tau^-q-scaled states from prev_tau to tau
   /// (0 from prev_tau = 0, i.e. at the first sample of a window). The same for every DOF of a
   /// chain: compute it once per sample. @realtime no allocation, no throw
-  static Scalar decay(Scalar prev_tau, Scalar tau) noexcept {
-    Scalar ratio = prev_tau / tau;
-    // ratio^q by repeated squaring (q is a small compile-time constant).
-    Scalar rho = Scalar(1);
+  /// Also lane by lane for Eigen arrays of instants (the same operations, the same bits).
+  template <class T>
+  static T decay(const T& prev_tau, const T& tau) noexcept {
+    T ratio = prev_tau / tau;
+    // ratio^q by repeated squaring (q is a small compile-time constant > 0); the first factor
+    // is taken as it is (1 * x == x exactly).
+    T rho = ratio;
+    bool first = true;
     for (int e = kTimeExponent; e > 0; e >>= 1) {
-      if (e & 1) rho *= ratio;
-      ratio *= ratio;
+      if (e & 1) {
+        if (!first) rho = rho * ratio;
+        first = false;
+      }
+      ratio = ratio * ratio;
     }
     return rho;
   }

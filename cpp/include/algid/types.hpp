@@ -7,6 +7,16 @@
 #include <cstdlib>
 #include <stdexcept>
 
+/// Marks a per-sample kernel whose callees (Eigen's expression evaluators, the lane helpers)
+/// must all be inlined into it: GCC and Clang stop inlining them once a translation unit
+/// instantiates many chain sizes, and a call per 8-lane operation costs more than the
+/// operation. Expands to nothing on other compilers.
+#if defined(__GNUC__) || defined(__clang__)
+#define ALGID_FLATTEN __attribute__((flatten))
+#else
+#define ALGID_FLATTEN
+#endif
+
 namespace algid {
 
 /// Fixed-size column vector.
@@ -41,6 +51,16 @@ namespace detail {
   (void)what;
   std::abort();
 #endif
+}
+
+/// 1 / x for a scalar or, lane by lane, for an Eigen array (the same IEEE division).
+template <class Scalar>
+inline Scalar reciprocal(Scalar x) noexcept {
+  return Scalar(1) / x;
+}
+template <class Scalar, int B>
+inline Eigen::Array<Scalar, B, 1> reciprocal(const Eigen::Array<Scalar, B, 1>& x) noexcept {
+  return x.inverse();
 }
 
 }  // namespace detail
