@@ -3,19 +3,23 @@
 Run from the repository root::
 
     python bench/per_sample.py            # full run (~2-4 min on 2 cores, most of it building)
-    python bench/per_sample.py --quick    # fewer windows, no callgrind, no native build
+    python bench/per_sample.py --quick    # fewer windows, no callgrind, no x86-64-v3 build
 
 What it does, in one process so every ratio compares figures from the same run:
 
-1. builds ``bench/cpp`` with CMake in Release (``-O3 -DNDEBUG``, no ``-march``: the wheel's
-   flags) and, separately, with ``-march=native`` (reported apart, never used for the targets);
+1. builds ``bench/cpp`` with CMake in Release (``-O3 -DNDEBUG``, no ``-march``: the flags of the
+   wheel's baseline build ``algid._core``) and, separately, with ``-march=x86-64-v3`` and
+   ``-march=x86-64-v4`` plus ``-ffp-contract=off`` (the flags of ``algid._core_v3`` and
+   ``_core_v4``, reported as ``*_v3`` / ``*_v4``) where this CPU runs them;
 2. runs ``bench_per_sample`` (steady_clock; median / p99 of 16-sample batches, worst single
-   sample, per DOF-sample) for ChainEstimator and an RLS baseline at n = 1, 3, 10, 50 in double
-   and float;
+   sample, per DOF-sample) for ChainEstimator ``update()`` ("default"), its block path
+   ``run()`` ("batch"), the continuous configuration and an RLS baseline at n = 1, 3, 10, 50
+   in double and float;
 3. counts instructions per DOF-sample under ``valgrind --tool=callgrind`` (client requests
-   bracket the update loop; Release build only: valgrind 3.19 cannot run AVX-512 code);
-4. times the Python per-sample ``update()``, the batch ``run()`` (GIL released) and the numpy
-   reference ``algid.reference.estimate`` on the same kind of signals;
+   bracket the measured loop);
+4. times the Python per-sample ``update()``, the batch ``run()`` (GIL released; for every
+   instruction-set build the CPU runs, the default one first) and the numpy reference
+   ``algid.reference.estimate`` on the same kind of signals;
 5. counts the flops per DOF-sample on an instrumented scalar type (``flop_count``) and measures
    the machine's multiply-add peak (``peak_flops``), giving a lower bound;
 6. measures single-precision accuracy on Table 1 (``float_accuracy``);
@@ -103,42 +107,47 @@ def load_signals(binary: Path, n: int, samples: int) -> tuple[np.ndarray, np.nda
     return np.ascontiguousarray(a), np.ascontiguousarray(u)
 
 
-def python_figures(a: np.ndarray, u: np.ndarray, reps: int) -> dict:
+def python_figures(a: np.ndarray, u: np.ndarray, reps: int, isa: str | None = None) -> dict:
+    """Python update() (default build only) and run() of the chain estimators of build `isa`."""
     import algid
+    from algid.estimator import chain_core
 
     samples, n = a.shape
     out: dict[str, dict] = {}
+    make = getattr(chain_core(isa), f"ChainEstimator{n}")
 
-    # Per-sample update(): each call timed (minus the timer's own median cost).
-    est = algid.ChainEstimator(n, DT)
-    clock = statistics.median(-(time.perf_counter_ns() - time.perf_counter_ns()) for _ in range(2000))
-    per_call = []
-    for rep in range(reps + 1):
-        est.reseed()
-        for j in range(samples):
-            t0 = time.perf_counter_ns()
-            est.update(a[j], u[j])
-            t1 = time.perf_counter_ns()
-            if rep and j >= 16:
-                per_call.append(max(0.0, t1 - t0 - clock))
-    per_call = np.asarray(per_call) / n
-    out["python_update"] = {"ns_per_dof_sample_median": float(np.median(per_call)),
-                            "p99": float(np.percentile(per_call, 99)), "max": float(per_call.max()),
-                            "samples": samples, "reps": reps}
+    if isa is None:
+        # Per-sample update(): each call timed (minus the timer's own median cost).
+        est = algid.ChainEstimator(n, DT)
+        clock = statistics.median(-(time.perf_counter_ns() - time.perf_counter_ns()) for _ in range(2000))
+        per_call = []
+        for rep in range(reps + 1):
+            est.reseed()
+            for j in range(samples):
+                t0 = time.perf_counter_ns()
+                est.update(a[j], u[j])
+                t1 = time.perf_counter_ns()
+                if rep and j >= 16:
+                    per_call.append(max(0.0, t1 - t0 - clock))
+        per_call = np.asarray(per_call) / n
+        out["python_update"] = {"ns_per_dof_sample_median": float(np.median(per_call)),
+                                "p99": float(np.percentile(per_call, 99)), "max": float(per_call.max()),
+                                "samples": samples, "reps": reps, "isa": algid.ISA}
 
     # Batch run(): GIL released; includes filling the (T, n) output arrays. Whole record per call,
     # the same protocol as the C++ window_min figure (whole window / T, min over windows): on a
     # shared machine the min is the figure least disturbed by other jobs.
     per_rep = []
     for rep in range(2 * reps + 1):
-        est = algid.ChainEstimator(n, DT)
+        est = make(DT, "fixed", 16, 1e-9)
         t0 = time.perf_counter_ns()
-        est.run(a, u)
+        est.run(a, u, False)
         t1 = time.perf_counter_ns()
         if rep:
             per_rep.append((t1 - t0) / (samples * n))
     out["python_run"] = {"ns_per_dof_sample_median": float(np.median(per_rep)), "window_min": float(min(per_rep)),
                          "p99": None, "max": None, "samples": samples, "reps": len(per_rep),
+                         "isa": isa or algid.ISA,
                          "note": "one timing per whole-record call (T samples); median and min over calls"}
     return out
 
@@ -204,8 +213,8 @@ def machine_info() -> dict:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--build-dir", type=Path, default=ROOT / "build" / "bench")
-    ap.add_argument("--quick", action="store_true", help="3 windows, no callgrind, no native build")
-    ap.add_argument("--no-native", action="store_true", help="skip the -march=native build")
+    ap.add_argument("--quick", action="store_true", help="3 windows, no callgrind, no x86-64-v3/v4 builds")
+    ap.add_argument("--no-wide", action="store_true", help="skip the -march=x86-64-v3 and -v4 builds")
     ap.add_argument("--no-callgrind", action="store_true")
     ap.add_argument("--rounds", type=int, default=3, help="repetitions of the timing (best median kept)")
     ap.add_argument("--output", type=Path, default=RESULTS)
@@ -218,10 +227,19 @@ def main(argv: list[str] | None = None) -> int:
     targets = ["bench_per_sample", "flop_count", "peak_flops", "float_accuracy"]
     print("building bench/cpp (Release, -O3, no -march) ...", flush=True)
     bindir = cmake_build(args.build_dir / "default", targets)
-    native_dir = None
-    if not (args.quick or args.no_native):
-        print("building bench/cpp (Release, -O3 -march=native) ...", flush=True)
-        native_dir = cmake_build(args.build_dir / "native", ["bench_per_sample", "peak_flops"], "-march=native")
+    # The wider builds the wheel also ships (algid._core_v3, _core_v4), where the compiler and
+    # this CPU can run them: {"v3": bench dir, ...}.
+    wide_dirs: dict[str, Path] = {}
+    if not (args.quick or args.no_wide):
+        import algid._core as core
+
+        for level in ("v3", "v4"):
+            if not core.cpu_supports(f"x86-64-{level}"):
+                continue
+            print(f"building bench/cpp (Release, -O3 -march=x86-64-{level} -ffp-contract=off: algid._core_{level}'s "
+                  "flags) ...", flush=True)
+            wide_dirs[level] = cmake_build(args.build_dir / f"x86-64-{level}", ["bench_per_sample", "peak_flops"],
+                                           f"-march=x86-64-{level} -ffp-contract=off")
 
     configs: dict[str, dict[str, dict]] = {}
 
@@ -238,19 +256,32 @@ def main(argv: list[str] | None = None) -> int:
         rounds.setdefault((config, n), []).append(figures)
 
     py_reps = 2 if args.quick else 3
+    import algid
+    from algid.estimator import chain_core
+
+    other_isas = []  # the builds the CPU runs besides the default one (python_run_double_<isa>)
+    for isa in ("x86-64", "x86-64-v3", "x86-64-v4"):
+        try:
+            if isa != algid.ISA and chain_core(isa):
+                other_isas.append(isa)
+        except (RuntimeError, ValueError):
+            pass
     signals = {n: load_signals(bindir / "bench_per_sample", n, 4000) for n in SIZES}
     for r in range(args.rounds):
         print(f"round {r + 1}/{args.rounds}: C++ (steady_clock), Python update()/run() ...", flush=True)
         for row in json_lines([str(bindir / "bench_per_sample"), "--windows", str(windows)]):
             add(f"{row['config']}_{row['scalar']}", row["n"], {k: v for k, v in row.items() if k not in ("config", "n", "scalar")})
-        if native_dir:
-            for row in json_lines([str(native_dir / "bench_per_sample"), "--windows", str(windows)]):
-                add(f"{row['config']}_{row['scalar']}_native", row["n"],
+        for level, wide_dir in wide_dirs.items():
+            for row in json_lines([str(wide_dir / "bench_per_sample"), "--windows", str(windows)]):
+                add(f"{row['config']}_{row['scalar']}_{level}", row["n"],
                     {k: v for k, v in row.items() if k not in ("config", "n", "scalar")})
         for n in SIZES:
             a, u = signals[n]
             for key, f in python_figures(a[:2000], u[:2000], py_reps).items():
                 add(f"{key}_double", n, f)
+            for isa in other_isas:
+                for key, f in python_figures(a[:2000], u[:2000], py_reps, isa).items():
+                    add(f"{key}_double_{isa}", n, f)
     for (config, n), rows in rounds.items():
         best = dict(min(rows, key=lambda f: f["ns_per_dof_sample_median"]))
         best["round_medians"] = [f["ns_per_dof_sample_median"] for f in rows]
@@ -268,11 +299,16 @@ def main(argv: list[str] | None = None) -> int:
             fig["instructions_per_dof_sample"] = None
     if have_valgrind:
         print("counting instructions (callgrind) ...", flush=True)
-        for subject in [c for c in ("default", "continuous", "rls") if f"{c}_double" in configs]:
+        for subject in [c for c in ("default", "batch", "continuous", "rls") if f"{c}_double" in configs]:
             for scalar in ("double", "float"):
                 for n in SIZES:
                     ipds = callgrind_instructions(bindir / "bench_per_sample", subject, n, scalar)
                     configs[f"{subject}_{scalar}"][str(n)]["instructions_per_dof_sample"] = ipds
+        if "v3" in wide_dirs:  # valgrind 3.19 runs AVX2 code, not AVX-512
+            for subject in ("default", "batch"):
+                for n in SIZES:
+                    ipds = callgrind_instructions(wide_dirs["v3"] / "bench_per_sample", subject, n, "double")
+                    configs[f"{subject}_double_v3"][str(n)]["instructions_per_dof_sample"] = ipds
 
     continuous_note = ("ContinuousEstimator<N, Scalar> with its default configuration (K = 4 staggered 0.3 s "
                        "windows, block-median aggregation, change detection on), one uninterrupted signal"
@@ -290,7 +326,7 @@ def main(argv: list[str] | None = None) -> int:
     print("counting flops, measuring peak and float accuracy ...", flush=True)
     flops = json_lines([str(bindir / "flop_count")])
     peak_default = json_lines([str(bindir / "peak_flops")])
-    peak_native = json_lines([str(native_dir / "peak_flops")]) if native_dir else []
+    peak_wide = {level: json_lines([str(d / "peak_flops")]) for level, d in wide_dirs.items()}
     accuracy = json_lines([str(bindir / "float_accuracy")])
     load_after = os.getloadavg()
 
@@ -314,12 +350,12 @@ def main(argv: list[str] | None = None) -> int:
                               "double_scalar_gflops": scalar_peak(peak_default, "double"),
                               "float_gflops": best_peak(peak_default, "float"),
                               "rows": [r for r in peak_default if "lanes" in r]}}
-    if peak_native:
-        peak["native"] = {"isa": next((r["isa"] for r in peak_native if "isa" in r), None),
-                          "double_gflops": best_peak(peak_native, "double"),
-                          "double_scalar_gflops": scalar_peak(peak_native, "double"),
-                          "float_gflops": best_peak(peak_native, "float"),
-                          "rows": [r for r in peak_native if "lanes" in r]}
+    for level, rows in peak_wide.items():
+        peak[f"x86-64-{level}"] = {"isa": next((r["isa"] for r in rows if "isa" in r), None),
+                                   "double_gflops": best_peak(rows, "double"),
+                                   "double_scalar_gflops": scalar_peak(rows, "double"),
+                                   "float_gflops": best_peak(rows, "float"),
+                                   "rows": [r for r in rows if "lanes" in r]}
     bound = {}
     for n in SIZES:
         f = flops_per_dof.get(n, {}).get("flops_per_dof_sample")
@@ -331,10 +367,17 @@ def main(argv: list[str] | None = None) -> int:
                     entry[f"bound_ns_{name}_{kind.replace('_gflops', '')}"] = f / p[kind]
         if f and measured:
             entry["achieved_gflops"] = f / measured
+        for level in wide_dirs:
+            batch_wide = fig(f"batch_double_{level}", n).get("ns_per_dof_sample_median")
+            if f and batch_wide:
+                entry[f"measured_ns_batch_{level}"] = batch_wide
+                entry[f"achieved_gflops_batch_{level}"] = f / batch_wide
         bound[str(n)] = entry
 
     n3 = fig("default_double", 3)
     n50 = fig("default_double", 50)
+    run_cpp = {"x86-64-v3": "batch_double_v3", "x86-64-v4": "batch_double_v4"}.get(algid.ISA, "default_double")
+    run_cpp = run_cpp if fig(run_cpp, 3) else "default_double"
     run3 = fig("python_run_double", 3)
     targets = {
         "median_ns_per_dof_sample_n3_le_100": {
@@ -343,17 +386,24 @@ def main(argv: list[str] | None = None) -> int:
         "linear_in_n_n50_per_dof_le_n3": {
             "n50": n50.get("ns_per_dof_sample_median"), "n3": n3.get("ns_per_dof_sample_median"),
             "met": (n50.get("ns_per_dof_sample_median") or 1e9) <= (n3.get("ns_per_dof_sample_median") or 0)},
+        # Python run() against the C++ loop it wraps, same build: ChainEstimator::run() blocks
+        # in the x86-64-v3 build, update() sample by sample in the baseline build.
         "python_run_within_1.5x_of_cpp": {
-            str(n): {"ratio": fig("python_run_double", n)["window_min"] / fig("default_double", n)["window_min"],
-                     "ratio_to_cpp_batch_median": fig("python_run_double", n)["window_min"] /
+            str(n): {"isa": algid.ISA, "cpp_config": run_cpp,
+                     "ratio": fig("python_run_double", n)["window_min"] / fig(run_cpp, n)["window_min"],
+                     "ratio_to_cpp_default_update_median": fig("python_run_double", n)["window_min"] /
                      fig("default_double", n)["ns_per_dof_sample_median"],
-                     "met": fig("python_run_double", n)["window_min"] <= 1.5 * fig("default_double", n)["window_min"]}
-            for n in SIZES},
+                     "met": fig("python_run_double", n)["window_min"] <= 1.5 * fig(run_cpp, n)["window_min"]}
+            for n in SIZES if fig(run_cpp, n)},
         "python_run_at_least_50x_faster_than_numpy_reference": {
-            str(n): {"ratio_marginal_cached": fig("numpy_reference_cached_weights_double", n)["marginal_ns_per_dof_sample"] /
+            str(n): {"isa": algid.ISA,
+                     "ratio_marginal_cached": fig("numpy_reference_cached_weights_double", n)["marginal_ns_per_dof_sample"] /
                      fig("python_run_double", n)["window_min"],
                      "ratio_whole_call_cached": fig("numpy_reference_cached_weights_double", n)["ns_per_dof_sample_median"] /
-                     fig("python_run_double", n)["window_min"]} for n in SIZES},
+                     fig("python_run_double", n)["window_min"],
+                     **({"ratio_marginal_cached_x86-64_build": fig("numpy_reference_cached_weights_double", n)[
+                         "marginal_ns_per_dof_sample"] / fig("python_run_double_x86-64", n)["window_min"]}
+                        if fig("python_run_double_x86-64", n) else {})} for n in SIZES},
         "max_within_5x_of_median": {
             str(n): {"max_over_median": fig("default_double", n)["max"] / fig("default_double", n)["ns_per_dof_sample_median"],
                      "max_path_over_median": fig("default_double", n)["max_path"] /
@@ -385,9 +435,13 @@ def main(argv: list[str] | None = None) -> int:
         "meta": {"date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                  "command": "python bench/per_sample.py" + (" --quick" if args.quick else ""),
                  "machine": machine_info(), "loadavg_before": load_before, "loadavg_after": load_after,
-                 "build": {"default": "CMAKE_BUILD_TYPE=Release (-O3 -DNDEBUG), no -march, -fPIE -fvisibility=hidden "
-                                      "-flto=auto: the wheel's extension-module flags",
-                           "native": "same plus -march=native (reported as *_native, not used for targets)"},
+                 "build": {"default": "CMAKE_BUILD_TYPE=Release (-O3 -DNDEBUG), no -march: the flags of the "
+                                      "wheel's baseline module algid._core (which adds -fPIC -fvisibility=hidden)",
+                           "v3": "same plus -march=x86-64-v3 -ffp-contract=off: the flags of algid._core_v3, which "
+                                 "algid imports on CPUs with AVX2/FMA (reported as *_v3)",
+                           "v4": "same with -march=x86-64-v4: algid._core_v4, imported on CPUs with AVX-512 "
+                                 "(reported as *_v4)"},
+                 "python_isa": algid.ISA,
                  "signals": "closed-form multisine chain (tests/cpp/closed_form.hpp SineChain), Table 1 for n = 3, 1 kHz",
                  "units": "ns per DOF-sample (ns_per_sample_median: per whole sample of all n DOF)",
                  "rounds": args.rounds,
@@ -401,8 +455,11 @@ def main(argv: list[str] | None = None) -> int:
                                  "the worst data-dependent path with interference filtered out",
                      "window_min": "a whole window's batch pass / T, min over windows and rounds: the protocol of "
                                    "python_run (whole-record run() call / T, min over calls)",
-                     "instructions_per_dof_sample": "callgrind Ir of the update loop after 64 warm-up samples "
-                                                    "(continuous: 400), / (updates n)"},
+                     "instructions_per_dof_sample": "callgrind Ir of the update loop (batch: one run() call) "
+                                                    "after 64 warm-up samples (continuous: 400), / (updates n)",
+                     "batch": "ChainEstimator::run() in 16-sample chunks (median, p99, max = slowest chunk) and "
+                              "whole windows (window_min), storing every sample's estimates as the Python run() "
+                              "does"},
                  "continuous": continuous_note},
         "configurations": configs,
         "flops": {"per_dof_sample": {str(k): v for k, v in flops_per_dof.items()},
@@ -449,7 +506,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{'met' if t['median_ns_per_dof_sample_n3_le_100']['met'] else 'NOT met'}")
     lin = t["linear_in_n_n50_per_dof_le_n3"]
     print(f"  linear in n (n=50 per DOF <= n=3): {lin['n50']:.0f} vs {lin['n3']:.0f} -> {'met' if lin['met'] else 'NOT met'}")
-    print("  Python run() / C++ (whole record, min over repetitions, both sides): " + ", ".join(
+    print(f"  Python run() ({algid.ISA} build) / C++ {run_cpp} (whole record, min over repetitions): " + ", ".join(
         f"n={n}: {v['ratio']:.2f}x{'' if v['met'] else ' (NOT met)'}" for n, v in t["python_run_within_1.5x_of_cpp"].items()))
     print("  numpy reference / Python run() (marginal, cached weights | whole call): " + ", ".join(
         f"n={n}: {v['ratio_marginal_cached']:.0f}x | {v['ratio_whole_call_cached']:.0f}x"

@@ -1,4 +1,4 @@
-// pybind11 module algid._core_v3: the chain estimators of algid._core compiled for a
+// pybind11 modules algid._core_v3 / _core_v4: the chain estimators of algid._core compiled for a
 // wider instruction set (CMakeLists.txt sets the name, the -march level and module-local
 // registration). algid/estimator.py imports the best one the CPU supports.
 #include <pybind11/pybind11.h>

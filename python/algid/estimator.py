@@ -21,19 +21,20 @@ SIZES: tuple[int, ...] = tuple(_core.SIZES)
 Status = _core.Status
 
 #: Instruction-set builds of the chain estimators, widest first: module name and level.
-_BUILDS: tuple[tuple[str, str], ...] = (("_core_v3", "x86-64-v3"), ("_core", "x86-64"))
+_BUILDS: tuple[tuple[str, str], ...] = (("_core_v4", "x86-64-v4"), ("_core_v3", "x86-64-v3"), ("_core", "x86-64"))
 
 
 def chain_core(isa: str | None = None):
     """The extension module whose chain estimators this process uses.
 
-    On x86-64 the wheel carries the estimators built twice: for ``x86-64`` (SSE2, any x86-64
-    CPU) and for ``x86-64-v3`` (AVX2 and FMA, most CPUs since 2013), whose ``run()`` solves the
-    systems of 8 instants side by side (``ChainEstimator::run`` in C++). By default the widest
-    build this CPU runs is used; ``isa`` or the environment variable ``ALGID_ISA`` (``x86-64``
-    or ``x86-64-v3``) forces one, for benchmarks and comparisons. The two agree to rounding (the
-    v3 build's chain products use fused multiply-adds); within one build ``run()`` and
-    ``update()`` give the same bits.
+    On x86-64 the wheel carries the estimators built three times: for ``x86-64`` (SSE2, any
+    x86-64 CPU), ``x86-64-v3`` (AVX2 and FMA, most CPUs since 2013) and ``x86-64-v4``
+    (AVX-512); the wider builds' ``run()`` solves the systems of 8 instants side by side
+    (``ChainEstimator::run`` in C++). By default the widest build this CPU runs is used; ``isa``
+    or the environment variable ``ALGID_ISA`` (``x86-64``, ``x86-64-v3``, ``x86-64-v4``) forces
+    one, for benchmarks and comparisons. The builds agree to rounding (the wider builds' chain
+    products use fused multiply-adds); within one build ``run()`` and ``update()`` give the
+    same bits.
     """
     wanted = isa or os.environ.get("ALGID_ISA") or None
     levels = [level for _, level in _BUILDS]

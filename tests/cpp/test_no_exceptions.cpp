@@ -14,7 +14,8 @@ int run() {
   typename Est::Config bad = cfg;
   bad.dt = Scalar(0);
   if (Est::validate(bad) != algid::ConfigError::kBadSamplePeriod) return 1;
-  static Est est(cfg);  // static storage: no heap
+  static Est est(cfg), batch(cfg);  // static storage: no heap
+  static Scalar record_a[300 * 3], record_u[300 * 3];
   // A 3-DOF chain under a smooth force, integrated with a semi-implicit Euler scheme: this
   // checks that the code runs and yields finite, valid estimates, not accuracy.
   Scalar x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
@@ -29,11 +30,19 @@ int run() {
     }
     est.update(a, u);
     for (int i = 0; i < 3; ++i) {
+      record_a[s * 3 + i] = a[i];
+      record_u[s * 3 + i] = u[i];
+    }
+    for (int i = 0; i < 3; ++i) {
       v[i] += a[i] * cfg.dt;
       x[i] += v[i] * cfg.dt;
     }
   }
-  return est.all_valid() ? 0 : 1;
+  // The block path compiles under the same flags and ends where update() ended.
+  long observed = 0;
+  batch.run(record_a, record_u, 300, [&](long, algid::Status) { ++observed; });
+  const bool same = observed == 300 && batch.mass()(0) == est.mass()(0) && batch.stiffness()(3) == est.stiffness()(3);
+  return est.all_valid() && same ? 0 : 1;
 }
 }  // namespace
 
