@@ -142,16 +142,16 @@ class ChainEstimator {
   /// four of SSE2).
   static constexpr int kBlock = 8;
 
-  /// Consume a record of T simultaneous samples (`accel`, `force`: T x N, row-major, t fastest
-  /// last) and call `observe(t, status)` after each sample t, with the estimator in exactly
+  /// Consume a record of T simultaneous samples (`accel`, `force`: T x N, row-major: sample t
+  /// at accel + t N) and call `observe(t, status)` after each sample t, with the estimator in exactly
   /// the state a call of update() would have left it in: every estimate, flag and accessor,
   /// to the bit. Stretches of kBlock finite samples after the warm-up go through as a block:
   /// the chains and eq. 7 still advance sample by sample, but the rows, the systems of eq. 5,
   /// Cramer's rule and the Hadamard ratio are computed for the kBlock instants at once, lane
   /// by lane with the operations of update() (cramer_lanes(), equilibrated_hadamard2()).
   /// That is the batch path of the Python `run()`; firmware calls update().
-  /// Scratch is on the stack: about kBlock (9 + 7 + 7) N scalars (72 KiB for N = 50 in
-  /// double). Returns how many of the T samples went through blocks.
+  /// Scratch is on the stack: about 40 kBlock N scalars (125 KiB for N = 50 in double).
+  /// Returns how many of the T samples went through blocks.
   /// @realtime no allocation; no throw unless `observe` throws
   template <class Observer>
   long run(const Scalar* accel, const Scalar* force, long T, Observer&& observe) {
@@ -326,7 +326,7 @@ class ChainEstimator {
     for (int b = 0; b < kBlock; ++b) {
       for (int i = 0; i < N; ++i) {
         const Scalar num[4] = {numerator[4 * i](b), numerator[4 * i + 1](b), numerator[4 * i + 2](b),
-                               numerator[4 * i + 3](b)};
+                               is_reduced(i) ? Scalar(0) : numerator[4 * i + 3](b)};  // 3x3: 3 numerators
         if (is_reduced(i)) {
           last_.commit(det[i](b), num, h2num[i](b), h2den[i](b), now[b], config_.validity);
         } else {
