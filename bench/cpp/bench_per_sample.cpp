@@ -120,25 +120,16 @@ struct EstimatorSubject {
 // samples (two blocks), with an observer that stores the estimate history as the Python run()
 // does (masses, dampings, springs and validity of every sample).
 template <int N, class Scalar>
-struct BatchSubject {
-  using Est = algid::ChainEstimator<N, Scalar>;
-  static constexpr int kDofs = N;
-  static constexpr bool kContinuous = false;
+struct BatchSubject : EstimatorSubject<N, Scalar> {  // the same estimator, fed through run()
+  using EstimatorSubject<N, Scalar>::s;
+  using EstimatorSubject<N, Scalar>::est;
   static constexpr bool kChunked = true;
-  static constexpr int kCallgrindWarmup = 64;
-  const algid_bench::Signals<Scalar>* s;
-  std::unique_ptr<Est> est;
   std::vector<Scalar> history;
   std::vector<char> valid;
   explicit BatchSubject(const algid_bench::Signals<Scalar>& sig)
-      : s(&sig),
+      : EstimatorSubject<N, Scalar>(sig),
         history(static_cast<std::size_t>(sig.samples) * (3 * N + 1)),
-        valid(static_cast<std::size_t>(sig.samples) * N) {
-    typename Est::Config cfg;
-    cfg.dt = static_cast<Scalar>(algid_bench::kDt);
-    est = std::make_unique<Est>(cfg);
-  }
-  void begin(int) noexcept { est->reseed(); }
+        valid(static_cast<std::size_t>(sig.samples) * N) {}
   // Samples [k0, k0 + count).
   void chunk(int k0, int count) noexcept {
     const std::size_t at = static_cast<std::size_t>(k0) * N;

@@ -242,15 +242,23 @@ class ChainEstimator {
 
   // What every DOF shares at the interval end after `samples` samples (>= P), once per sample.
   Instant<Scalar> instant(long samples) const noexcept {
-    const Scalar tau = static_cast<Scalar>(samples - P + 1) * config_.dt;
-    const Scalar prev_tau = static_cast<Scalar>(samples - P) * config_.dt;
     Instant<Scalar> now;
-    now.inv_tau = Scalar(1) / tau;
+    shared(static_cast<Scalar>(samples - P), now.inv_tau, now.decay4, now.decay3);
     now.h = config_.dt;
-    if (N > 1) now.decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);  // DOF 1 is full
-    if (reduced_last()) now.decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
     now.samples = samples;
     return now;
+  }
+
+  // 1 / tau and the eq. 7 decay factors from the previous interval end, given (samples - P) as
+  // a scalar or, for the block path, as lanes of instants (the same operations per lane).
+  // A decay factor no DOF uses is left as it is.
+  template <class T>
+  void shared(const T& intervals, T& inv_tau, T& decay4, T& decay3) const noexcept {
+    const T prev_tau = intervals * config_.dt;
+    const T tau = (intervals + Scalar(1)) * config_.dt;
+    inv_tau = detail::reciprocal(tau);
+    if (N > 1) decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);  // DOF 1 is full
+    if (reduced_last()) decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
   }
 
   // kBlock finite samples past the warm-up (every push advances the chains): see run().
@@ -275,17 +283,9 @@ class ChainEstimator {
     }
     // What the DOFs share at each instant (instant()), and the time scaling J_r = I^r tau^-r,
     // lane by lane as in update().
-    Lanes tau, prev_tau;
-    for (int b = 0; b < kBlock; ++b) {
-      tau(b) = static_cast<Scalar>(samples_ + 1 + b - P + 1);
-      prev_tau(b) = static_cast<Scalar>(samples_ + 1 + b - P);
-    }
-    tau = tau * config_.dt;
-    prev_tau = prev_tau * config_.dt;
-    const Lanes inv_tau = tau.inverse();
-    Lanes decay4 = Lanes::Zero(), decay3 = Lanes::Zero();
-    if (N > 1) decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);
-    if (reduced_last()) decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
+    Lanes intervals, inv_tau, decay4 = Lanes::Zero(), decay3 = Lanes::Zero();
+    for (int b = 0; b < kBlock; ++b) intervals(b) = static_cast<Scalar>(samples_ + 1 + b - P);
+    shared(intervals, inv_tau, decay4, decay3);
     Instant<Scalar> now[kBlock];
     for (int b = 0; b < kBlock; ++b) {
       now[b].inv_tau = inv_tau(b);
@@ -344,10 +344,11 @@ class ChainEstimator {
   // the operations of signal_rows() (J_s - a J_(s+1)) + b J_(s+2).
   template <int Cols, class Lanes>
   static void lane_rows(const Lanes* J, Lanes* rows) noexcept {
-    constexpr Scalar a[4] = {4, 6, 8, 10};    // 2 (q + 2)
-    constexpr Scalar b[4] = {6, 12, 20, 30};  // (q + 2)(q + 3)
     for (int c = 0; c < Cols; ++c) {
-      for (int q = 0; q < 4; ++q) rows[c * 4 + q] = J[c + q] - a[q] * J[c + q + 1] + b[q] * J[c + q + 2];
+      for (int q = 0; q < 4; ++q) {
+        rows[c * 4 + q] =
+            J[c + q] - static_cast<Scalar>(kRowA[q]) * J[c + q + 1] + static_cast<Scalar>(kRowB[q]) * J[c + q + 2];
+      }
     }
   }
 

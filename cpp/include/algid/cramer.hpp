@@ -54,25 +54,6 @@ inline CramerSolution<Scalar, 4> cramer(const Matrix<Scalar, 4, 4>& a, const Vec
   return out;
 }
 
-/// Cramer's rule for a 3x3 system: expansion along row 1 with the 2x2 minors of rows 2, 3 of
-/// the augmented matrix [S | b]. @realtime no allocation, no throw
-template <class Scalar>
-inline CramerSolution<Scalar, 3> cramer(const Matrix<Scalar, 3, 3>& a, const Vector<Scalar, 3>& b) noexcept {
-  // m_ij: minor of rows 1, 2 and columns i < j of [S | b] (column 3 = b).
-  const Scalar m01 = a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0);
-  const Scalar m02 = a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0);
-  const Scalar m03 = a(1, 0) * b(2) - b(1) * a(2, 0);
-  const Scalar m12 = a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1);
-  const Scalar m13 = a(1, 1) * b(2) - b(1) * a(2, 1);
-  const Scalar m23 = a(1, 2) * b(2) - b(1) * a(2, 2);
-  CramerSolution<Scalar, 3> out;
-  out.det = a(0, 0) * m12 - a(0, 1) * m02 + a(0, 2) * m01;
-  out.numerator(0) = b(0) * m12 + a(0, 1) * m23 - a(0, 2) * m13;   // columns (b, 1, 2)
-  out.numerator(1) = -a(0, 0) * m23 - b(0) * m02 + a(0, 2) * m03;  // columns (0, b, 2)
-  out.numerator(2) = a(0, 0) * m13 - a(0, 1) * m03 + b(0) * m01;   // columns (0, 1, b)
-  return out;
-}
-
 /// cramer() for a 4x4 system whose entries are lanes (`L`: a scalar or an Eigen array, one
 /// system per lane). `S` holds the 16 entries column-major, `b` the right-hand side; writes the
 /// determinant and the four numerators. Per lane the operations of the packet form above:
@@ -94,8 +75,9 @@ inline void cramer_lanes4(const L* S, const L* b, L& det, L* numerator) noexcept
   numerator[3] = ((t01 * u24 - t02 * u14) + t04 * u12) + ((u01 * t24 - u02 * t14) + u04 * t12);
 }
 
-/// cramer() for a 3x3 system whose entries are lanes; the operations of the scalar form above.
-/// @realtime no allocation, no throw
+/// Cramer's rule for a 3x3 system whose entries are lanes (or scalars): expansion along row 1
+/// with the 2x2 minors of rows 2, 3 of the augmented matrix [S | b]. @realtime no allocation,
+/// no throw
 template <class L>
 inline void cramer_lanes3(const L* S, const L* b, L& det, L* numerator) noexcept {
   const auto a = [&](int r, int c) -> const L& { return S[c * 3 + r]; };
@@ -109,6 +91,14 @@ inline void cramer_lanes3(const L* S, const L* b, L& det, L* numerator) noexcept
   numerator[0] = b[0] * m12 + a(0, 1) * m23 - a(0, 2) * m13;
   numerator[1] = -a(0, 0) * m23 - b[0] * m02 + a(0, 2) * m03;
   numerator[2] = a(0, 0) * m13 - a(0, 1) * m03 + b[0] * m01;
+}
+
+/// Cramer's rule for one 3x3 system (cramer_lanes3() on scalars). @realtime no allocation, no throw
+template <class Scalar>
+inline CramerSolution<Scalar, 3> cramer(const Matrix<Scalar, 3, 3>& a, const Vector<Scalar, 3>& b) noexcept {
+  CramerSolution<Scalar, 3> out;
+  cramer_lanes3(a.data(), b.data(), out.det, out.numerator.data());
+  return out;
 }
 
 /// cramer_lanes4 / cramer_lanes3 by size. @realtime no allocation, no throw

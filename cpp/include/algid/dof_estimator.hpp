@@ -52,6 +52,11 @@ struct ValidityRule {
 inline constexpr int kAccelOrders = 7;
 inline constexpr int kForceOrders = 5;
 
+/// Coefficients of the row recurrence R(q, s) = J_s - kRowA[q] J_(s+1) + kRowB[q] J_(s+2):
+/// 2 (q + 2) and (q + 2)(q + 3).
+inline constexpr int kRowA[4] = {4, 6, 8, 10};
+inline constexpr int kRowB[4] = {6, 12, 20, 30};
+
 /// The rows of one signal at one instant: column c holds R(q, q + c), q = 0..3 (the recurrence
 /// in the file comment), for c < Cols.
 /// @tparam Cols 3 for an acceleration (mass, damping, spring columns), 1 for a force.
@@ -60,8 +65,8 @@ inline constexpr int kForceOrders = 5;
 template <int Cols, class Scalar>
 inline void signal_rows(const Scalar* J, Matrix<Scalar, 4, Cols>& rows) noexcept {
   using Column = Eigen::Array<Scalar, 4, 1>;
-  const Column a(Scalar(4), Scalar(6), Scalar(8), Scalar(10));   // 2 (q + 2)
-  const Column b(Scalar(6), Scalar(12), Scalar(20), Scalar(30));  // (q + 2)(q + 3)
+  const Column a = Eigen::Array<int, 4, 1>(kRowA[0], kRowA[1], kRowA[2], kRowA[3]).cast<Scalar>();
+  const Column b = Eigen::Array<int, 4, 1>(kRowB[0], kRowB[1], kRowB[2], kRowB[3]).cast<Scalar>();
   const Eigen::Map<const Eigen::Array<Scalar, Cols + 5, 1>> j(J);
   for (int c = 0; c < Cols; ++c) {
     rows.col(c).array() =
