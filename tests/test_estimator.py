@@ -188,12 +188,14 @@ def _isa_builds() -> list[str]:
 
     builds = ["x86-64"]
     for level in ("v3", "v4"):
+        # The CPU check first: importing a build this CPU cannot run dies of SIGILL.
+        if not _core.cpu_supports(f"x86-64-{level}"):
+            continue
         try:
             importlib.import_module(f"algid._core_{level}")
         except ImportError:
             continue
-        if _core.cpu_supports(f"x86-64-{level}"):
-            builds.append(f"x86-64-{level}")
+        builds.append(f"x86-64-{level}")
     return builds
 
 
