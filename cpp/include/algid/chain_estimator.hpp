@@ -56,9 +56,11 @@ class ChainEstimator {
 
  public:
   /// Integrator chains of the N accelerations (orders 1..7 needed, 8 kept) and of the N forces
-  /// (1..5 needed, 6 kept): the extra order pads to the SIMD width and costs nothing.
+  /// (1..5 needed, kForceKept kept): the extra orders pad to whole SIMD registers (6 with SSE2,
+  /// 8 with AVX), which costs less than the partial registers they replace.
+  static constexpr int kForceKept = detail::simd_padded<Scalar>(kForceOrders + 1, kAccelOrders + 1);
   using AccelChain = IntegratorChain<P, kAccelOrders + 1, Scalar, N>;
-  using ForceChain = IntegratorChain<P, kForceOrders + 1, Scalar, N>;
+  using ForceChain = IntegratorChain<P, kForceKept, Scalar, N>;
   /// The quadrature rule both are advanced with.
   using Rule = typename AccelChain::Rule;
   using Config = ChainConfig<Scalar>;
@@ -265,19 +267,24 @@ class ChainEstimator {
   template <class Observer>
   ALGID_FLATTEN void run_block(const Scalar* accel, const Scalar* force, long t0, Observer& observe) {
     using Lanes = Eigen::Array<Scalar, kBlock, 1>;
-    constexpr int kA = AccelChain::kOrders + 1;  // J_0 .. J_8 of an acceleration
-    constexpr int kF = ForceChain::kOrders + 1;  // J_0 .. J_6 of a force
-    constexpr int kAO = AccelChain::kOrders, kFO = ForceChain::kOrders;
-    // The chains after each sample of the block, one contiguous column per sample (sample
-    // major, as the chains hold them); turned into lanes (instant major) signal by signal.
-    Matrix<Scalar, kAO * N, kBlock> astate;
-    Matrix<Scalar, kFO * N, kBlock> fstate;
-    Matrix<Scalar, N, kBlock> avalue, fvalue;
+    constexpr int kA = kAccelOrders + 1;  // J_0 .. J_7 of an acceleration: what its rows need
+    constexpr int kF = kForceOrders + 1;  // J_0 .. J_5 of a force
+    constexpr int kAO = kAccelOrders, kFO = kForceOrders;  // I^1 .. I^kAO kept per signal
+    // The chains after each sample of the block (column b: sample b), read back as lanes (row
+    // r: one integral at the kBlock instants). Row-major, so that the rows are whole SIMD
+    // loads, except for one DOF, where the compiler transposes the 8 x 8 tiles in registers and
+    // rows written just before they are read would stall the store-to-load forwarding.
+    constexpr int kLayout = N == 1 ? Eigen::ColMajor : Eigen::RowMajor;
+    Eigen::Matrix<Scalar, kAO * N, kBlock, kLayout> astate;
+    Eigen::Matrix<Scalar, kFO * N, kBlock, kLayout> fstate;
+    Eigen::Matrix<Scalar, N, kBlock, Eigen::RowMajor> avalue, fvalue;
     for (int b = 0; b < kBlock; ++b) {  // samples_ advances as each sample is observed, below
       accel_.push(accel + b * N, rule_);
       force_.push(force + b * N, rule_);
-      astate.col(b) = Eigen::Map<const Vector<Scalar, kAO * N>>(accel_.state().data());
-      fstate.col(b) = Eigen::Map<const Vector<Scalar, kFO * N>>(force_.state().data());
+      for (int k = 0; k < N; ++k) {
+        astate.col(b).template segment<kAO>(k * kAO) = accel_.state().col(k).template head<kAO>();
+        fstate.col(b).template segment<kFO>(k * kFO) = force_.state().col(k).template head<kFO>();
+      }
       avalue.col(b) = accel_.value();
       fvalue.col(b) = force_.value();
     }

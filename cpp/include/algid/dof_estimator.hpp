@@ -205,10 +205,15 @@ class DofEstimator {
               const ValidityRule<Scalar>& rule) noexcept {
     det_ = det;
     const Scalar inv2 = now.inv_tau * now.inv_tau;
-    numerator_(0) = numerator[0];
-    numerator_(1) = numerator[1] * now.inv_tau;
-    numerator_(2) = numerator[2] * inv2;
-    if constexpr (M == 4) numerator_(3) = numerator[3] * inv2;
+    // Built in registers and stored whole: filling numerator_ entry by entry and then reading
+    // it as one SIMD vector would stall on the store-to-load forwarding.
+    Vector<Scalar, M> scaled;
+    if constexpr (M == 4) {
+      scaled = Vector<Scalar, 4>(numerator[0], numerator[1] * now.inv_tau, numerator[2] * inv2, numerator[3] * inv2);
+    } else {
+      scaled = Vector<Scalar, 3>(numerator[0], numerator[1] * now.inv_tau, numerator[2] * inv2);
+    }
+    numerator_ = scaled;
     hadamard2_num_ = std::isfinite(h2num) ? h2num : Scalar(0);
     hadamard2_den_ = h2den;
     const bool solvable = std::isfinite(det_) && det_ != Scalar(0);
@@ -217,7 +222,7 @@ class DofEstimator {
     const Scalar decay = M == 4 ? now.decay4 : now.decay3;
     if (trusted_) {
       const Scalar sign = det_ > Scalar(0) ? Scalar(1) : Scalar(-1);
-      ratio_.add(decay, now.h, std::abs(det_), sign * numerator_);
+      ratio_.add(decay, now.h, std::abs(det_), sign * scaled);
     } else {
       ratio_.add(decay, now.h, Scalar(0), Vector<Scalar, M>::Zero());
     }

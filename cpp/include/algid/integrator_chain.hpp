@@ -126,9 +126,10 @@ class IntegratorChain {
   long count() const noexcept { return count_; }
 
  private:
-  // step(r) += sum_{q<r} carry(r, q) state(q), in blocks of kCarryBlock orders that each skip
-  // the zero upper triangle: about half the multiplications of the full product.
-  static constexpr int kCarryBlock = 2;
+  // step(r) += sum_{q<r} carry(r, q) state(q), in blocks of kCarryBlock orders (one SIMD
+  // register: Eigen's packet size) that each skip the zero upper triangle: about half the
+  // multiplications of the full product, in whole registers.
+  static constexpr int kCarryBlock = Eigen::internal::packet_traits<Scalar>::size;
   template <int Row0, class Carry>
   void add_carry(const Carry& carry, Matrix<Scalar, Orders, K>& step) const noexcept {
     constexpr int kRows = Orders - Row0 < kCarryBlock ? Orders - Row0 : kCarryBlock;
