@@ -304,22 +304,28 @@ class ChainEstimator {
     Lanes inv_pow[kA];
     inv_pow[0].setConstant(Scalar(1));
     for (int r = 1; r < kA; ++r) inv_pow[r] = inv_pow[r - 1] * inv_tau;
-    Lanes aj[kA * N], fj[kF * N];  // J_r of signal k at [k * kA + r]
-    for (int k = 0; k < N; ++k) {
-      aj[k * kA] = avalue.row(k).transpose();
-      fj[k * kF] = fvalue.row(k).transpose();
-      for (int r = 1; r < kA; ++r) aj[k * kA + r] = inv_pow[r] * astate.row(k * kAO + r - 1).transpose().array();
-      for (int r = 1; r < kF; ++r) fj[k * kF + r] = inv_pow[r] * fstate.row(k * kFO + r - 1).transpose().array();
-    }
+    // The rows of acceleration ka and force kf at the kBlock instants (k < 0: none), from
+    // J_r = I^r tau^-r of those signals; computed where the rows are needed, not kept for all N:
+    // the scratch then stays small enough for the L1 cache at large N.
+    const auto signal_rows_lanes = [&](int ka, Lanes* arows_k, int kf, Lanes* frows_k) {
+      Lanes JA[kA], JF[kF];
+      if (ka >= 0) JA[0] = avalue.row(ka).transpose();
+      if (kf >= 0) JF[0] = fvalue.row(kf).transpose();
+      for (int r = 1; r < kA; ++r) {
+        if (ka >= 0) JA[r] = inv_pow[r] * astate.row(ka * kAO + r - 1).transpose().array();
+        if (kf >= 0 && r < kF) JF[r] = inv_pow[r] * fstate.row(kf * kFO + r - 1).transpose().array();
+      }
+      if (ka >= 0) lane_rows<3>(JA, arows_k);
+      if (kf >= 0) lane_rows<1>(JF, frows_k);
+    };
     // Eq. 5 of every DOF for the kBlock instants, one per lane. The rows of the accelerations
-    // i - 1, i, i + 1 (4 x 3 column-major each) roll through three slots, so the scratch stays
-    // small enough for the L1 cache at large N.
+    // i - 1, i, i + 1 (4 x 3 column-major each) roll through three slots; force i's rows go
+    // with acceleration i + 1's.
     Lanes arows[3][12], frows[4];
     Lanes det[N], numerator[4 * N], h2num[N], h2den[N];
-    lane_rows<3>(&aj[0], arows[0]);
+    signal_rows_lanes(0, arows[0], N == 1 ? 0 : -1, frows);  // one DOF: its force here too
     for (int i = 0; i < N; ++i) {
-      if (i + 1 < N) lane_rows<3>(&aj[(i + 1) * kA], arows[(i + 1) % 3]);
-      lane_rows<1>(&fj[i * kF], frows);
+      if (N > 1) signal_rows_lanes(i + 1 < N ? i + 1 : -1, arows[(i + 1) % 3], i, frows);
       const Lanes* left = i > 0 ? arows[(i + 2) % 3] : nullptr;
       const Lanes* right = i + 1 < N ? arows[(i + 1) % 3] : nullptr;
       if (is_reduced(i)) {
