@@ -53,7 +53,9 @@ void exact_case(unsigned seed, algid::Boundary boundary) {
   std::printf("N=%d %s: max |error| * hadamard %.2e, final eq. 7 error %.2e\n", N, free_end ? "free" : "fixed",
               worst_scaled, final_err);
   CHECK(worst_scaled < 1e-8);
-  CHECK(final_err < 1e-7);
+  // 0.2 s of window: rounding-level, 1e-11 .. 1.2e-7 (N = 5 in an -march=x86-64-v3 build, where
+  // the chain products fuse multiply-adds; 1.5e-8 with the portable flags).
+  CHECK(final_err < 3e-7);
   CHECK(est.all_valid());
   if (free_end) CHECK(est.stiffness()(N) == 0.0);
   if (sum_only) CHECK(std::isnan(est.stiffness()(1)));

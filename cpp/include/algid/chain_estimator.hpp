@@ -269,22 +269,18 @@ class ChainEstimator {
     using Lanes = Eigen::Array<Scalar, kBlock, 1>;
     constexpr int kA = kAccelOrders + 1;  // J_0 .. J_7 of an acceleration: what its rows need
     constexpr int kF = kForceOrders + 1;  // J_0 .. J_5 of a force
-    constexpr int kAO = kAccelOrders, kFO = kForceOrders;  // I^1 .. I^kAO kept per signal
-    // The chains after each sample of the block (column b: sample b), read back as lanes (row
-    // r: one integral at the kBlock instants). Row-major, so that the rows are whole SIMD
-    // loads, except for one DOF, where the compiler transposes the 8 x 8 tiles in registers and
-    // rows written just before they are read would stall the store-to-load forwarding.
-    constexpr int kLayout = N == 1 ? Eigen::ColMajor : Eigen::RowMajor;
-    Eigen::Matrix<Scalar, kAO * N, kBlock, kLayout> astate;
-    Eigen::Matrix<Scalar, kFO * N, kBlock, kLayout> fstate;
+    constexpr int kAO = AccelChain::kOrders, kFO = ForceChain::kOrders;
+    // The chains after each sample of the block, one contiguous column per sample (as the
+    // chains hold them), turned into lanes (lane b = instant b) tile by tile in registers
+    // below (transpose_to_lanes). The samples themselves (J_0) are few: stored as lanes.
+    Matrix<Scalar, kAO * N, kBlock> astate;
+    Matrix<Scalar, kFO * N, kBlock> fstate;
     Eigen::Matrix<Scalar, N, kBlock, Eigen::RowMajor> avalue, fvalue;
     for (int b = 0; b < kBlock; ++b) {  // samples_ advances as each sample is observed, below
       accel_.push(accel + b * N, rule_);
       force_.push(force + b * N, rule_);
-      for (int k = 0; k < N; ++k) {
-        astate.col(b).template segment<kAO>(k * kAO) = accel_.state().col(k).template head<kAO>();
-        fstate.col(b).template segment<kFO>(k * kFO) = force_.state().col(k).template head<kFO>();
-      }
+      astate.col(b) = Eigen::Map<const Vector<Scalar, kAO * N>>(accel_.state().data());
+      fstate.col(b) = Eigen::Map<const Vector<Scalar, kFO * N>>(force_.state().data());
       avalue.col(b) = accel_.value();
       fvalue.col(b) = force_.value();
     }
@@ -308,12 +304,18 @@ class ChainEstimator {
     // J_r = I^r tau^-r of those signals; computed where the rows are needed, not kept for all N:
     // the scratch then stays small enough for the L1 cache at large N.
     const auto signal_rows_lanes = [&](int ka, Lanes* arows_k, int kf, Lanes* frows_k) {
-      Lanes JA[kA], JF[kF];
-      if (ka >= 0) JA[0] = avalue.row(ka).transpose();
-      if (kf >= 0) JF[0] = fvalue.row(kf).transpose();
+      Lanes JA[kAO + 1], JF[kFO + 1];  // J_0 .. J_Orders (the padding orders unused)
+      if (ka >= 0) {
+        JA[0] = avalue.row(ka).transpose();
+        transpose_to_lanes<kAO>(astate.col(0).data() + ka * kAO, kAO * N, &JA[1]);
+      }
+      if (kf >= 0) {
+        JF[0] = fvalue.row(kf).transpose();
+        transpose_to_lanes<kFO>(fstate.col(0).data() + kf * kFO, kFO * N, &JF[1]);
+      }
       for (int r = 1; r < kA; ++r) {
-        if (ka >= 0) JA[r] = inv_pow[r] * astate.row(ka * kAO + r - 1).transpose().array();
-        if (kf >= 0 && r < kF) JF[r] = inv_pow[r] * fstate.row(kf * kFO + r - 1).transpose().array();
+        if (ka >= 0) JA[r] = inv_pow[r] * JA[r];
+        if (kf >= 0 && r < kF) JF[r] = inv_pow[r] * JF[r];
       }
       if (ka >= 0) lane_rows<3>(JA, arows_k);
       if (kf >= 0) lane_rows<1>(JF, frows_k);
@@ -352,6 +354,40 @@ class ChainEstimator {
       observe(t0 + b, Status::kOk);
     }
   }
+
+  // lanes[r](b) = src[b * stride + r], r < Rows, b < kBlock: Rows consecutive states of one
+  // signal at the kBlock instants of a block (src: column-major, one column per instant) as
+  // lanes. Square tiles of one SIMD register are transposed in registers (Eigen's ptranspose:
+  // 2 x 2 in SSE2, 4 x 4 in AVX, 8 x 8 in AVX-512); element by element where the register
+  // does not tile the block.
+  // (GCC warns that a SIMD type's alignment attribute is dropped as a template argument, as
+  // Eigen's own packet code does everywhere; Eigen silences it in its headers, we here.)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wignored-attributes"
+#endif
+  template <int Rows, class Lanes>
+  static void transpose_to_lanes(const Scalar* src, int stride, Lanes* lanes) noexcept {
+    using Packet = typename Eigen::internal::packet_traits<Scalar>::type;
+    constexpr int kWidth = Eigen::internal::unpacket_traits<Packet>::size;
+    if constexpr (kWidth > 1 && Rows % kWidth == 0 && kBlock % kWidth == 0) {
+      for (int r0 = 0; r0 < Rows; r0 += kWidth) {
+        for (int b0 = 0; b0 < kBlock; b0 += kWidth) {
+          Eigen::internal::PacketBlock<Packet, kWidth> tile;
+          for (int j = 0; j < kWidth; ++j)
+            tile.packet[j] = Eigen::internal::ploadu<Packet>(src + (b0 + j) * stride + r0);
+          Eigen::internal::ptranspose(tile);
+          for (int j = 0; j < kWidth; ++j) Eigen::internal::pstoreu(lanes[r0 + j].data() + b0, tile.packet[j]);
+        }
+      }
+    } else {
+      for (int r = 0; r < Rows; ++r)
+        for (int b = 0; b < kBlock; ++b) lanes[r](b) = src[b * stride + r];
+    }
+  }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
   // signal_rows() for kBlock instants: column c of the rows holds R(q, q + c), q = 0..3, with
   // the operations of signal_rows() (J_s - a J_(s+1)) + b J_(s+2).
