@@ -319,7 +319,7 @@ def main(argv: list[str] | None = None) -> int:
     print("timing the numpy reference ...", flush=True)
     for n in SIZES:
         put("numpy_reference_cached_weights_double", n,
-            numpy_reference_figures(*signals[n], (1000, 4000), cached_weights=True, reps=2 if args.quick else 3))
+            numpy_reference_figures(*signals[n], (1000, 4000), cached_weights=True, reps=2 if args.quick else 6))
     # As shipped (reference.quadrature_weights recomputed per signal: a fixed ~0.25 s x 6n).
     put("numpy_reference_double", 3, numpy_reference_figures(*signals[3], (1000, 4000), cached_weights=False, reps=1))
 

@@ -104,7 +104,7 @@ class ChainEstimator {
 
   /// Consume one simultaneous sample of the accelerations [m/s^2] and forces [N].
   /// @realtime no allocation, no throw, O(N)
-  Status update(const Scalar* accel, const Scalar* force) noexcept {
+  ALGID_FLATTEN Status update(const Scalar* accel, const Scalar* force) noexcept {
     for (int i = 0; i < N; ++i) {
       if (!std::isfinite(accel[i]) || !std::isfinite(force[i])) {
         reseed();
