@@ -8,7 +8,7 @@
 //
 // Cross-check of the hand count in docs/performance.md; the same counter measures the RLS
 // baseline. Phases are separated by counting the parts of one update through the public
-// IntegratorChain (the estimator's banks) / signal_rows / DofEstimator with the same inputs.
+// IntegratorLanes (the estimator's chains) and signal_rows with the same inputs.
 // Counted and its std overloads must be declared before the core headers: the core calls
 // std::isfinite / std::abs / std::sqrt by qualified name.
 #include <cmath>
@@ -142,25 +142,28 @@ void count_estimator() {
   print("default", N, kCounted, g_ops);
 }
 
-// The phases of one DOF-sample: the chain banks of a 3-DOF chain (per DOF), the time scaling
-// and eq. 4-6 rows (per DOF), and the update of the DOF in the middle.
+// The phases of one DOF-sample of a 3-DOF chain in the lane layout (here one lane: the
+// counting scalar has no SIMD packets, so this counts the useful work, without the padding
+// lanes of the SIMD builds): the integrator chains of the accelerations and forces, the time
+// scaling and the eq. 5 rows, and the rest of update() (systems, Cramer, Hadamard ratio,
+// validity, eq. 7, estimates, spring fusion) as the total minus both.
 void count_phases() {
   constexpr int N = 3;
+  constexpr int P = 8;
   using Est = algid::ChainEstimator<N, Counted>;
+  static_assert(Est::kLaneLayout, "phases of the lane layout");
   const auto sig = algid_bench::make_signals<N, double>(kWarm + kCounted);
   typename Est::Rule rule(Counted(algid_bench::kDt));
-  typename Est::AccelChain ya;
-  typename Est::ForceChain fa;
-  typename Est::AccelChain::Scaled ys;
-  typename Est::ForceChain::Scaled fs;
-  algid::Matrix<Counted, 4, 3> yrows[N];
-  algid::Matrix<Counted, 4, 1> frows[N];
-  algid::DofEstimator<4, Counted> dof;
-  algid::ValidityRule<Counted> validity;
+  algid::LaneWeights<P, algid::kAccelOrders, Counted, 1> weights;
+  weights.configure(rule);
+  algid::IntegratorLanes<P, algid::kAccelOrders, Counted, 1, N> ya;
+  algid::IntegratorLanes<P, algid::kForceOrders, Counted, 1, N> fa;
   ya.reset();
   fa.reset();
-  dof.reset();
-  algid_bench::OpCount push{}, rows{}, update{};
+  typename Est::Config cfg;
+  cfg.dt = Counted(algid_bench::kDt);
+  Est est(cfg);
+  algid_bench::OpCount push{}, rows{}, total{};
   const auto add = [](algid_bench::OpCount& to, long div) {
     to.add += g_ops.add / div, to.mul += g_ops.mul / div, to.div += g_ops.div / div, to.sqrt += g_ops.sqrt / div;
   };
@@ -172,44 +175,52 @@ void count_phases() {
       u[i] = Counted(sig.force[static_cast<std::size_t>(k * N + i)]);
     }
     g_ops = {};
-    const bool advanced = ya.push(a, rule);
-    fa.push(u, rule);
+    est.update(a, u);
+    if (counting) add(total, N);
+    g_ops = {};
+    const bool advanced = ya.push(a, N, weights);
+    fa.push(u, N, weights);
     if (counting) add(push, N);
     if (!advanced) continue;
-    const long samples = k + 1;
-    const double tau = static_cast<double>(samples - 8 + 1) * algid_bench::kDt;
-    algid::Instant<Counted> now;
-    now.inv_tau = Counted(1.0 / tau);
-    now.h = Counted(algid_bench::kDt);
-    now.decay4 = algid::RatioEstimator<4, Counted>::decay(Counted(tau - algid_bench::kDt), Counted(tau));
-    now.samples = samples;
-    algid::Vector<Counted, Est::AccelChain::kOrders + 1> inv_pow;
-    inv_pow(0) = Counted(1.0);
-    for (int r = 1; r <= Est::AccelChain::kOrders; ++r) inv_pow(r) = Counted(inv_pow(r - 1).value() / tau);
+    const double tau = static_cast<double>(k + 1 - P + 1) * algid_bench::kDt;
+    Counted inv_pow[algid::kAccelOrders + 1];
+    inv_pow[0] = Counted(1.0);
+    for (int r = 1; r <= algid::kAccelOrders; ++r) inv_pow[r] = Counted(inv_pow[r - 1].value() / tau);
     g_ops = {};
-    ya.scaled(inv_pow, ys);
-    fa.scaled(inv_pow, fs);
-    for (int i = 0; i < N; ++i) {
-      algid::signal_rows(ys.col(i).data(), yrows[i]);
-      algid::signal_rows(fs.col(i).data(), frows[i]);
+    for (int g = 0; g < N; ++g) {
+      algid::detail::Lanes<Counted, 1> JA[algid::kAccelOrders + 1], JF[algid::kForceOrders + 1];
+      ya.scaled(g, inv_pow, JA);
+      fa.scaled(g, inv_pow, JF);
+      Counted ja[algid::kAccelOrders + 1], jf[algid::kForceOrders + 1];
+      for (int r = 0; r <= algid::kAccelOrders; ++r) ja[r] = JA[r](0);
+      for (int r = 0; r <= algid::kForceOrders; ++r) jf[r] = JF[r](0);
+      algid::Matrix<Counted, 4, 3> arows;
+      algid::Matrix<Counted, 4, 1> frows;
+      algid::signal_rows(ja, arows);  // the recurrence of the lane rows, the same operations
+      algid::signal_rows(jf, frows);
     }
     if (counting) add(rows, N);
-    g_ops = {};
-    dof.update(&yrows[0], yrows[1], &yrows[2], frows[1], now, validity);
-    if (counting) add(update, 1);
   }
+  algid_bench::OpCount rest{total.add - push.add - rows.add, total.mul - push.mul - rows.mul,
+                            total.div - push.div - rows.div, total.sqrt - push.sqrt - rows.sqrt};
   print("phase:chain_banks_accel_and_force", 1, kCounted, push);
   print("phase:time_scaling_and_rows", 1, kCounted, rows);
-  print("phase:dof_update(cramer+hadamard+eq7)", 1, kCounted, update);
-  // Cramer alone, and the ratio estimator alone.
+  print("phase:dof_update(systems+cramer+hadamard+validity+eq7+fusion)", 1, kCounted, rest);
+  // Cramer alone, and eq. 7 alone, on one system.
+  Counted S[16], b[4], det, numerator[4];
+  for (int e = 0; e < 16; ++e) S[e] = Counted(1.0 + e % 5 + (e % 4 == e / 4 ? 3.0 : 0.0));
+  for (int q = 0; q < 4; ++q) b[q] = Counted(1.0 + q);
   g_ops = {};
-  const auto sol = algid::cramer(dof.system(), dof.rhs());
+  algid::cramer_lanes4(S, b, det, numerator);
   print("phase:cramer_4x4", 1, 1, g_ops);
-  algid::RatioEstimator<4, Counted> ratio;
+  using L1 = algid::detail::Lanes<Counted, 1>;
+  algid::RatioLanes<Counted, 1> ratio;
   ratio.reset();
-  ratio.add(Counted(0.0), Counted(1e-3), Counted(1.0), sol.numerator);
+  const L1 weighted[4] = {L1::Constant(numerator[0]), L1::Constant(numerator[1]), L1::Constant(numerator[2]),
+                          L1::Constant(numerator[3])};
+  ratio.add(L1::Constant(Counted(0.0)), Counted(0.5e-3), L1::Constant(Counted(1.0)), weighted);
   g_ops = {};
-  ratio.add(Counted(0.9), Counted(1e-3), Counted(1.0), sol.numerator);
+  ratio.add(L1::Constant(Counted(0.9)), Counted(0.5e-3), L1::Constant(Counted(1.0)), weighted);
   print("phase:eq7_ratio_add", 1, 1, g_ops);
 }
 

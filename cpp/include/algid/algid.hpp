@@ -2,6 +2,7 @@
 /// @file algid.hpp
 /// Umbrella header: every public algid header, nothing else.
 
+#include "algid/chain_config.hpp"
 #include "algid/chain_estimator.hpp"
 #include "algid/continuous_estimator.hpp"
 #include "algid/cramer.hpp"

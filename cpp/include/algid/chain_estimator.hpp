@@ -13,441 +13,59 @@
 /// Bad samples: a non-finite acceleration or force is discarded, the estimator reseeds (the
 /// next sample is the new t0), `update()` returns Status::kBadInput and every estimate is
 /// invalid (NaN) until the new window has a trusted sample.
+///
+/// Layout. The arithmetic is the same for every N; how it is laid out in SIMD registers is
+/// not. From three DOF on (detail::LaneChain) the DOF sit side by side, one per lane, and
+/// every step of a sample advances 2, 4 or 8 of them at once; one or two DOF do not fill a
+/// register, so there (detail::PerDofChain) each DOF is vectorised on its own and run()
+/// solves 8 consecutive instants side by side instead. In both, run() leaves the estimator
+/// after every sample exactly, to the bit, as update() would. The two layouts agree to
+/// rounding (tests/cpp/test_estimator.cpp).
+///
+/// Interface (both layouts):
+///   - `static ConfigError validate(const Config&)`, `explicit ChainEstimator(const Config&)`;
+///   - `Status update(const Scalar* accel, const Scalar* force)` (N values each, [m/s^2], [N]),
+///     `reseed()`, `long run(accel, force, T, observe)` (T x N row-major, `observe(t, status)`
+///     after each sample);
+///   - `mass()`, `damping()` (N), `stiffness()` (N + 1: k_1 .. k_{N+1}, an interior spring the
+///     mean of its two DOF's estimates; k_1 = k_1 + k_2 and k_2 NaN for N = 1 with walls,
+///     k_{N+1} = 0 at a free end), `valid()`, `all_valid()`;
+///   - per DOF i: `theta(i)` = eq. 7 [m_i, c_i, k_i, k_{i+1}], `theta_instant(i)` (the Cramer
+///     solution of the last sample), `hadamard(i)`, `instant_valid(i)`;
+///   - `samples()`, `window()` [s], `config()`, `kDelay`, `kDofs`.
 
-#include "algid/dof_estimator.hpp"
-#include "algid/integrator_chain.hpp"
-#include "algid/types.hpp"
+#include "algid/chain_config.hpp"
+#include "algid/detail/lane_chain.hpp"
+#include "algid/detail/per_dof_chain.hpp"
 
-#include <array>
-#include <cmath>
-#include <limits>
+#include <type_traits>
 
 namespace algid {
 
-/// Configuration of a ChainEstimator.
-template <class Scalar>
-struct ChainConfig {
-  Scalar dt = Scalar(1e-3);              ///< sample period [s]
-  Boundary boundary = Boundary::kFixed;  ///< right end: wall (k_{n+1} estimated) or free (k_{n+1} = 0)
-  ValidityRule<Scalar> validity{};       ///< when an instantaneous solution is trusted
-};
+/// Chains of at least this many DOF use the lane layout (detail::LaneChain).
+inline constexpr int kLaneLayoutFrom = 3;
 
-/// Why a configuration is rejected (kNone: accepted).
-enum class ConfigError { kNone, kBadSamplePeriod, kBadMinSamples, kBadMinHadamard };
+namespace detail {
+template <int N, class Scalar, int P>
+using ChainLayout = std::conditional_t<(N >= kLaneLayoutFrom), LaneChain<N, Scalar, P>, PerDofChain<N, Scalar, P>>;
+}  // namespace detail
 
-/// Human-readable text of a ConfigError.
-inline const char* to_string(ConfigError e) noexcept {
-  switch (e) {
-    case ConfigError::kNone: return "ok";
-    case ConfigError::kBadSamplePeriod: return "dt must be finite and > 0 [s]";
-    case ConfigError::kBadMinSamples: return "validity.min_samples must be >= 1";
-    case ConfigError::kBadMinHadamard: return "validity.min_hadamard must be in [0, 1)";
-  }
-  return "unknown";
-}
-
-/// The estimator of an N-DOF chain.
+/// The estimator of an N-DOF chain; its interface is in the file comment.
 /// @tparam N number of DOF (masses), >= 1.
 /// @tparam Scalar double or float.
 /// @tparam P quadrature points (even; 8 by default: O(h^8) chains, 6 samples of delay).
 template <int N, class Scalar = double, int P = 8>
-class ChainEstimator {
+class ChainEstimator : public detail::ChainLayout<N, Scalar, P> {
   static_assert(N >= 1, "a chain has at least one DOF");
+  using Layout = detail::ChainLayout<N, Scalar, P>;
 
  public:
-  /// Integrator chains of the N accelerations (orders 1..7 needed, 8 kept) and of the N forces
-  /// (1..5 needed, kForceKept kept): the extra orders pad to whole SIMD registers (6 with SSE2,
-  /// 8 with AVX), which costs less than the partial registers they replace.
-  static constexpr int kForceKept = detail::simd_padded<Scalar>(kForceOrders + 1, kAccelOrders + 1);
-  using AccelChain = IntegratorChain<P, kAccelOrders + 1, Scalar, N>;
-  using ForceChain = IntegratorChain<P, kForceKept, Scalar, N>;
-  /// The quadrature rule both are advanced with.
-  using Rule = typename AccelChain::Rule;
   using Config = ChainConfig<Scalar>;
-  /// Samples by which the estimates lag the newest sample.
-  static constexpr int kDelay = Rule::kDelay;
-  /// Number of DOF.
-  static constexpr int kDofs = N;
-
-  /// Check a configuration without side effects. @realtime no allocation, no throw
-  static ConfigError validate(const Config& config) noexcept {
-    if (!(config.dt > Scalar(0)) || !std::isfinite(config.dt)) return ConfigError::kBadSamplePeriod;
-    if (config.validity.min_samples < 1) return ConfigError::kBadMinSamples;
-    if (!(config.validity.min_hadamard >= Scalar(0) && config.validity.min_hadamard < Scalar(1)))
-      return ConfigError::kBadMinHadamard;
-    return ConfigError::kNone;
-  }
+  /// True when the DOF are solved side by side in SIMD lanes (N >= kLaneLayoutFrom).
+  static constexpr bool kLaneLayout = N >= kLaneLayoutFrom;
 
   /// Configure; throws std::invalid_argument on a bad configuration.
-  explicit ChainEstimator(const Config& config) : config_(config) {
-    const ConfigError e = validate(config);
-    if (e != ConfigError::kNone) detail::config_error(to_string(e));
-    rule_.configure(config.dt);
-    reseed();
-  }
-
-  /// Restart at a new t0: the next sample is the first of a new window.
-  /// @realtime no allocation, no throw
-  void reseed() noexcept {
-    accel_.reset();
-    force_.reset();
-    for (auto& d : full_) d.reset();
-    last_.reset();
-    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    mass_.setConstant(nan);
-    damping_.setConstant(nan);
-    stiffness_.setConstant(nan);
-    if (free_end()) stiffness_(N) = Scalar(0);
-    valid_.fill(false);
-    samples_ = 0;
-  }
-
-  /// Consume one simultaneous sample of the accelerations [m/s^2] and forces [N].
-  /// @realtime no allocation, no throw, O(N)
-  ALGID_FLATTEN Status update(const Scalar* accel, const Scalar* force) noexcept {
-    for (int i = 0; i < N; ++i) {
-      if (!std::isfinite(accel[i]) || !std::isfinite(force[i])) {
-        reseed();
-        return Status::kBadInput;
-      }
-    }
-    ++samples_;
-    const bool advanced = accel_.push(accel, rule_);
-    force_.push(force, rule_);
-    if (!advanced) return Status::kWarmup;
-    const Instant<Scalar> now = instant(samples_);
-    Vector<Scalar, AccelChain::kOrders + 1> inv_pow;
-    inv_pow(0) = Scalar(1);
-    for (int r = 1; r <= AccelChain::kOrders; ++r) inv_pow(r) = inv_pow(r - 1) * now.inv_tau;
-    // Each signal's rows once: an acceleration enters its own DOF and both neighbours'.
-    accel_.scaled(inv_pow, accel_scaled_);
-    force_.scaled(inv_pow, force_scaled_);
-    for (int i = 0; i < N; ++i) {
-      signal_rows(accel_scaled_.col(i).data(), accel_rows_[i]);
-      signal_rows(force_scaled_.col(i).data(), force_rows_[i]);
-    }
-    for (int i = 0; i < N; ++i) {
-      const auto* left = i > 0 ? &accel_rows_[i - 1] : nullptr;
-      const auto* right = i + 1 < N ? &accel_rows_[i + 1] : nullptr;
-      if (is_reduced(i)) {
-        last_.update(left, accel_rows_[i], right, force_rows_[i], now, config_.validity);
-      } else {
-        full_[i].update(left, accel_rows_[i], right, force_rows_[i], now, config_.validity);
-      }
-    }
-    collect();
-    return Status::kOk;
-  }
-
-  /// Samples per block of run(): the eq. 5 systems of kBlock consecutive instants are solved
-  /// side by side, one per SIMD lane (8 fills an AVX-512 register of doubles, two of AVX2,
-  /// four of SSE2).
-  static constexpr int kBlock = 8;
-
-  /// Consume a record of T simultaneous samples (`accel`, `force`: T x N, row-major: sample t
-  /// at accel + t N) and call `observe(t, status)` after each sample t, with the estimator in exactly
-  /// the state a call of update() would have left it in: every estimate, flag and accessor,
-  /// to the bit. Stretches of kBlock finite samples after the warm-up go through as a block:
-  /// the chains and eq. 7 still advance sample by sample, but the rows, the systems of eq. 5,
-  /// Cramer's rule and the Hadamard ratio are computed for the kBlock instants at once, lane
-  /// by lane with the operations of update() (cramer_lanes(), equilibrated_hadamard2()).
-  /// That is the batch path of the Python `run()`; firmware calls update().
-  /// Scratch is on the stack: about 40 kBlock N scalars (125 KiB for N = 50 in double).
-  /// Returns how many of the T samples went through blocks.
-  /// @realtime no allocation; no throw unless `observe` throws
-  template <class Observer>
-  long run(const Scalar* accel, const Scalar* force, long T, Observer&& observe) {
-    long t = 0, blocked = 0;
-    while (t < T) {
-      const Scalar* a = accel + t * N;
-      const Scalar* f = force + t * N;
-      if (samples_ >= P - 1 && T - t >= kBlock && finite(a, f, kBlock * N)) {
-        run_block(a, f, t, observe);
-        t += kBlock;
-        blocked += kBlock;
-      } else {
-        const Status s = update(a, f);
-        observe(t, s);
-        ++t;
-      }
-    }
-    return blocked;
-  }
-
-  /// Same as update(const Scalar*, const Scalar*) for Eigen vectors.
-  /// @realtime no allocation, no throw
-  Status update(const Vector<Scalar, N>& accel, const Vector<Scalar, N>& force) noexcept {
-    return update(accel.data(), force.data());
-  }
-
-  /// Eq. 7 estimates of the masses m_i [kg] (NaN where not valid).
-  const Vector<Scalar, N>& mass() const noexcept { return mass_; }
-  /// Eq. 7 estimates of the dampings c_i [N s/m].
-  const Vector<Scalar, N>& damping() const noexcept { return damping_; }
-  /// Fused eq. 7 estimates of the springs k_1 .. k_{n+1} [N/m]: an interior spring is the mean
-  /// of the estimates of its two DOF (those that are valid). For N = 1 with walls, k_1 holds
-  /// the identifiable sum k_1 + k_2 and k_2 is NaN; with a free end k_{n+1} = 0.
-  const Vector<Scalar, N + 1>& stiffness() const noexcept { return stiffness_; }
-  /// Per-DOF validity of the eq. 7 estimates.
-  const std::array<bool, N>& valid() const noexcept { return valid_; }
-  /// True when every DOF is valid.
-  bool all_valid() const noexcept {
-    for (bool v : valid_)
-      if (!v) return false;
-    return true;
-  }
-
-  /// Eq. 7 estimate [m_i, c_i, k_i, k_{i+1}] of DOF i (0-based); a reduced DOF has NaN in
-  /// slot 3 (and k_1 + k_2 in slot 2 when N = 1 with walls); NaN while not valid.
-  Vector<Scalar, 4> theta(int i) const noexcept {
-    Vector<Scalar, 4> out = Vector<Scalar, 4>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
-    if (is_reduced(i)) {
-      if (last_.valid()) out.template head<3>() = last_.estimates();
-    } else if (full_[i].valid()) {
-      out = full_[i].estimates();
-    }
-    return out;
-  }
-  /// Instantaneous Cramer solution of eq. 5 for DOF i (0-based), same layout as theta().
-  Vector<Scalar, 4> theta_instant(int i) const noexcept {
-    Vector<Scalar, 4> out = Vector<Scalar, 4>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
-    if (is_reduced(i)) {
-      out.template head<3>() = last_.instant();
-    } else {
-      out = full_[i].instant();
-    }
-    return out;
-  }
-  /// Equilibrated Hadamard ratio of DOF i's last system.
-  Scalar hadamard(int i) const noexcept { return is_reduced(i) ? last_.hadamard() : full_[i].hadamard(); }
-  /// Whether DOF i's last instantaneous solution was trusted.
-  bool instant_valid(int i) const noexcept { return is_reduced(i) ? last_.instant_valid() : full_[i].instant_valid(); }
-  /// Samples consumed since t0.
-  long samples() const noexcept { return samples_; }
-  /// Window length t_k - delay h - t0 [s] that the current estimates describe (0 before).
-  Scalar window() const noexcept {
-    return samples_ >= P ? static_cast<Scalar>(samples_ - P + 1) * config_.dt : Scalar(0);
-  }
-  /// The configuration in force.
-  const Config& config() const noexcept { return config_; }
-
- private:
-  bool free_end() const noexcept { return config_.boundary == Boundary::kFree; }
-  bool reduced_last() const noexcept { return N == 1 || free_end(); }
-  bool is_reduced(int i) const noexcept { return i == N - 1 && reduced_last(); }
-
-  static bool finite(const Scalar* a, const Scalar* f, int count) noexcept {
-    bool ok = true;
-    for (int e = 0; e < count; ++e) ok &= std::isfinite(a[e]) & std::isfinite(f[e]);
-    return ok;
-  }
-
-  // What every DOF shares at the interval end after `samples` samples (>= P), once per sample.
-  Instant<Scalar> instant(long samples) const noexcept {
-    Instant<Scalar> now;
-    shared(static_cast<Scalar>(samples - P), now.inv_tau, now.decay4, now.decay3);
-    now.h = config_.dt;
-    now.samples = samples;
-    return now;
-  }
-
-  // 1 / tau and the eq. 7 decay factors from the previous interval end, given (samples - P) as
-  // a scalar or, for the block path, as lanes of instants (the same operations per lane).
-  // A decay factor no DOF uses is left as it is.
-  template <class T>
-  void shared(const T& intervals, T& inv_tau, T& decay4, T& decay3) const noexcept {
-    const T prev_tau = intervals * config_.dt;
-    const T tau = (intervals + Scalar(1)) * config_.dt;
-    inv_tau = detail::reciprocal(tau);
-    if (N > 1) decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);  // DOF 1 is full
-    if (reduced_last()) decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
-  }
-
-  // kBlock finite samples past the warm-up (every push advances the chains): see run().
-  template <class Observer>
-  ALGID_FLATTEN void run_block(const Scalar* accel, const Scalar* force, long t0, Observer& observe) {
-    using Lanes = Eigen::Array<Scalar, kBlock, 1>;
-    constexpr int kA = kAccelOrders + 1;  // J_0 .. J_7 of an acceleration: what its rows need
-    constexpr int kF = kForceOrders + 1;  // J_0 .. J_5 of a force
-    constexpr int kAO = AccelChain::kOrders, kFO = ForceChain::kOrders;
-    // The chains after each sample of the block, one contiguous column per sample (as the
-    // chains hold them), turned into lanes (lane b = instant b) tile by tile in registers
-    // below (transpose_to_lanes). The samples themselves (J_0) are few: stored as lanes.
-    Matrix<Scalar, kAO * N, kBlock> astate;
-    Matrix<Scalar, kFO * N, kBlock> fstate;
-    Eigen::Matrix<Scalar, N, kBlock, Eigen::RowMajor> avalue, fvalue;
-    for (int b = 0; b < kBlock; ++b) {  // samples_ advances as each sample is observed, below
-      accel_.push(accel + b * N, rule_);
-      force_.push(force + b * N, rule_);
-      astate.col(b) = Eigen::Map<const Vector<Scalar, kAO * N>>(accel_.state().data());
-      fstate.col(b) = Eigen::Map<const Vector<Scalar, kFO * N>>(force_.state().data());
-      avalue.col(b) = accel_.value();
-      fvalue.col(b) = force_.value();
-    }
-    // What the DOFs share at each instant (instant()), and the time scaling J_r = I^r tau^-r,
-    // lane by lane as in update().
-    Lanes intervals, inv_tau, decay4 = Lanes::Zero(), decay3 = Lanes::Zero();
-    for (int b = 0; b < kBlock; ++b) intervals(b) = static_cast<Scalar>(samples_ + 1 + b - P);
-    shared(intervals, inv_tau, decay4, decay3);
-    Instant<Scalar> now[kBlock];
-    for (int b = 0; b < kBlock; ++b) {
-      now[b].inv_tau = inv_tau(b);
-      now[b].h = config_.dt;
-      now[b].decay4 = decay4(b);
-      now[b].decay3 = decay3(b);
-      now[b].samples = samples_ + 1 + b;
-    }
-    Lanes inv_pow[kA];
-    inv_pow[0].setConstant(Scalar(1));
-    for (int r = 1; r < kA; ++r) inv_pow[r] = inv_pow[r - 1] * inv_tau;
-    // The rows of acceleration ka and force kf at the kBlock instants (k < 0: none), from
-    // J_r = I^r tau^-r of those signals; computed where the rows are needed, not kept for all N:
-    // the scratch then stays small enough for the L1 cache at large N.
-    const auto signal_rows_lanes = [&](int ka, Lanes* arows_k, int kf, Lanes* frows_k) {
-      Lanes JA[kAO + 1], JF[kFO + 1];  // J_0 .. J_Orders (the padding orders unused)
-      if (ka >= 0) {
-        JA[0] = avalue.row(ka).transpose();
-        transpose_to_lanes<kAO>(astate.col(0).data() + ka * kAO, kAO * N, &JA[1]);
-      }
-      if (kf >= 0) {
-        JF[0] = fvalue.row(kf).transpose();
-        transpose_to_lanes<kFO>(fstate.col(0).data() + kf * kFO, kFO * N, &JF[1]);
-      }
-      for (int r = 1; r < kA; ++r) {
-        if (ka >= 0) JA[r] = inv_pow[r] * JA[r];
-        if (kf >= 0 && r < kF) JF[r] = inv_pow[r] * JF[r];
-      }
-      if (ka >= 0) lane_rows<3>(JA, arows_k);
-      if (kf >= 0) lane_rows<1>(JF, frows_k);
-    };
-    // Eq. 5 of every DOF for the kBlock instants, one per lane. The rows of the accelerations
-    // i - 1, i, i + 1 (4 x 3 column-major each) roll through three slots; force i's rows go
-    // with acceleration i + 1's.
-    Lanes arows[3][12], frows[4];
-    Lanes det[N], numerator[4 * N], h2num[N], h2den[N];
-    signal_rows_lanes(0, arows[0], N == 1 ? 0 : -1, frows);  // one DOF: its force here too
-    for (int i = 0; i < N; ++i) {
-      if (N > 1) signal_rows_lanes(i + 1 < N ? i + 1 : -1, arows[(i + 1) % 3], i, frows);
-      const Lanes* left = i > 0 ? arows[(i + 2) % 3] : nullptr;
-      const Lanes* right = i + 1 < N ? arows[(i + 1) % 3] : nullptr;
-      if (is_reduced(i)) {
-        solve_lanes<3>(left, arows[i % 3], right, frows, det[i], &numerator[4 * i], h2num[i], h2den[i], last_);
-      } else {
-        solve_lanes<4>(left, arows[i % 3], right, frows, det[i], &numerator[4 * i], h2num[i], h2den[i],
-                       full_[static_cast<std::size_t>(i)]);
-      }
-    }
-    // Eq. 7 and the outputs, sample by sample.
-    for (int b = 0; b < kBlock; ++b) {
-      for (int i = 0; i < N; ++i) {
-        const Scalar num[4] = {numerator[4 * i](b), numerator[4 * i + 1](b), numerator[4 * i + 2](b),
-                               is_reduced(i) ? Scalar(0) : numerator[4 * i + 3](b)};  // 3x3: 3 numerators
-        if (is_reduced(i)) {
-          last_.commit(det[i](b), num, h2num[i](b), h2den[i](b), now[b], config_.validity);
-        } else {
-          full_[static_cast<std::size_t>(i)].commit(det[i](b), num, h2num[i](b), h2den[i](b), now[b],
-                                                    config_.validity);
-        }
-      }
-      collect();
-      ++samples_;
-      observe(t0 + b, Status::kOk);
-    }
-  }
-
-  // lanes[r](b) = src[b * stride + r], r < Rows, b < kBlock: Rows consecutive states of one
-  // signal at the kBlock instants of a block (src: column-major, one column per instant) as
-  // lanes. Square tiles of one SIMD register are transposed in registers (Eigen's ptranspose:
-  // 2 x 2 in SSE2, 4 x 4 in AVX, 8 x 8 in AVX-512); element by element where the register
-  // does not tile the block.
-  // (GCC warns that a SIMD type's alignment attribute is dropped as a template argument, as
-  // Eigen's own packet code does everywhere; Eigen silences it in its headers, we here.)
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wignored-attributes"
-#endif
-  template <int Rows, class Lanes>
-  static void transpose_to_lanes(const Scalar* src, int stride, Lanes* lanes) noexcept {
-    using Packet = typename Eigen::internal::packet_traits<Scalar>::type;
-    constexpr int kWidth = Eigen::internal::unpacket_traits<Packet>::size;
-    if constexpr (kWidth > 1 && Rows % kWidth == 0 && kBlock % kWidth == 0) {
-      for (int r0 = 0; r0 < Rows; r0 += kWidth) {
-        for (int b0 = 0; b0 < kBlock; b0 += kWidth) {
-          Eigen::internal::PacketBlock<Packet, kWidth> tile;
-          for (int j = 0; j < kWidth; ++j)
-            tile.packet[j] = Eigen::internal::ploadu<Packet>(src + (b0 + j) * stride + r0);
-          Eigen::internal::ptranspose(tile);
-          for (int j = 0; j < kWidth; ++j) Eigen::internal::pstoreu(lanes[r0 + j].data() + b0, tile.packet[j]);
-        }
-      }
-    } else {
-      for (int r = 0; r < Rows; ++r)
-        for (int b = 0; b < kBlock; ++b) lanes[r](b) = src[b * stride + r];
-    }
-  }
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
-
-  // signal_rows() for kBlock instants: column c of the rows holds R(q, q + c), q = 0..3, with
-  // the operations of signal_rows() (J_s - a J_(s+1)) + b J_(s+2).
-  template <int Cols, class Lanes>
-  static void lane_rows(const Lanes* J, Lanes* rows) noexcept {
-    for (int c = 0; c < Cols; ++c) {
-      for (int q = 0; q < 4; ++q) {
-        rows[c * 4 + q] =
-            J[c + q] - static_cast<Scalar>(kRowA[q]) * J[c + q + 1] + static_cast<Scalar>(kRowB[q]) * J[c + q + 2];
-      }
-    }
-  }
-
-  // One DOF's systems for kBlock instants; the last lane's system is what system() reports.
-  template <int M, class Lanes, class Dof>
-  static void solve_lanes(const Lanes* left, const Lanes* self, const Lanes* right, const Lanes* force, Lanes& det,
-                          Lanes* numerator, Lanes& h2num, Lanes& h2den, Dof& dof) noexcept {
-    Lanes S[M * M], s[M];
-    assemble_system<M>(left, self, right, force, S, s);
-    cramer_lanes<M>(S, s, det, numerator);
-    equilibrated_hadamard2<M>(S, det, h2num, h2den);
-    Scalar last_S[M * M], last_s[M];
-    for (int e = 0; e < M * M; ++e) last_S[e] = S[e](kBlock - 1);
-    for (int q = 0; q < M; ++q) last_s[q] = s[q](kBlock - 1);
-    dof.set_system(last_S, last_s);
-  }
-
-  // Eq. 7 estimates of every DOF into the physical views (one division per DOF); an interior
-  // spring is the mean of its two DOFs' estimates, or the one that is valid.
-  void collect() noexcept {
-    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    Scalar right_spring = nan;  // k_{i+1} from DOF i, for the fusion at DOF i + 1
-    for (int i = 0; i < N; ++i) {
-      const Vector<Scalar, 4> t = theta(i);  // NaN where not valid
-      valid_[i] = is_reduced(i) ? last_.valid() : full_[i].valid();
-      mass_(i) = t(0);
-      damping_(i) = t(1);
-      // k_i: this DOF's estimate, fused with DOF i-1's estimate of the same spring.
-      const bool left_ok = !std::isnan(right_spring);
-      stiffness_(i) = valid_[i] ? (left_ok ? Scalar(0.5) * (t(2) + right_spring) : t(2)) : right_spring;
-      right_spring = t(3);
-    }
-    stiffness_(N) = free_end() ? Scalar(0) : right_spring;
-  }
-
-  Config config_;
-  Rule rule_;
-  AccelChain accel_{};
-  ForceChain force_{};
-  typename AccelChain::Scaled accel_scaled_ = AccelChain::Scaled::Zero();
-  typename ForceChain::Scaled force_scaled_ = ForceChain::Scaled::Zero();
-  std::array<Matrix<Scalar, 4, 3>, N> accel_rows_{};
-  std::array<Matrix<Scalar, 4, 1>, N> force_rows_{};
-  std::array<DofEstimator<4, Scalar>, N> full_{};
-  DofEstimator<3, Scalar> last_{};
-  Vector<Scalar, N> mass_ = Vector<Scalar, N>::Zero();
-  Vector<Scalar, N> damping_ = Vector<Scalar, N>::Zero();
-  Vector<Scalar, N + 1> stiffness_ = Vector<Scalar, N + 1>::Zero();
-  std::array<bool, N> valid_{};
-  long samples_ = 0;
+  explicit ChainEstimator(const Config& config) : Layout(config) {}
 };
 
 }  // namespace algid

@@ -23,10 +23,32 @@
 /// see `scaled_moment()`. Compared with integrating Delta^p f directly, this is exact for
 /// polynomial signals of degree P-1 (not P-1-p) and costs a third of the work.
 
+#include "algid/detail/lanes.hpp"
 #include "algid/quadrature.hpp"
 #include "algid/types.hpp"
 
+#include <array>
+#include <cstddef>
+
 namespace algid {
+namespace detail {
+
+/// state += step, Kahan-compensated (`compensation` carries the lost low-order part) when
+/// Compensated; scalars, Eigen matrices or arrays alike.
+template <bool Compensated, class T, class C>
+inline void accumulate(T& state, C& compensation, const T& step) noexcept {
+  if constexpr (Compensated) {
+    const T y = step - compensation;
+    const T t = state + y;
+    compensation = (t - state) - y;
+    state = t;
+  } else {
+    (void)compensation;
+    state += step;
+  }
+}
+
+}  // namespace detail
 
 /// Iterated integrals I^1 .. I^Orders of K sampled signals that share one clock (the
 /// accelerations, or the forces, of a chain): one stencil offset and one rule for all, and the
@@ -74,8 +96,8 @@ class IntegratorChain {
     }
     ++count_;
     if (count_ < P) return false;
-    const long j = count_ - P;                                      // interval [t_j, t_{j+1}]
-    const long start = j - (P / 2 - 1) > 0 ? j - (P / 2 - 1) : 0;  // centred, shifted near t_0
+    const long j = count_ - P;  // interval [t_j, t_{j+1}]
+    const long start = Rule::stencil_start(j);
     const int off = static_cast<int>(j - start);
     const int first = static_cast<int>(start % kRing);
     // I^r += sum_{q<r} h^(r-q)/(r-q)! I^q + h^r sum_m W(r, m) f_m, every order from the old
@@ -84,16 +106,9 @@ class IntegratorChain {
     step.noalias() = rule.weights(off).template topRows<Orders>().lazyProduct(
         ring_.template block<P, K>(first, 0));
     add_carry<0>(rule.carry(), step);
-    if constexpr (kCompensated) {
-      // The state grows like tau^r while each step adds a small amount: that is where
-      // single precision loses its digits; double keeps them without compensation.
-      const Matrix<Scalar, Orders, K> y = step - compensation_;
-      const Matrix<Scalar, Orders, K> t = state_ + y;
-      compensation_ = (t - state_) - y;
-      state_ = t;
-    } else {
-      state_ += step;
-    }
+    // The state grows like tau^r while each step adds a small amount: that is where single
+    // precision loses its digits; double keeps them without compensation.
+    detail::accumulate<kCompensated>(state_, compensation_, step);
     value_ = ring_.row(static_cast<int>((j + 1) % kRing)).transpose();
     return true;
   }
@@ -149,6 +164,104 @@ class IntegratorChain {
       Matrix<Scalar, kCompensated ? Orders : 1, kCompensated ? K : 1>::Zero();
   Vector<Scalar, K> value_ = Vector<Scalar, K>::Zero();
   long count_ = 0;
+};
+
+/// The same iterated integrals in the lane layout: up to G W signals that share one clock, one
+/// signal per SIMD lane (signal k in lane k % W of register k / W), so that one register
+/// operation advances W signals; the layout of ChainEstimator for chains of three DOF or more,
+/// whose DOF are solved side by side (one per lane) from these integrals. Each lane follows the
+/// recurrence of IntegratorChain with the same rule; the sums are formed with fused
+/// multiply-adds where the build has them. Lanes beyond the signals pushed stay zero.
+/// Storage: a doubled ring of 2P samples and the Orders states per lane register (and, in
+/// single precision, their Kahan compensation). Do not build with -ffast-math.
+/// @tparam P interpolation points of the quadrature.
+/// @tparam Orders highest order of iterated integral kept.
+/// @tparam W lanes per register, G registers.
+template <int P, int Orders, class Scalar, int W, int G>
+class IntegratorLanes {
+  static_assert(Orders >= 1, "at least one integral");
+  static_assert(W >= 1 && G >= 1, "at least one lane");
+
+ public:
+  using L = detail::Lanes<Scalar, W>;
+  /// Highest order of iterated integral kept.
+  static constexpr int kOrders = Orders;
+  /// Kahan-compensated state update in single precision (see IntegratorChain).
+  static constexpr bool kCompensated = sizeof(Scalar) < sizeof(double);
+
+  /// Forget everything: the next sample is t_0. @realtime no allocation, no throw.
+  void reset() noexcept {
+    count_ = 0;
+    now_ = 0;
+    for (auto& slot : ring_)
+      for (auto& x : slot) x.setZero();
+    for (auto& order : state_)
+      for (auto& x : order) x.setZero();
+    for (auto& order : compensation_)
+      for (auto& x : order) x.setZero();
+  }
+
+  /// Consume the simultaneous samples f[0 .. n-1] (n <= G W) of the signals in lanes 0 .. n-1.
+  /// Returns true when the integrals have advanced to a new interval end (from the P-th
+  /// sample on). @realtime no allocation, no throw.
+  template <int RuleOrders>
+  bool push(const Scalar* f, int n, const LaneWeights<P, RuleOrders, Scalar, W>& rule) noexcept {
+    static_assert(RuleOrders >= Orders, "the rule must cover every order of the chain");
+    const int slot = static_cast<int>(count_ % kRing);
+    auto& copy0 = ring_[static_cast<std::size_t>(slot)];
+    auto& copy1 = ring_[static_cast<std::size_t>(slot + kRing)];
+    for (int k = 0; k < n; ++k) {
+      copy0[static_cast<std::size_t>(k / W)](k % W) = f[k];
+      copy1[static_cast<std::size_t>(k / W)](k % W) = f[k];
+    }
+    ++count_;
+    if (count_ < P) return false;
+    const long j = count_ - P;  // interval [t_j, t_{j+1}]
+    const long start = InterpolatoryRule<P, Orders, Scalar>::stencil_start(j);
+    const int off = static_cast<int>(j - start);
+    const auto* stencil = &ring_[static_cast<std::size_t>(start % kRing)];
+    now_ = static_cast<int>((j + 1) % kRing);
+    using Ops = detail::LaneOps<Scalar, W>;
+    for (int g = 0; g < G; ++g) {
+      // Every order from the old lower orders: the step is computed whole before the state moves.
+      L step[Orders];
+      detail::static_for<0, Orders>([&](auto order) {
+        constexpr int r = decltype(order)::value;  // unrolled: the carry below has r terms
+        L acc = stencil[0][g] * rule.weight(off, r, 0);
+        for (int m = 1; m < P; ++m) acc = Ops::madd(stencil[m][g], rule.weight(off, r, m), acc);
+        for (int q = 0; q < r; ++q) acc = Ops::madd(state_[q][g], rule.carry(r, q), acc);
+        step[r] = acc;
+      });
+      for (int r = 0; r < Orders; ++r)
+        detail::accumulate<kCompensated>(state_[r][g], compensation_[kCompensated ? r : 0][g], step[r]);
+    }
+    return true;
+  }
+
+  /// Time-scaled integrals J_r = I^r f / tau^r, r = 0 .. Orders, of the signals of register g
+  /// at the current interval end, given inv_tau_pow[r] = tau^-r (J_0 is the sample itself).
+  /// @realtime no allocation, no throw.
+  void scaled(int g, const Scalar* inv_tau_pow, L* J) const noexcept {
+    J[0] = ring_[static_cast<std::size_t>(now_)][g];
+    for (int r = 1; r <= Orders; ++r) J[r] = inv_tau_pow[r] * state_[r - 1][g];
+  }
+
+  /// I^r of the signal in lane k (r = 0: the sample) at the current interval end.
+  Scalar integral(int r, int k) const noexcept {
+    const L& x = r == 0 ? ring_[static_cast<std::size_t>(now_)][k / W] : state_[r - 1][k / W];
+    return x(k % W);
+  }
+
+  /// Samples consumed since the last reset.
+  long count() const noexcept { return count_; }
+
+ private:
+  static constexpr int kRing = 2 * P;  // >= 3P/2 - 1 samples: a centred stencil's span
+  std::array<std::array<L, G>, 2 * kRing> ring_{};
+  std::array<std::array<L, G>, Orders> state_{};
+  std::array<std::array<L, G>, kCompensated ? Orders : 1> compensation_{};  // single precision only
+  long count_ = 0;
+  int now_ = 0;  // ring slot of the current interval end
 };
 
 /// I^r(Delta^p f) / tau^(r+p) from the time-scaled integrals J_k = I^k f / tau^k (J[0] = f):

@@ -15,6 +15,7 @@
 /// interval (off = P/2-1) except near t_0, where it is shifted right (off = 0..P/2-2) so that
 /// the start-up uses the same order: no low-order first steps.
 
+#include "algid/detail/lanes.hpp"
 #include "algid/types.hpp"
 
 #include <array>
@@ -34,6 +35,10 @@ class InterpolatoryRule {
   static constexpr int kOffsets = P / 2;
   /// Samples the estimate lags behind the newest sample (the start-up needs a full stencil).
   static constexpr int kDelay = P - 2;
+
+  /// First sample of the stencil of interval [t_j, t_{j+1}]: centred, shifted right near t_0
+  /// (its offset `j - stencil_start(j)` selects the weights).
+  static constexpr long stencil_start(long j) noexcept { return j - (P / 2 - 1) > 0 ? j - (P / 2 - 1) : 0; }
 
   InterpolatoryRule() = default;
 
@@ -107,6 +112,35 @@ class InterpolatoryRule {
 
   std::array<Matrix<Scalar, Orders, P>, kOffsets> weights_{};
   Matrix<Scalar, Orders, Orders> carry_ = Matrix<Scalar, Orders, Orders>::Zero();
+};
+
+/// The weights of an InterpolatoryRule with every value repeated across W lanes, for the lane
+/// layout of the integrator chains (IntegratorLanes): a lane update then multiplies by a weight
+/// straight from memory. Storage: (P/2 P + Orders) Orders lanes (7 KiB for P = 8, 7 orders and 4
+/// lanes of double).
+template <int P, int Orders, class Scalar, int W>
+class LaneWeights {
+ public:
+  using Rule = InterpolatoryRule<P, Orders, Scalar>;
+  using L = detail::Lanes<Scalar, W>;
+
+  /// Copy the weights of `rule`. May be called in the configuration phase only.
+  void configure(const Rule& rule) noexcept {
+    for (int off = 0; off < Rule::kOffsets; ++off)
+      for (int r = 0; r < Orders; ++r)
+        for (int m = 0; m < P; ++m) weights_[off][r][m] = L::Constant(rule.weights(off)(r, m));
+    for (int r = 0; r < Orders; ++r)
+      for (int q = 0; q < Orders; ++q) carry_[r][q] = L::Constant(rule.carry()(r, q));
+  }
+
+  /// `h^(r+1) W[off](r, m)` in every lane, r = 0 .. Orders-1 (order r + 1).
+  const L& weight(int off, int r, int m) const noexcept { return weights_[off][r][m]; }
+  /// `carry(r, q)` of the rule in every lane.
+  const L& carry(int r, int q) const noexcept { return carry_[r][q]; }
+
+ private:
+  std::array<std::array<std::array<L, P>, Orders>, Rule::kOffsets> weights_{};
+  std::array<std::array<L, Orders>, Orders> carry_{};
 };
 
 }  // namespace algid

@@ -14,6 +14,7 @@
 /// step rescales the states by (tau_prev / tau)^q. Double integration is trapezoidal: its
 /// weights are the same for numerator and denominator, so a constant theta is reproduced exactly.
 
+#include "algid/detail/lanes.hpp"
 #include "algid/types.hpp"
 
 namespace algid {
@@ -89,6 +90,56 @@ class RatioEstimator {
   Matrix<Scalar, M, 2> num_ = Matrix<Scalar, M, 2>::Zero();  // I^1, I^2 of sgn(Delta) Delta_j
   Scalar prev_weight_ = Scalar(0);
   Vector<Scalar, M> prev_weighted_ = Vector<Scalar, M>::Zero();
+};
+
+/// Eq. 7 of W DOF side by side, one per SIMD lane (the lane layout of ChainEstimator), for
+/// the four parameters of a 4x4 system; a DOF with a 3x3 system has 0 in its fourth numerator,
+/// and its own decay factor in its lane. Per lane, the trapezoidal double integrals of
+/// RatioEstimator with the same scaling.
+template <class Scalar, int W>
+class RatioLanes {
+ public:
+  using L = detail::Lanes<Scalar, W>;
+
+  /// Start a new window. @realtime no allocation, no throw
+  void reset() noexcept {
+    den0_.setZero();
+    den1_.setZero();
+    prev_weight_.setZero();
+    for (int j = 0; j < 4; ++j) {
+      num0_[j].setZero();
+      num1_[j].setZero();
+      prev_weighted_[j].setZero();
+    }
+  }
+
+  /// Add the sample at the next interval end: `rho` = RatioEstimator<M>::decay(previous tau,
+  /// tau) of each lane's M, `half` = h / 2 [s], `weight` = |det S| (0 where not trusted) and
+  /// `weighted[j]` = weight * theta_instant_j (0 where not trusted).
+  /// @realtime no allocation, no throw
+  void add(const L& rho, Scalar half, const L& weight, const L* weighted) noexcept {
+    using Ops = detail::LaneOps<Scalar, W>;
+    const L h = L::Constant(half);
+    const L den1 = Ops::madd(rho, Ops::madd(h, prev_weight_, den0_), half * weight);
+    den1_ = Ops::madd(rho, Ops::madd(h, den0_, den1_), half * den1);
+    den0_ = den1;
+    prev_weight_ = weight;
+    for (int j = 0; j < 4; ++j) {
+      const L num1 = Ops::madd(rho, Ops::madd(h, prev_weighted_[j], num0_[j]), half * weighted[j]);
+      num1_[j] = Ops::madd(rho, Ops::madd(h, num0_[j], num1_[j]), half * num1);
+      num0_[j] = num1;
+      prev_weighted_[j] = weighted[j];
+    }
+  }
+
+  /// Scaled I^2|Delta| of every lane: a lane's estimate is valid where it is > 0.
+  const L& denominator() const noexcept { return den1_; }
+  /// Scaled I^2(sgn(Delta) Delta_j) of every lane.
+  const L& numerator(int j) const noexcept { return num1_[j]; }
+
+ private:
+  L den0_ = L::Zero(), den1_ = L::Zero(), prev_weight_ = L::Zero();  // I^1, I^2 of |Delta|; last weight
+  L num0_[4], num1_[4], prev_weighted_[4];                            // the same for sgn(Delta) Delta_j
 };
 
 }  // namespace algid
