@@ -3,6 +3,8 @@
 // Each binary prints "N passed, N failed" and exits non-zero on any failure.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 
 namespace algid_test {
 inline int& passed() { static int n = 0; return n; }
@@ -19,6 +21,24 @@ inline int finish(const char* name) {
   std::printf("%s: %d passed, %d failed\n", name, passed(), failed());
   return failed() == 0 ? 0 : 1;
 }
+
+#ifdef ALGID_TEST_REQUIRES_ISA
+// A test binary built for a wider instruction set: exit 77 (skipped) before main where this CPU
+// cannot run it.
+inline const bool kCpuRunsThisBuild = [] {
+  __builtin_cpu_init();
+  const char* isa = ALGID_TEST_REQUIRES_ISA;
+  bool ok = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
+  if (std::strcmp(isa, "x86-64-v4") == 0)
+    ok = ok && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+         __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl");
+  if (!ok) {
+    std::printf("skipped: this CPU does not run %s code\n", isa);
+    std::exit(77);
+  }
+  return true;
+}();
+#endif
 }  // namespace algid_test
 
 #define CHECK(cond) ::algid_test::record(static_cast<bool>(cond), #cond, __FILE__, __LINE__)
