@@ -12,9 +12,10 @@ What it does, in one process so every ratio compares figures from the same run:
    ``-march=x86-64-v4`` plus ``-ffp-contract=off`` (the flags of ``algid._core_v3`` and
    ``_core_v4``, reported as ``*_v3`` / ``*_v4``) where this CPU runs them;
 2. runs ``bench_per_sample`` (steady_clock; median / p99 of 16-sample batches, worst single
-   sample, per DOF-sample) for ChainEstimator ``update()`` ("default"), its block path
-   ``run()`` ("batch"), the continuous configuration and an RLS baseline at n = 1, 3, 10, 50
-   in double and float;
+   sample, per DOF-sample) for ChainEstimator ``update()`` ("default"), its batch path
+   ``run()`` ("batch": blocks of 8 instants for n = 1, update() sample by sample in the lane
+   layout of n >= 3), the continuous configuration and an RLS baseline at n = 1, 3, 10, 50 in
+   double and float;
 3. counts instructions per DOF-sample under ``valgrind --tool=callgrind`` (client requests
    bracket the measured loop);
 4. times the Python per-sample ``update()``, the batch ``run()`` (GIL released; for every
@@ -357,14 +358,21 @@ def main(argv: list[str] | None = None) -> int:
                                    "float_gflops": best_peak(rows, "float"),
                                    "rows": [r for r in rows if "lanes" in r]}
     bound = {}
+    # The lane layout (n >= 3) computes whole registers: lane_slots lanes for n DOF, the padding
+    # lanes included (n = 3 in 4 lanes: 4/3 of the useful flops). Counted flops are the useful
+    # ones; the bound of a build uses what that build executes.
+    build_config = {"default_flags": "default_double", "x86-64-v3": "default_double_v3", "x86-64-v4": "default_double_v4"}
     for n in SIZES:
         f = flops_per_dof.get(n, {}).get("flops_per_dof_sample")
         measured = fig("default_double", n).get("ns_per_dof_sample_median")
         entry = {"flops_per_dof_sample": f, "measured_ns": measured}
         for name, p in peak.items():
+            slots = fig(build_config.get(name, ""), n).get("lane_slots") or n
+            executed = f * slots / n if f else None
+            entry[f"lane_slots_{name}"] = slots
             for kind in ("double_gflops", "double_scalar_gflops"):
-                if f and p.get(kind):
-                    entry[f"bound_ns_{name}_{kind.replace('_gflops', '')}"] = f / p[kind]
+                if executed and p.get(kind):
+                    entry[f"bound_ns_{name}_{kind.replace('_gflops', '')}"] = executed / p[kind]
         if f and measured:
             entry["achieved_gflops"] = f / measured
         for level in wide_dirs:
@@ -387,7 +395,8 @@ def main(argv: list[str] | None = None) -> int:
             "n50": n50.get("ns_per_dof_sample_median"), "n3": n3.get("ns_per_dof_sample_median"),
             "met": (n50.get("ns_per_dof_sample_median") or 1e9) <= (n3.get("ns_per_dof_sample_median") or 0)},
         # Python run() against the C++ loop it wraps, same build: ChainEstimator::run() blocks
-        # in the x86-64-v3 build, update() sample by sample in the baseline build.
+        # in the wider builds (blocks for n = 1, the lane layout for n >= 3), update() sample by
+        # sample in the baseline build.
         "python_run_within_1.5x_of_cpp": {
             str(n): {"isa": algid.ISA, "cpp_config": run_cpp,
                      "ratio": fig("python_run_double", n)["window_min"] / fig(run_cpp, n)["window_min"],

@@ -13,7 +13,8 @@
 // timing windows); "continuous" = ContinuousEstimator<N, Scalar> with its default configuration
 // (K = 4 staggered reseeded 0.3 s windows, block-median aggregation, change detection), fed one
 // uninterrupted signal (never reset between timing windows); "rls" = the baseline; "batch" =
-// ChainEstimator::run() (the block path behind the Python run()), in 16-sample chunks and whole
+// ChainEstimator::run() (what the Python run() calls: blocks of 8 instants for n <= 2, update()
+// sample by sample in the lane layout of n >= 3), in 16-sample chunks and whole
 // windows, storing the estimate history of every sample.
 //
 // Timing protocol, per configuration: one untimed warm-up window, then W windows of T samples
@@ -286,15 +287,33 @@ Result measure_batch(Subject& subject, int samples, int windows) {
   return r;
 }
 
-void print(const char* config, int n, const char* scalar, const Result& r, double overhead) {
+// The SIMD layout of ChainEstimator<N, Scalar> in this build: "lanes" (one DOF per lane, `lanes`
+// lanes per register, `slots` lanes in all, the padding included) or "per_dof".
+template <int N, class Scalar>
+struct LayoutInfo {
+  using Est = algid::ChainEstimator<N, Scalar>;
+  static const char* name() { return Est::kLaneLayout ? "lanes" : "per_dof"; }
+  static int lanes() {
+    if constexpr (Est::kLaneLayout) return Est::kLanes;
+    return 0;
+  }
+  static int slots() {
+    if constexpr (Est::kLaneLayout) return Est::kLanes * Est::kRegisters;
+    return N;
+  }
+};
+
+void print(const char* config, int n, const char* scalar, const Result& r, double overhead, const char* layout = "",
+           int lanes = 0, int slots = 0) {
   const double dn = n;
   std::printf(
       "{\"config\": \"%s\", \"n\": %d, \"scalar\": \"%s\", "
       "\"ns_per_sample_median\": %.2f, \"ns_per_dof_sample_median\": %.2f, \"p99\": %.2f, \"max\": %.2f, "
       "\"max_path\": %.2f, \"window_min\": %.2f, \"single_median\": %.2f, \"single_p99\": %.2f, \"timed_samples\": %ld, "
-      "\"clock_overhead_ns\": %.1f, \"batch\": %d, \"units\": \"ns per DOF-sample except ns_per_sample_median\"}\n",
+      "\"clock_overhead_ns\": %.1f, \"batch\": %d, \"layout\": \"%s\", \"lanes\": %d, \"lane_slots\": %d, "
+      "\"units\": \"ns per DOF-sample except ns_per_sample_median\"}\n",
       config, n, scalar, r.batch_median, r.batch_median / dn, r.batch_p99 / dn, r.max / dn, r.max_path / dn,
-      r.window_min / dn, r.single_median / dn, r.single_p99 / dn, r.timed, overhead, kBatch);
+      r.window_min / dn, r.single_median / dn, r.single_p99 / dn, r.timed, overhead, kBatch, layout, lanes, slots);
   std::fflush(stdout);
 }
 
@@ -304,11 +323,13 @@ void bench_n(const char* scalar, int samples, int windows, double overhead) {
     const auto sig = algid_bench::make_signals<N, Scalar>(samples);
     {
       EstimatorSubject<N, Scalar> subject(sig);
-      print("default", N, scalar, measure(subject, samples, windows, overhead), overhead);
+      print("default", N, scalar, measure(subject, samples, windows, overhead), overhead, LayoutInfo<N, Scalar>::name(),
+            LayoutInfo<N, Scalar>::lanes(), LayoutInfo<N, Scalar>::slots());
     }
     {
       BatchSubject<N, Scalar> subject(sig);
-      print("batch", N, scalar, measure_batch(subject, samples, windows), overhead);
+      print("batch", N, scalar, measure_batch(subject, samples, windows), overhead, LayoutInfo<N, Scalar>::name(),
+            LayoutInfo<N, Scalar>::lanes(), LayoutInfo<N, Scalar>::slots());
     }
     {
       RlsSubject<N, Scalar> subject(sig);
@@ -340,7 +361,7 @@ int callgrind_run(int updates) {
   for (int k = 0; k < kWarm; ++k) subject.step(k);
   CALLGRIND_START_INSTRUMENTATION;
   if constexpr (Subject::kChunked) {
-    subject.chunk(kWarm, updates);  // one run() call: the block path
+    subject.chunk(kWarm, updates);  // one run() call
   } else {
     for (int k = kWarm; k < total; ++k) subject.step(k);
   }

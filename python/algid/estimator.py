@@ -29,12 +29,13 @@ def chain_core(isa: str | None = None):
 
     On x86-64 the wheel carries the estimators built three times: for ``x86-64`` (SSE2, any
     x86-64 CPU), ``x86-64-v3`` (AVX2 and FMA, most CPUs since 2013) and ``x86-64-v4``
-    (AVX-512); the wider builds' ``run()`` solves the systems of 8 instants side by side
-    (``ChainEstimator::run`` in C++). By default the widest build this CPU runs is used; ``isa``
-    or the environment variable ``ALGID_ISA`` (``x86-64``, ``x86-64-v3``, ``x86-64-v4``) forces
-    one, for benchmarks and comparisons. The builds agree to rounding (the wider builds' chain
-    products use fused multiply-adds); within one build ``run()`` and ``update()`` give the
-    same bits.
+    (AVX-512). From three DOF on, every DOF of the chain sits in a SIMD lane, 2 per register
+    in the ``x86-64`` build and 4 in the wider ones; for one or two DOF the wider builds'
+    ``run()`` solves the systems of 8 instants side by side instead (``ChainEstimator`` in
+    C++). By default the widest build this CPU runs is used; ``isa`` or the environment
+    variable ``ALGID_ISA`` (``x86-64``, ``x86-64-v3``, ``x86-64-v4``) forces one, for
+    benchmarks and comparisons. The builds agree to rounding (the wider builds use fused
+    multiply-adds); within one build ``run()`` and ``update()`` give the same bits.
     """
     wanted = isa or os.environ.get("ALGID_ISA") or None
     levels = [level for _, level in _BUILDS]
