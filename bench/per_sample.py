@@ -185,6 +185,50 @@ def numpy_reference_figures(a_all: np.ndarray, u_all: np.ndarray, samples: tuple
             "p99": None, "max": None, "cached_weights": cached_weights}
 
 
+def interleaved_numpy_ratio(a_all: np.ndarray, u_all: np.ndarray, reps: int, run_samples: int = 2000) -> dict:
+    """numpy reference / Python run() measured back to back, `reps` times: each repetition times
+    the reference (cached weights) on 1000 and 4000 samples (marginal cost per DOF-sample, which
+    removes its fixed per-call costs) and then Python run() (default build) on `run_samples`
+    samples (min of 5 calls). Both sides of each ratio see the same state of the shared machine,
+    whose speed moves by tens of percent between minutes: the per-repetition ratios are the
+    robust figure, the separate minima are not."""
+    import functools
+
+    import algid
+    from algid import reference
+    from algid.estimator import chain_core
+
+    n = a_all.shape[1]
+    make = getattr(chain_core(), f"ChainEstimator{n}")
+    original = reference.quadrature_weights
+    reference.quadrature_weights = functools.lru_cache(maxsize=None)(original)
+    marginal, run, ratio = [], [], []
+    try:
+        reference.estimate(a_all[:1000], u_all[:1000], DT)  # warm the weights cache
+        for _ in range(reps):
+            t0 = time.perf_counter_ns()
+            reference.estimate(a_all[:1000], u_all[:1000], DT)
+            t1 = time.perf_counter_ns()
+            reference.estimate(a_all[:4000], u_all[:4000], DT)
+            t2 = time.perf_counter_ns()
+            best = None
+            for _ in range(5):
+                est = make(DT, "fixed", 16, 1e-9)
+                t3 = time.perf_counter_ns()
+                est.run(a_all[:run_samples], u_all[:run_samples], False)
+                dt_ns = time.perf_counter_ns() - t3
+                best = dt_ns if best is None else min(best, dt_ns)
+            marginal.append(((t2 - t1) - (t1 - t0)) / (3000 * n))
+            run.append(best / (run_samples * n))
+            ratio.append(marginal[-1] / run[-1])
+    finally:
+        reference.quadrature_weights = original
+    return {"isa": algid.ISA, "reps": reps, "numpy_marginal_ns_per_dof_sample": marginal,
+            "python_run_ns_per_dof_sample": run, "ratio_per_rep": ratio,
+            "ratio_median": float(statistics.median(ratio)), "ratio_min": float(min(ratio)),
+            "ratio_of_minima": float(min(marginal) / min(run))}
+
+
 # ---------------------------------------------------------------------------------------------
 
 
@@ -321,6 +365,8 @@ def main(argv: list[str] | None = None) -> int:
     for n in SIZES:
         put("numpy_reference_cached_weights_double", n,
             numpy_reference_figures(*signals[n], (1000, 4000), cached_weights=True, reps=2 if args.quick else 6))
+    print("numpy reference and Python run() back to back ...", flush=True)
+    interleaved = {str(n): interleaved_numpy_ratio(*signals[n], reps=3 if args.quick else 8) for n in SIZES}
     # As shipped (reference.quadrature_weights recomputed per signal: a fixed ~0.25 s x 6n).
     put("numpy_reference_double", 3, numpy_reference_figures(*signals[3], (1000, 4000), cached_weights=False, reps=1))
 
@@ -406,6 +452,10 @@ def main(argv: list[str] | None = None) -> int:
             for n in SIZES if fig(run_cpp, n)},
         "python_run_at_least_50x_faster_than_numpy_reference": {
             str(n): {"isa": algid.ISA,
+                     # the figure: numpy reference and run() timed back to back, median over repetitions
+                     "ratio_interleaved_median": interleaved[str(n)]["ratio_median"],
+                     "ratio_interleaved_min": interleaved[str(n)]["ratio_min"],
+                     # the same from the separate measurements (numpy timed after every round)
                      "ratio_marginal_cached": fig("numpy_reference_cached_weights_double", n)["marginal_ns_per_dof_sample"] /
                      fig("python_run_double", n)["window_min"],
                      "ratio_whole_call_cached": fig("numpy_reference_cached_weights_double", n)["ns_per_dof_sample_median"] /
@@ -423,7 +473,7 @@ def main(argv: list[str] | None = None) -> int:
         targets["python_run_at_least_50x_faster_than_numpy_reference"]["3"]["ratio_whole_call_as_shipped"] = (
             as_shipped["ns_per_dof_sample_median"] / run3["window_min"])
     for n, t in targets["python_run_at_least_50x_faster_than_numpy_reference"].items():
-        t["met"] = t["ratio_marginal_cached"] >= 50
+        t["met"] = t["ratio_interleaved_median"] >= 50
     for n, t in targets["max_within_5x_of_median"].items():
         t["met_raw_max"] = t["max_over_median"] <= 5
         t["met_path_max"] = t["max_path_over_median"] <= 5
@@ -466,6 +516,10 @@ def main(argv: list[str] | None = None) -> int:
                                    "python_run (whole-record run() call / T, min over calls)",
                      "instructions_per_dof_sample": "callgrind Ir of the update loop (batch: one run() call) "
                                                     "after 64 warm-up samples (continuous: 400), / (updates n)",
+                     "numpy_reference_over_python_run_interleaved": "per repetition: the numpy reference (cached "
+                                                                    "weights) at 1000 and 4000 samples (marginal cost) "
+                                                                    "and Python run() (min of 5 calls on 2000 samples), "
+                                                                    "back to back; the ratio of each repetition",
                      "batch": "ChainEstimator::run() in 16-sample chunks (median, p99, max = slowest chunk) and "
                               "whole windows (window_min), storing every sample's estimates as the Python run() "
                               "does"},
@@ -476,6 +530,7 @@ def main(argv: list[str] | None = None) -> int:
         "peak": peak,
         "lower_bound": bound,
         "ratio_estimator_over_rls": {"time": rls_ratio, "instructions": rls_ratio_instructions},
+        "numpy_reference_over_python_run_interleaved": interleaved,
         "single_precision": accuracy,
         "targets": targets,
     }
@@ -517,9 +572,12 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  linear in n (n=50 per DOF <= n=3): {lin['n50']:.0f} vs {lin['n3']:.0f} -> {'met' if lin['met'] else 'NOT met'}")
     print(f"  Python run() ({algid.ISA} build) / C++ {run_cpp} (whole record, min over repetitions): " + ", ".join(
         f"n={n}: {v['ratio']:.2f}x{'' if v['met'] else ' (NOT met)'}" for n, v in t["python_run_within_1.5x_of_cpp"].items()))
-    print("  numpy reference / Python run() (marginal, cached weights | whole call): " + ", ".join(
-        f"n={n}: {v['ratio_marginal_cached']:.0f}x | {v['ratio_whole_call_cached']:.0f}x"
+    print("  numpy reference / Python run(), back to back (median | min over repetitions): " + ", ".join(
+        f"n={n}: {v['ratio_interleaved_median']:.0f}x | {v['ratio_interleaved_min']:.0f}x"
         for n, v in t["python_run_at_least_50x_faster_than_numpy_reference"].items()))
+    print("  (timed apart: marginal | whole call: " + ", ".join(
+        f"n={n}: {v['ratio_marginal_cached']:.0f}x | {v['ratio_whole_call_cached']:.0f}x"
+        for n, v in t["python_run_at_least_50x_faster_than_numpy_reference"].items()) + ")")
     print("  max / median (raw | path): " + ", ".join(
         f"n={n}: {v['max_over_median']:.1f} | {v['max_path_over_median']:.2f}" for n, v in t["max_within_5x_of_median"].items()))
     print("  estimator / RLS per DOF-sample: " + ", ".join(f"n={n}: {r:.1f}x" for n, r in rls_ratio.items()))

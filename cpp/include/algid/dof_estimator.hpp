@@ -31,6 +31,7 @@
 /// samples enter eq. 7, and the eq. 7 estimate is valid once one has.
 
 #include "algid/cramer.hpp"
+#include "algid/detail/lanes.hpp"
 #include "algid/integrator_chain.hpp"
 #include "algid/ratio_estimator.hpp"
 #include "algid/types.hpp"
@@ -146,6 +147,43 @@ inline void equilibrated_hadamard2(const Matrix<Scalar, M, M>& S, Scalar det, Sc
   for (int r = 1; r < M; ++r) den = den * row2(r);
   const Scalar tail = M == 4 ? inv_col2(2) * inv_col2(M - 1) : inv_col2(2);
   num = (det * inv_col2(0) * inv_col2(1)) * (det * tail);
+}
+
+/// The validity rule and eq. 7's input for systems side by side in lanes (one system per lane:
+/// a DOF, or an instant): from the determinants, the Cramer numerators scaled to the physical
+/// parameters (`scaled`, M of them), the squared Hadamard ratio h2num / h2den (h2num is set to
+/// 0 where it is not finite: a zero column) and the samples consumed since t0 at each lane's
+/// instant, the weight of eq. 7 (|det| where trusted, 0 elsewhere: a zero or non-finite det, a
+/// low Hadamard ratio, too few samples) and the weighted numerators (sgn(det) scaled where
+/// trusted, 0 elsewhere). The arithmetic of DofEstimator::commit(), lane by lane.
+/// @realtime no allocation, no throw
+template <int M, class Scalar, int W>
+inline void weigh_lanes(const detail::Lanes<Scalar, W>& det, const detail::Lanes<Scalar, W>* scaled,
+                        detail::Lanes<Scalar, W>& h2num, const detail::Lanes<Scalar, W>& h2den,
+                        const detail::Lanes<Scalar, W>& samples, const ValidityRule<Scalar>& rule,
+                        detail::Lanes<Scalar, W>& weight, detail::Lanes<Scalar, W>* weighted) noexcept {
+  using Ops = detail::LaneOps<Scalar, W>;
+  using L = detail::Lanes<Scalar, W>;
+  const L zero = L::Zero(), one = L::Ones(), inf = L::Constant(std::numeric_limits<Scalar>::infinity());
+  h2num = Ops::if_less(h2num.abs(), inf, h2num, zero);
+  weight = det.abs();
+  weight = Ops::if_less(weight, inf, weight, zero);
+  weight = Ops::if_less_equal(rule.min_hadamard * rule.min_hadamard * h2den, h2num, weight, zero);
+  weight = Ops::if_less_equal(L::Constant(static_cast<Scalar>(rule.min_samples)), samples, weight, zero);
+  const L sign = Ops::if_less(zero, det, one, -one);
+  for (int j = 0; j < M; ++j) weighted[j] = Ops::if_less(zero, weight, sign * scaled[j], zero);
+}
+
+/// Eq. 7 estimates lane by lane from the scaled double integrals: num[j] / den where den > 0
+/// (a trusted sample has entered), NaN elsewhere. @realtime no allocation, no throw
+template <int M, class Scalar, int W>
+inline void estimates_lanes(const detail::Lanes<Scalar, W>& den, const detail::Lanes<Scalar, W>* num,
+                            detail::Lanes<Scalar, W>* estimate) noexcept {
+  using L = detail::Lanes<Scalar, W>;
+  const L inv = L::Ones() / den;
+  for (int j = 0; j < M; ++j)
+    estimate[j] = detail::LaneOps<Scalar, W>::if_less(L::Zero(), den, num[j] * inv,
+                                                      L::Constant(std::numeric_limits<Scalar>::quiet_NaN()));
 }
 
 /// Estimator of theta_i = [m_i, c_i, k_i, k_{i+1}] for one DOF.

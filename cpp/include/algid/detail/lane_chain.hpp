@@ -121,7 +121,7 @@ class LaneChain : public ChainCommon<LaneChain<N, Scalar, P>, N, Scalar, P> {
     for (int r = 1; r <= kAccelOrders; ++r) inv_pow[r] = inv_pow[r - 1] * inv_tau;
     const Scalar decay4 = RatioEstimator<4, Scalar>::decay(prev_tau, tau);
     const Scalar decay3 = reduced_last() ? RatioEstimator<3, Scalar>::decay(prev_tau, tau) : decay4;
-    const bool old_enough = samples >= config_.validity.min_samples;
+    const L samples_now = L::Constant(static_cast<Scalar>(samples));
 
     // The rows of every signal: acceleration columns 0, 1 (mass, damping), the spring column
     // with a zero register before and after (the walls' lanes), force rows.
@@ -144,7 +144,6 @@ class LaneChain : public ChainCommon<LaneChain<N, Scalar, P>, N, Scalar, P> {
     }
 
     const L zero = L::Zero(), one = L::Ones();
-    const L inf = L::Constant(std::numeric_limits<Scalar>::infinity());
     const L nan = L::Constant(std::numeric_limits<Scalar>::quiet_NaN());
     const Scalar inv_tau2 = inv_tau * inv_tau;
     for (int g = 0; g < kRegisters; ++g) {
@@ -172,28 +171,20 @@ class LaneChain : public ChainCommon<LaneChain<N, Scalar, P>, N, Scalar, P> {
       L det, numerator[4], h2num, h2den;
       cramer_lanes4(S, s, det, numerator);
       equilibrated_hadamard2<4>(S, det, h2num, h2den);
-      h2num = Ops::if_less(h2num.abs(), inf, h2num, zero);  // a zero column: never trusted
       // Numerators of the physical parameters (tau scaling undone, see dof_estimator.hpp).
       const L scaled[4] = {numerator[0], numerator[1] * inv_tau, numerator[2] * inv_tau2, numerator[3] * inv_tau2};
-      // The validity rule as the eq. 7 weight: |det| where trusted, 0 elsewhere (a zero or
-      // non-finite det, a low Hadamard ratio, too few samples).
-      L weight = det.abs();
-      weight = Ops::if_less(weight, inf, weight, zero);
-      weight = Ops::if_less_equal(config_.validity.min_hadamard * config_.validity.min_hadamard * h2den, h2num,
-                                  weight, zero);
-      if (!old_enough) weight = zero;
-      const L sign = Ops::if_less(zero, det, one, -one);
-      L weighted[4];
-      for (int j = 0; j < 4; ++j) weighted[j] = Ops::if_less(zero, weight, sign * scaled[j], zero);
+      L weight, weighted[4];
+      weigh_lanes<4>(det, scaled, h2num, h2den, samples_now, config_.validity, weight, weighted);
       const L rho = has_reduced ? Ops::if_less(zero, reduced_[static_cast<std::size_t>(g)], L::Constant(decay3),
                                                L::Constant(decay4))
                                 : L::Constant(decay4);
       RatioLanes<Scalar, kLanes>& ratio = ratio_[static_cast<std::size_t>(g)];
       ratio.add(rho, Scalar(0.5) * config_.dt, weight, weighted);
       // Eq. 7 estimates where valid (NaN elsewhere), in the lanes the accessors read.
-      const L& den = ratio.denominator();
-      const L inv_den = one / den;
-      for (int j = 0; j < 4; ++j) estimate_[j][g] = Ops::if_less(zero, den, ratio.numerator(j) * inv_den, nan);
+      const L numerators[4] = {ratio.numerator(0), ratio.numerator(1), ratio.numerator(2), ratio.numerator(3)};
+      L estimate[4];
+      estimates_lanes<4>(ratio.denominator(), numerators, estimate);
+      for (int j = 0; j < 4; ++j) estimate_[j][g] = estimate[j];
       if (has_reduced) estimate_[3][g] = Ops::if_less(zero, reduced_[static_cast<std::size_t>(g)], nan, estimate_[3][g]);
       det_[g] = det;
       weight_[g] = weight;
