@@ -3,11 +3,11 @@
 /// Cramer's rule for the 3x3 and 4x4 systems of eq. 5: the determinant Delta and the
 /// numerators Delta_j (determinant with column j replaced by the right-hand side).
 ///
-/// Two forms of each: one system (`cramer()`, for the per-sample update) and many systems side
-/// by side (`cramer_lanes()`, for a block of samples: lane b of every entry belongs to system b,
-/// and an entry is a scalar or an Eigen array of lanes). The lane form performs, lane by lane,
-/// the same operations in the same order as the single-system form, so its results are
-/// bitwise identical (no FMA contraction: see CMakeLists.txt).
+/// Two forms of each: one system (`cramer()`, for the per-sample update of one DOF) and many
+/// systems side by side (`cramer_lanes()`, for the DOF of a chain or a block of instants: lane b
+/// of every entry belongs to system b, and an entry is a scalar or an Eigen array of lanes). The
+/// lane form performs, lane by lane, the same operations in the same order as the single-system
+/// form, so its results are bitwise identical (no FMA contraction: see CMakeLists.txt).
 
 #include "algid/types.hpp"
 

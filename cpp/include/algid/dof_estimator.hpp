@@ -88,7 +88,7 @@ struct Instant {
 /// The time-scaled system of eq. 5 of one DOF from the rows of its signals (see the file
 /// comment): `self`, `left`, `right` are acceleration rows (4 x 3, column-major; `left` /
 /// `right` nullptr at a wall), `force` the force rows (4 x 1). Writes S (M x M, column-major)
-/// and s (M). Entries are scalars or Eigen arrays of lanes (one instant per lane).
+/// and s (M). Entries are scalars or Eigen arrays of lanes (one system per lane).
 /// @realtime no allocation, no throw
 template <int M, class L>
 inline void assemble_system(const L* left, const L* self, const L* right, const L* force, L* S, L* s) noexcept {

@@ -62,6 +62,7 @@ class LaneChain : public ChainCommon<LaneChain<N, Scalar, P>, N, Scalar, P> {
   static constexpr int kSpringRegisters = (N + 1 + kLanes - 1) / kLanes;
   using L = Lanes<Scalar, kLanes>;
   using Ops = LaneOps<Scalar, kLanes>;
+  static_assert(sizeof(L) == kLanes * sizeof(Scalar), "registers of lanes are contiguous: mass() views them");
   /// Integrals of the accelerations (J_0 .. J_7 needed) and of the forces (J_0 .. J_5).
   using AccelChain = IntegratorLanes<P, kAccelOrders, Scalar, kLanes, kRegisters>;
   using ForceChain = IntegratorLanes<P, kForceOrders, Scalar, kLanes, kRegisters>;
