@@ -32,7 +32,9 @@ Timings are never asserted; the "targets" block records whether this run met iss
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime as _dt
+import functools
 import json
 import os
 import platform
@@ -153,20 +155,29 @@ def python_figures(a: np.ndarray, u: np.ndarray, reps: int, isa: str | None = No
     return out
 
 
+@contextlib.contextmanager
+def cached_quadrature_weights(enabled: bool = True):
+    """The numpy reference with its quadrature weights computed once per process: the timed
+    calls then exclude their computation (the reference memoises them itself too, so only the
+    first call of a process differs)."""
+    from algid import reference
+
+    original = reference.quadrature_weights
+    if enabled:
+        reference.quadrature_weights = functools.lru_cache(maxsize=None)(original)
+    try:
+        yield reference
+    finally:
+        reference.quadrature_weights = original
+
+
 def numpy_reference_figures(a_all: np.ndarray, u_all: np.ndarray, samples: tuple[int, int], cached_weights: bool,
                             reps: int = 3) -> dict:
     """Whole-record numpy reference: total per DOF-sample at both lengths, and the marginal cost
     (difference of the two, which removes fixed per-call costs); min over `reps` calls."""
-    from algid import reference
-
-    original = reference.quadrature_weights
-    if cached_weights:
-        import functools
-
-        reference.quadrature_weights = functools.lru_cache(maxsize=None)(original)
-    try:
-        n = a_all.shape[1]
-        times = {}
+    n = a_all.shape[1]
+    times = {}
+    with cached_quadrature_weights(cached_weights) as reference:
         for T in samples:
             a, u = a_all[:T], u_all[:T]
             best = None
@@ -176,8 +187,6 @@ def numpy_reference_figures(a_all: np.ndarray, u_all: np.ndarray, samples: tuple
                 dt_ns = time.perf_counter_ns() - t0
                 best = dt_ns if best is None else min(best, dt_ns)
             times[T] = best
-    finally:
-        reference.quadrature_weights = original
     t_short, t_long = samples
     return {"ns_per_dof_sample_median": times[t_long] / (t_long * n),
             "ns_per_dof_sample_at": {str(T): times[T] / (T * n) for T in samples},
@@ -192,18 +201,13 @@ def interleaved_numpy_ratio(a_all: np.ndarray, u_all: np.ndarray, reps: int, run
     samples (min of 5 calls). Both sides of each ratio see the same state of the shared machine,
     whose speed moves by tens of percent between minutes: the per-repetition ratios are the
     robust figure, the separate minima are not."""
-    import functools
-
     import algid
-    from algid import reference
     from algid.estimator import chain_core
 
     n = a_all.shape[1]
     make = getattr(chain_core(), f"ChainEstimator{n}")
-    original = reference.quadrature_weights
-    reference.quadrature_weights = functools.lru_cache(maxsize=None)(original)
     marginal, run, ratio = [], [], []
-    try:
+    with cached_quadrature_weights() as reference:
         reference.estimate(a_all[:1000], u_all[:1000], DT)  # warm the weights cache
         for _ in range(reps):
             t0 = time.perf_counter_ns()
@@ -221,8 +225,6 @@ def interleaved_numpy_ratio(a_all: np.ndarray, u_all: np.ndarray, reps: int, run
             marginal.append(((t2 - t1) - (t1 - t0)) / (3000 * n))
             run.append(best / (run_samples * n))
             ratio.append(marginal[-1] / run[-1])
-    finally:
-        reference.quadrature_weights = original
     return {"isa": algid.ISA, "reps": reps, "numpy_marginal_ns_per_dof_sample": marginal,
             "python_run_ns_per_dof_sample": run, "ratio_per_rep": ratio,
             "ratio_median": float(statistics.median(ratio)), "ratio_min": float(min(ratio)),

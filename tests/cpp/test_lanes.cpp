@@ -127,11 +127,11 @@ void ratio_lanes_match() {
       if (k == W - 1) {
         reduced.add(d3, h, weight(k), x.head<3>());
         for (int j = 0; j < 3; ++j)
-          worst = std::max(worst, std::abs(lanes.numerator(j)(k) / lanes.denominator()(k) - reduced.estimate(j)));
+          worst = std::max(worst, std::abs(lanes.numerators()[j](k) / lanes.denominator()(k) - reduced.estimate(j)));
       } else {
         full[k].add(d4, h, weight(k), x);
         for (int j = 0; j < 4; ++j)
-          worst = std::max(worst, std::abs(lanes.numerator(j)(k) / lanes.denominator()(k) - full[k].estimate(j)));
+          worst = std::max(worst, std::abs(lanes.numerators()[j](k) / lanes.denominator()(k) - full[k].estimate(j)));
       }
     }
   }

@@ -95,7 +95,7 @@ class RatioEstimator {
 /// Eq. 7 of W DOF side by side, one per SIMD lane (the lane layout of ChainEstimator), for
 /// the four parameters of a 4x4 system; a DOF with a 3x3 system has 0 in its fourth numerator,
 /// and its own decay factor in its lane. Per lane, the trapezoidal double integrals of
-/// RatioEstimator with the same scaling.
+/// RatioEstimator with the same scaling, for |Delta| and the four sgn(Delta) Delta_j alike.
 template <class Scalar, int W>
 class RatioLanes {
  public:
@@ -103,13 +103,10 @@ class RatioLanes {
 
   /// Start a new window. @realtime no allocation, no throw
   void reset() noexcept {
-    den0_.setZero();
-    den1_.setZero();
-    prev_weight_.setZero();
-    for (int j = 0; j < 4; ++j) {
-      num0_[j].setZero();
-      num1_[j].setZero();
-      prev_weighted_[j].setZero();
+    for (int j = 0; j < kIntegrals; ++j) {
+      i1_[j].setZero();
+      i2_[j].setZero();
+      prev_[j].setZero();
     }
   }
 
@@ -120,26 +117,24 @@ class RatioLanes {
   void add(const L& rho, Scalar half, const L& weight, const L* weighted) noexcept {
     using Ops = detail::LaneOps<Scalar, W>;
     const L h = L::Constant(half);
-    const L den1 = Ops::madd(rho, Ops::madd(h, prev_weight_, den0_), half * weight);
-    den1_ = Ops::madd(rho, Ops::madd(h, den0_, den1_), half * den1);
-    den0_ = den1;
-    prev_weight_ = weight;
-    for (int j = 0; j < 4; ++j) {
-      const L num1 = Ops::madd(rho, Ops::madd(h, prev_weighted_[j], num0_[j]), half * weighted[j]);
-      num1_[j] = Ops::madd(rho, Ops::madd(h, num0_[j], num1_[j]), half * num1);
-      num0_[j] = num1;
-      prev_weighted_[j] = weighted[j];
+    for (int j = 0; j < kIntegrals; ++j) {
+      const L& x = j == 0 ? weight : weighted[j - 1];
+      const L i1 = Ops::madd(rho, Ops::madd(h, prev_[j], i1_[j]), half * x);
+      i2_[j] = Ops::madd(rho, Ops::madd(h, i1_[j], i2_[j]), half * i1);
+      i1_[j] = i1;
+      prev_[j] = x;
     }
   }
 
   /// Scaled I^2|Delta| of every lane: a lane's estimate is valid where it is > 0.
-  const L& denominator() const noexcept { return den1_; }
-  /// Scaled I^2(sgn(Delta) Delta_j) of every lane.
-  const L& numerator(int j) const noexcept { return num1_[j]; }
+  const L& denominator() const noexcept { return i2_[0]; }
+  /// Scaled I^2(sgn(Delta) Delta_j) of every lane, j = 0 .. 3 (contiguous).
+  const L* numerators() const noexcept { return &i2_[1]; }
 
  private:
-  L den0_ = L::Zero(), den1_ = L::Zero(), prev_weight_ = L::Zero();  // I^1, I^2 of |Delta|; last weight
-  L num0_[4], num1_[4], prev_weighted_[4];                            // the same for sgn(Delta) Delta_j
+  static constexpr int kIntegrals = 5;  // |Delta| and the four numerators
+  // I^1, I^2 and the last sample of [|Delta|, sgn(Delta) Delta_1 .. Delta_4], lane by lane
+  L i1_[kIntegrals], i2_[kIntegrals], prev_[kIntegrals];
 };
 
 }  // namespace algid

@@ -57,11 +57,11 @@ class ChainCommon {
   bool reduced_last() const noexcept { return N == 1 || free_end(); }
   bool is_reduced(int i) const noexcept { return i == N - 1 && reduced_last(); }
 
-  /// True when every acceleration and force of a sample is finite.
-  static bool finite(const Scalar* accel, const Scalar* force) noexcept {
-    for (int i = 0; i < N; ++i)
-      if (!std::isfinite(accel[i]) || !std::isfinite(force[i])) return false;
-    return true;
+  /// True when the first `count` accelerations and forces (one sample: N) are all finite.
+  static bool finite(const Scalar* accel, const Scalar* force, int count = N) noexcept {
+    bool ok = true;
+    for (int e = 0; e < count; ++e) ok &= std::isfinite(accel[e]) & std::isfinite(force[e]);
+    return ok;
   }
 
   Config config_;

@@ -77,8 +77,8 @@ class LaneChain : public ChainCommon<LaneChain<N, Scalar, P>, N, Scalar, P> {
     Rule rule;
     rule.configure(config.dt);
     weights_.configure(rule);
-    reduced_.fill(L::Zero());
-    if (reduced_last()) reduced_[(N - 1) / kLanes]((N - 1) % kLanes) = Scalar(1);
+    reduced_.setZero();
+    if (reduced_last()) reduced_((N - 1) % kLanes) = Scalar(1);
     reseed();
   }
 
@@ -161,13 +161,12 @@ class LaneChain : public ChainCommon<LaneChain<N, Scalar, P>, N, Scalar, P> {
       }
       const bool has_reduced = reduced_last() && g == (N - 1) / kLanes;
       if (has_reduced) {  // the 3x3 DOF: row and column 4 of the identity
-        const L& reduced = reduced_[static_cast<std::size_t>(g)];
         for (int q = 0; q < 3; ++q) {
-          S[3 * 4 + q] = Ops::if_less(zero, reduced, zero, S[3 * 4 + q]);
-          S[q * 4 + 3] = Ops::if_less(zero, reduced, zero, S[q * 4 + 3]);
+          S[3 * 4 + q] = Ops::if_less(zero, reduced_, zero, S[3 * 4 + q]);
+          S[q * 4 + 3] = Ops::if_less(zero, reduced_, zero, S[q * 4 + 3]);
         }
-        S[15] = Ops::if_less(zero, reduced, one, S[15]);
-        s[3] = Ops::if_less(zero, reduced, zero, s[3]);
+        S[15] = Ops::if_less(zero, reduced_, one, S[15]);
+        s[3] = Ops::if_less(zero, reduced_, zero, s[3]);
       }
       L det, numerator[4], h2num, h2den;
       cramer_lanes4(S, s, det, numerator);
@@ -176,17 +175,15 @@ class LaneChain : public ChainCommon<LaneChain<N, Scalar, P>, N, Scalar, P> {
       const L scaled[4] = {numerator[0], numerator[1] * inv_tau, numerator[2] * inv_tau2, numerator[3] * inv_tau2};
       L weight, weighted[4];
       weigh_lanes<4>(det, scaled, h2num, h2den, samples_now, config_.validity, weight, weighted);
-      const L rho = has_reduced ? Ops::if_less(zero, reduced_[static_cast<std::size_t>(g)], L::Constant(decay3),
-                                               L::Constant(decay4))
+      const L rho = has_reduced ? Ops::if_less(zero, reduced_, L::Constant(decay3), L::Constant(decay4))
                                 : L::Constant(decay4);
       RatioLanes<Scalar, kLanes>& ratio = ratio_[static_cast<std::size_t>(g)];
       ratio.add(rho, Scalar(0.5) * config_.dt, weight, weighted);
       // Eq. 7 estimates where valid (NaN elsewhere), in the lanes the accessors read.
-      const L numerators[4] = {ratio.numerator(0), ratio.numerator(1), ratio.numerator(2), ratio.numerator(3)};
       L estimate[4];
-      estimates_lanes<4>(ratio.denominator(), numerators, estimate);
+      estimates_lanes<4>(ratio.denominator(), ratio.numerators(), estimate);
       for (int j = 0; j < 4; ++j) estimate_[j][g] = estimate[j];
-      if (has_reduced) estimate_[3][g] = Ops::if_less(zero, reduced_[static_cast<std::size_t>(g)], nan, estimate_[3][g]);
+      if (has_reduced) estimate_[3][g] = Ops::if_less(zero, reduced_, nan, estimate_[3][g]);
       det_[g] = det;
       weight_[g] = weight;
       hadamard2_num_[g] = h2num;
@@ -283,7 +280,7 @@ class LaneChain : public ChainCommon<LaneChain<N, Scalar, P>, N, Scalar, P> {
   LaneWeights<P, kAccelOrders, Scalar, kLanes> weights_;
   AccelChain accel_{};
   ForceChain force_{};
-  std::array<L, kRegisters> reduced_{};  // 1 in the lane of a 3x3 DOF
+  L reduced_ = L::Zero();  // 1 in the lane of a 3x3 DOF, in the last register of DOF
   std::array<RatioLanes<Scalar, kLanes>, kRegisters> ratio_{};
   // The last sample's solution, lane by lane: det S, the eq. 7 weight (> 0: trusted), the
   // squared Hadamard ratio as num / den, the tau-unscaled Cramer numerators.

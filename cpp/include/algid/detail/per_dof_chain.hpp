@@ -181,13 +181,6 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   long samples() const noexcept { return samples_; }
 
  private:
-
-  static bool finite(const Scalar* a, const Scalar* f, int count) noexcept {
-    bool ok = true;
-    for (int e = 0; e < count; ++e) ok &= std::isfinite(a[e]) & std::isfinite(f[e]);
-    return ok;
-  }
-
   // What every DOF shares at the interval end after `samples` samples (>= P), once per sample.
   Instant<Scalar> instant(long samples) const noexcept {
     Instant<Scalar> now;
