@@ -1,6 +1,7 @@
 // pybind11 module algid._core: conversion only, no logic. The generic helper in
 // bind_chain.hpp binds every fixed-size ChainEstimator<N>; the Python layer dispatches on n.
 #include <algid/algid.hpp>
+#include <algid/detail/cpu.hpp>
 
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -15,25 +16,6 @@ void bind_chains_small(py::module_& m);
 void bind_chains_medium(py::module_& m);
 void bind_chains_large(py::module_& m);
 
-namespace {
-
-bool cpu_supports(const std::string& level) {
-#if (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
-  __builtin_cpu_init();
-  const bool v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-                  __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
-                  __builtin_cpu_supports("avx") && __builtin_cpu_supports("popcnt");
-  if (level == "x86-64-v3") return v3;
-  if (level == "x86-64-v4")
-    return v3 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-           __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512dq") &&
-           __builtin_cpu_supports("avx512vl");
-#endif
-  (void)level;
-  return false;
-}
-
-}  // namespace
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "algid C++ core: on-line algebraic estimators of mass-spring-damper chains";
@@ -43,9 +25,11 @@ PYBIND11_MODULE(_core, m) {
   bind_continuous(m);
   m.attr("SIZES") = py::make_tuple(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 16, 20, 32, 50, 64);
   m.attr("ISA") = "x86-64";
-  m.def("cpu_supports", &cpu_supports, py::arg("level"),
-        "Whether this CPU (and OS) runs code built for `level`: 'x86-64-v3' (AVX2, FMA, BMI) or "
-        "'x86-64-v4' (AVX-512 F/BW/CD/DQ/VL); False for other levels and architectures.");
+  m.def(
+      "cpu_supports", [](const std::string& level) { return algid::detail::cpu_supports(level.c_str()); },
+      py::arg("level"),
+      "Whether this CPU (and OS) runs code built for `level`: 'x86-64-v3' (AVX2, FMA, BMI) or "
+      "'x86-64-v4' (AVX-512 F/BW/CD/DQ/VL); False for other levels and architectures.");
   py::enum_<algid::Status>(m, "Status")
       .value("OK", algid::Status::kOk)
       .value("WARMUP", algid::Status::kWarmup)

@@ -4,7 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
+
+#ifdef ALGID_TEST_REQUIRES_ISA
+#include <algid/detail/cpu.hpp>
+#endif
 
 namespace algid_test {
 inline int& passed() { static int n = 0; return n; }
@@ -26,14 +29,8 @@ inline int finish(const char* name) {
 // A test binary built for a wider instruction set: exit 77 (skipped) before main where this CPU
 // cannot run it.
 inline const bool kCpuRunsThisBuild = [] {
-  __builtin_cpu_init();
-  const char* isa = ALGID_TEST_REQUIRES_ISA;
-  bool ok = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
-  if (std::strcmp(isa, "x86-64-v4") == 0)
-    ok = ok && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-         __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl");
-  if (!ok) {
-    std::printf("skipped: this CPU does not run %s code\n", isa);
+  if (!algid::detail::cpu_supports(ALGID_TEST_REQUIRES_ISA)) {
+    std::printf("skipped: this CPU does not run %s code\n", ALGID_TEST_REQUIRES_ISA);
     std::exit(77);
   }
   return true;
