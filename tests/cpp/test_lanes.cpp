@@ -122,14 +122,15 @@ void ratio_lanes_match() {
     weighted[3](W - 1) = 0.0;
     lanes.add(rho, 0.5 * h, weight, weighted);
     for (int k = 0; k < W; ++k) {
-      algid::Vector<double, 4> x;
-      for (int j = 0; j < 4; ++j) x(j) = weighted[j](k);
+      algid::RatioEstimator<4>::Packed x = algid::RatioEstimator<4>::Packed::Zero();
+      x(0) = weight(k);
+      for (int j = 0; j < 4; ++j) x(1 + j) = weighted[j](k);
       if (k == W - 1) {
-        reduced.add(d3, h, weight(k), x.head<3>());
+        reduced.add(d3, h, x.head<4>());
         for (int j = 0; j < 3; ++j)
           worst = std::max(worst, std::abs(lanes.numerators()[j](k) / lanes.denominator()(k) - reduced.estimate(j)));
       } else {
-        full[k].add(d4, h, weight(k), x);
+        full[k].add(d4, h, x);
         for (int j = 0; j < 4; ++j)
           worst = std::max(worst, std::abs(lanes.numerators()[j](k) / lanes.denominator()(k) - full[k].estimate(j)));
       }

@@ -198,6 +198,9 @@ class DofEstimator {
   using AccelRows = Matrix<Scalar, 4, 3>;
   /// Rows of a force signal.
   using ForceRows = Matrix<Scalar, 4, 1>;
+  /// What eq. 7 is fed per sample, [weight, weighted_0 .. weighted_(M-1), 0 ...] (see
+  /// RatioEstimator::add()).
+  using Packed = typename RatioEstimator<M, Scalar>::Packed;
 
   /// Start a new window. @realtime no allocation, no throw
   void reset() noexcept {
@@ -258,12 +261,28 @@ class DofEstimator {
     trusted_ = solvable && now.samples >= rule.min_samples &&
                hadamard2_num_ >= rule.min_hadamard * rule.min_hadamard * hadamard2_den_;
     const Scalar decay = M == 4 ? now.decay4 : now.decay3;
+    Packed x = Packed::Zero();
     if (trusted_) {
       const Scalar sign = det_ > Scalar(0) ? Scalar(1) : Scalar(-1);
-      ratio_.add(decay, now.h, std::abs(det_), sign * scaled);
-    } else {
-      ratio_.add(decay, now.h, Scalar(0), Vector<Scalar, M>::Zero());
+      x(0) = std::abs(det_);
+      x.template segment<M>(1) = sign * scaled;
     }
+    ratio_.add(decay, now.h, x);
+  }
+
+  /// commit() for a sample weighed elsewhere with the same arithmetic (weigh_lanes(): the block
+  /// path of ChainEstimator::run() weighs many instants side by side): `scaled` the time-scaled
+  /// Cramer numerators, `h2num` with 0 where it was not finite, `x` what eq. 7 is fed (x(0) > 0
+  /// exactly when the sample is trusted), `decay` this system size's decay factor, `h` the
+  /// sample period [s]. @realtime no allocation, no throw
+  void commit_weighed(Scalar det, const Scalar* scaled, Scalar h2num, Scalar h2den, const Packed& x, Scalar decay,
+                      Scalar h) noexcept {
+    det_ = det;
+    numerator_ = Eigen::Map<const Vector<Scalar, M>>(scaled);
+    hadamard2_num_ = h2num;
+    hadamard2_den_ = h2den;
+    trusted_ = x(0) > Scalar(0);
+    ratio_.add(decay, h, x);
   }
 
   /// Set the system reported by system() / rhs() (the block path solves it elsewhere).
@@ -285,6 +304,8 @@ class DofEstimator {
   Scalar estimate(int j) const noexcept { return ratio_.estimate(j); }
   /// All eq. 7 estimates; meaningful when valid().
   Vector<Scalar, M> estimates() const noexcept { return ratio_.estimates(); }
+  /// All eq. 7 estimates in slots 1 .. M of a packed vector (RatioEstimator::packed_estimates()).
+  Packed packed_estimates() const noexcept { return ratio_.packed_estimates(); }
   /// True once eq. 7 has integrated a trusted sample.
   bool valid() const noexcept { return ratio_.valid(); }
   /// Doubly equilibrated Hadamard ratio of the last system, in [0, 1].

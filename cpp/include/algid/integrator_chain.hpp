@@ -149,11 +149,21 @@ class IntegratorChain {
   void add_carry(const Carry& carry, Matrix<Scalar, Orders, K>& step) const noexcept {
     constexpr int kRows = Orders - Row0 < kCarryBlock ? Orders - Row0 : kCarryBlock;
     constexpr int kDepth = Row0 + kRows - 1;  // the lower orders the block's last row needs
-    if constexpr (kDepth > 0) {
-      step.template middleRows<kRows>(Row0).noalias() +=
-          carry.template block<kRows, kDepth>(Row0, 0).lazyProduct(state_.template topRows<kDepth>());
-    }
+    if constexpr (kDepth > 0) step.template middleRows<kRows>(Row0) += carry_terms<Row0, kRows, 0, kDepth>(carry);
     if constexpr (Row0 + kRows < Orders) add_carry<Row0 + kRows>(carry, step);
+  }
+
+  // sum_{Q0 <= q < Q1} carry(Row0 + i, q) state(q) for i < kRows, summed as a balanced tree of
+  // pairs: the next sample's state waits on this sum, and a tree of depth log2 is that much
+  // shorter a wait than a chain of fused multiply-adds one term at a time.
+  template <int Row0, int kRows, int Q0, int Q1, class Carry>
+  auto carry_terms(const Carry& carry) const noexcept {
+    if constexpr (Q1 - Q0 <= 2) {
+      return carry.template block<kRows, Q1 - Q0>(Row0, Q0).lazyProduct(state_.template middleRows<Q1 - Q0>(Q0));
+    } else {
+      constexpr int kMid = Q0 + (Q1 - Q0 + 1) / 2 / 2 * 2;  // an even split: pairs stay pairs
+      return carry_terms<Row0, kRows, Q0, kMid>(carry) + carry_terms<Row0, kRows, kMid, Q1>(carry);
+    }
   }
 
   static constexpr int kRing = 2 * P;  // >= 3P/2 - 1 samples: a centred stencil's span

@@ -28,12 +28,16 @@ class RatioEstimator {
   /// Power of (t - t0) that relates |det A| to the determinant of the time-scaled system.
   static constexpr int kTimeExponent = M == 4 ? 19 : 12;
 
+  /// |Delta| and the M numerators side by side (slot 0: |Delta|, slot 1 + j: numerator j),
+  /// padded with zeros to whole SIMD registers of four: one vector recurrence advances them all.
+  static constexpr int kSlots = M + 1 <= 4 ? 4 : 8;
+  using Packed = Vector<Scalar, kSlots>;
+
   /// Start a new window. @realtime no allocation, no throw
   void reset() noexcept {
-    den_ = Vector<Scalar, 2>::Zero();
-    num_ = Matrix<Scalar, M, 2>::Zero();
-    prev_weight_ = Scalar(0);
-    prev_weighted_ = Vector<Scalar, M>::Zero();
+    i1_.setZero();
+    i2_.setZero();
+    prev_.setZero();
   }
 
   /// Factor (prev_tau / tau)^q that carries the tau^-q-scaled states from prev_tau to tau
@@ -57,39 +61,37 @@ class RatioEstimator {
     return rho;
   }
 
-  /// Add the sample at tau = t - t0 with sample period `h` [s], `weight` = |det S| (0 for a
-  /// sample that is not trusted) and `weighted` = weight * theta_instant; `rho` =
-  /// decay(previous tau, tau) carries the scaled states from the previous sample.
-  /// @realtime no allocation, no throw
-  void add(Scalar rho, Scalar h, Scalar weight, const Vector<Scalar, M>& weighted) noexcept {
+  /// Add the sample at tau = t - t0 with sample period `h` [s]: `x` = [weight, weighted_0 ..
+  /// weighted_(M-1), 0 ...] with weight = |det S| and weighted = weight * theta_instant (all 0
+  /// for a sample that is not trusted); `rho` = decay(previous tau, tau) carries the scaled
+  /// states from the previous sample. @realtime no allocation, no throw
+  void add(Scalar rho, Scalar h, const Packed& x) noexcept {
     const Scalar half = Scalar(0.5) * h;
-    const Scalar den1 = rho * (den_(0) + half * prev_weight_) + half * weight;
-    den_(1) = rho * (den_(1) + half * den_(0)) + half * den1;
-    den_(0) = den1;
-    const Vector<Scalar, M> num1 = rho * (num_.col(0) + half * prev_weighted_) + half * weighted;
-    num_.col(1) = rho * (num_.col(1) + half * num_.col(0)) + half * num1;
-    num_.col(0) = num1;
-    prev_weight_ = weight;
-    prev_weighted_ = weighted;
+    const Packed i1 = rho * (i1_ + half * prev_) + half * x;
+    i2_ = rho * (i2_ + half * i1_) + half * i1;
+    i1_ = i1;
+    prev_ = x;
   }
 
   /// True once a trusted sample has entered the double integral.
-  bool valid() const noexcept { return den_(1) > Scalar(0); }
+  bool valid() const noexcept { return i2_(0) > Scalar(0); }
 
   /// Eq. 7 estimate of parameter j (meaningful only when valid()).
-  Scalar estimate(int j) const noexcept { return num_(j, 1) / den_(1); }
+  Scalar estimate(int j) const noexcept { return i2_(1 + j) / i2_(0); }
+
+  /// All M eq. 7 estimates at once (one division), in slots 1 .. M (slot 0 is
+  /// I^2|Delta| / I^2|Delta|).
+  Packed packed_estimates() const noexcept { return i2_ * (Scalar(1) / i2_(0)); }
 
   /// All M eq. 7 estimates at once (one division).
-  Vector<Scalar, M> estimates() const noexcept { return num_.col(1) * (Scalar(1) / den_(1)); }
+  Vector<Scalar, M> estimates() const noexcept { return packed_estimates().template segment<M>(1); }
 
   /// Scaled denominator I^2|Delta| * tau^-q (a confidence weight for fusion and diagnostics).
-  Scalar denominator() const noexcept { return den_(1); }
+  Scalar denominator() const noexcept { return i2_(0); }
 
  private:
-  Vector<Scalar, 2> den_ = Vector<Scalar, 2>::Zero();    // I^1, I^2 of |Delta|
-  Matrix<Scalar, M, 2> num_ = Matrix<Scalar, M, 2>::Zero();  // I^1, I^2 of sgn(Delta) Delta_j
-  Scalar prev_weight_ = Scalar(0);
-  Vector<Scalar, M> prev_weighted_ = Vector<Scalar, M>::Zero();
+  // I^1, I^2 and the last sample of [|Delta|, sgn(Delta) Delta_j ...]
+  Packed i1_ = Packed::Zero(), i2_ = Packed::Zero(), prev_ = Packed::Zero();
 };
 
 /// Eq. 7 of W DOF side by side, one per SIMD lane (the lane layout of ChainEstimator), for

@@ -119,14 +119,37 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   /// Returns how many of the T samples went through blocks.
   /// @realtime no allocation; no throw unless `observe` throws
   template <class Observer>
-  long run(const Scalar* accel, const Scalar* force, long T, Observer&& observe) {
+  ALGID_FLATTEN long run(const Scalar* accel, const Scalar* force, long T, Observer&& observe) {
+    // Software-pipelined: while the samples of one block are committed to eq. 7 (a recurrence
+    // from sample to sample), the chains already advance through the next block (another
+    // recurrence, independent of the first): the two latency-bound loops share one instruction
+    // stream. The chains are internal state no accessor reads, so running ahead is invisible
+    // to `observe`.
+    BlockInputs inputs[2];
+    BlockSolution solution;
+    int current = 0;
+    bool pushed = false;  // inputs[current] already holds the block starting at t
     long t = 0, blocked = 0;
     while (t < T) {
       const Scalar* a = accel + t * N;
       const Scalar* f = force + t * N;
-      if (samples_ >= P - 1 && T - t >= kBlock && finite(a, f, kBlock * N)) {
-        run_block(a, f, t, observe);
-        t += kBlock;
+      if (pushed || (samples_ >= P - 1 && T - t >= kBlock && finite(a, f, kBlock * N))) {
+        if (!pushed)
+          for (int b = 0; b < kBlock; ++b) push_into(a + b * N, f + b * N, b, inputs[current]);
+        solve_block(inputs[current], solution);
+        const long next = t + kBlock;
+        const Scalar* na = accel + next * N;
+        const Scalar* nf = force + next * N;
+        const bool ahead = T - next >= kBlock && finite(na, nf, kBlock * N);
+        BlockInputs& following = inputs[1 - current];
+        for (int b = 0; b < kBlock; ++b) {
+          if (ahead) push_into(na + b * N, nf + b * N, b, following);
+          commit(solution, b);
+          observe(t + b, Status::kOk);
+        }
+        pushed = ahead;
+        current = 1 - current;
+        t = next;
         blocked += kBlock;
       } else {
         const Status s = update(a, f);
@@ -202,40 +225,54 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
     if (reduced_last()) decay3 = RatioEstimator<3, Scalar>::decay(prev_tau, tau);
   }
 
-  // kBlock finite samples past the warm-up (every push advances the chains): see run().
-  template <class Observer>
-  ALGID_FLATTEN void run_block(const Scalar* accel, const Scalar* force, long t0, Observer& observe) {
-    using Lanes = Eigen::Array<Scalar, kBlock, 1>;
+  using BlockLanes = Eigen::Array<Scalar, kBlock, 1>;
+  // The chains after each sample of a block, one contiguous column per sample (as the chains
+  // hold them), turned into lanes (lane b = instant b) tile by tile in registers by
+  // solve_block() (transpose_to_lanes). The samples themselves (J_0) are few: stored as lanes.
+  struct BlockInputs {
+    Matrix<Scalar, AccelChain::kOrders * N, kBlock> astate;
+    Matrix<Scalar, ForceChain::kOrders * N, kBlock> fstate;
+    Eigen::Matrix<Scalar, N, kBlock, Eigen::RowMajor> avalue, fvalue;
+  };
+  // Eq. 5 of every DOF solved at the kBlock instants of a block, one per lane, and what the
+  // DOFs share at each instant: what commit() feeds to eq. 7 sample by sample.
+  // `scaled`: the Cramer numerators scaled to the physical parameters; `h2num`: 0 where not
+  // finite; `fed`: column b is what eq. 7 is fed at instant b (DofEstimator::Packed, in the
+  // first 4 rows for a 3x3 system).
+  struct BlockSolution {
+    BlockLanes det[N], scaled[4 * N], h2num[N], h2den[N], decay4, decay3;
+    Matrix<Scalar, 8, kBlock> fed[N];
+  };
+
+  // Push one finite sample past the warm-up (the chains advance) and keep the chains' state as
+  // instant b of `in`.
+  ALGID_FLATTEN void push_into(const Scalar* accel, const Scalar* force, int b, BlockInputs& in) noexcept {
+    constexpr int kAO = AccelChain::kOrders, kFO = ForceChain::kOrders;
+    accel_.push(accel, rule_);
+    force_.push(force, rule_);
+    in.astate.col(b) = Eigen::Map<const Vector<Scalar, kAO * N>>(accel_.state().data());
+    in.fstate.col(b) = Eigen::Map<const Vector<Scalar, kFO * N>>(force_.state().data());
+    in.avalue.col(b) = accel_.value();
+    in.fvalue.col(b) = force_.value();
+  }
+
+  // The rows, eq. 5, Cramer's rule and the Hadamard ratio at the kBlock instants of `in`, which
+  // follow the samples_ samples already committed: see run().
+  ALGID_FLATTEN void solve_block(const BlockInputs& in, BlockSolution& out) noexcept {
+    using Lanes = BlockLanes;
     constexpr int kA = kAccelOrders + 1;  // J_0 .. J_7 of an acceleration: what its rows need
     constexpr int kF = kForceOrders + 1;  // J_0 .. J_5 of a force
     constexpr int kAO = AccelChain::kOrders, kFO = ForceChain::kOrders;
-    // The chains after each sample of the block, one contiguous column per sample (as the
-    // chains hold them), turned into lanes (lane b = instant b) tile by tile in registers
-    // below (transpose_to_lanes). The samples themselves (J_0) are few: stored as lanes.
-    Matrix<Scalar, kAO * N, kBlock> astate;
-    Matrix<Scalar, kFO * N, kBlock> fstate;
-    Eigen::Matrix<Scalar, N, kBlock, Eigen::RowMajor> avalue, fvalue;
-    for (int b = 0; b < kBlock; ++b) {  // samples_ advances as each sample is observed, below
-      accel_.push(accel + b * N, rule_);
-      force_.push(force + b * N, rule_);
-      astate.col(b) = Eigen::Map<const Vector<Scalar, kAO * N>>(accel_.state().data());
-      fstate.col(b) = Eigen::Map<const Vector<Scalar, kFO * N>>(force_.state().data());
-      avalue.col(b) = accel_.value();
-      fvalue.col(b) = force_.value();
-    }
     // What the DOFs share at each instant (instant()), and the time scaling J_r = I^r tau^-r,
     // lane by lane as in update().
-    Lanes intervals, inv_tau, decay4 = Lanes::Zero(), decay3 = Lanes::Zero();
-    for (int b = 0; b < kBlock; ++b) intervals(b) = static_cast<Scalar>(samples_ + 1 + b - P);
-    shared(intervals, inv_tau, decay4, decay3);
-    Instant<Scalar> now[kBlock];
+    Lanes intervals, inv_tau, samples;
     for (int b = 0; b < kBlock; ++b) {
-      now[b].inv_tau = inv_tau(b);
-      now[b].h = config_.dt;
-      now[b].decay4 = decay4(b);
-      now[b].decay3 = decay3(b);
-      now[b].samples = samples_ + 1 + b;
+      intervals(b) = static_cast<Scalar>(samples_ + 1 + b - P);
+      samples(b) = static_cast<Scalar>(samples_ + 1 + b);
     }
+    out.decay4.setZero();
+    out.decay3.setZero();
+    shared(intervals, inv_tau, out.decay4, out.decay3);
     Lanes inv_pow[kA];
     inv_pow[0].setConstant(Scalar(1));
     for (int r = 1; r < kA; ++r) inv_pow[r] = inv_pow[r - 1] * inv_tau;
@@ -245,12 +282,12 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
     const auto signal_rows_lanes = [&](int ka, Lanes* arows_k, int kf, Lanes* frows_k) {
       Lanes JA[kAO + 1], JF[kFO + 1];  // J_0 .. J_Orders (the padding orders unused)
       if (ka >= 0) {
-        JA[0] = avalue.row(ka).transpose();
-        transpose_to_lanes<kAO>(astate.col(0).data() + ka * kAO, kAO * N, &JA[1]);
+        JA[0] = in.avalue.row(ka).transpose();
+        transpose_to_lanes<kAO>(in.astate.col(0).data() + ka * kAO, kAO * N, &JA[1]);
       }
       if (kf >= 0) {
-        JF[0] = fvalue.row(kf).transpose();
-        transpose_to_lanes<kFO>(fstate.col(0).data() + kf * kFO, kFO * N, &JF[1]);
+        JF[0] = in.fvalue.row(kf).transpose();
+        transpose_to_lanes<kFO>(in.fstate.col(0).data() + kf * kFO, kFO * N, &JF[1]);
       }
       for (int r = 1; r < kA; ++r) {
         if (ka >= 0) JA[r] = inv_pow[r] * JA[r];
@@ -263,35 +300,34 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
     // i - 1, i, i + 1 (4 x 3 column-major each) roll through three slots; force i's rows go
     // with acceleration i + 1's.
     Lanes arows[3][12], frows[4];
-    Lanes det[N], numerator[4 * N], h2num[N], h2den[N];
     signal_rows_lanes(0, arows[0], N == 1 ? 0 : -1, frows);  // one DOF: its force here too
     for (int i = 0; i < N; ++i) {
       if (N > 1) signal_rows_lanes(i + 1 < N ? i + 1 : -1, arows[(i + 1) % 3], i, frows);
       const Lanes* left = i > 0 ? arows[(i + 2) % 3] : nullptr;
       const Lanes* right = i + 1 < N ? arows[(i + 1) % 3] : nullptr;
       if (is_reduced(i)) {
-        solve_lanes<3>(left, arows[i % 3], right, frows, det[i], &numerator[4 * i], h2num[i], h2den[i], last_);
+        solve_lanes<3>(left, arows[i % 3], right, frows, inv_tau, samples, i, out, last_);
       } else {
-        solve_lanes<4>(left, arows[i % 3], right, frows, det[i], &numerator[4 * i], h2num[i], h2den[i],
-                       full_[static_cast<std::size_t>(i)]);
+        solve_lanes<4>(left, arows[i % 3], right, frows, inv_tau, samples, i, out, full_[static_cast<std::size_t>(i)]);
       }
     }
-    // Eq. 7 and the outputs, sample by sample.
-    for (int b = 0; b < kBlock; ++b) {
-      for (int i = 0; i < N; ++i) {
-        const Scalar num[4] = {numerator[4 * i](b), numerator[4 * i + 1](b), numerator[4 * i + 2](b),
-                               is_reduced(i) ? Scalar(0) : numerator[4 * i + 3](b)};  // 3x3: 3 numerators
-        if (is_reduced(i)) {
-          last_.commit(det[i](b), num, h2num[i](b), h2den[i](b), now[b], config_.validity);
-        } else {
-          full_[static_cast<std::size_t>(i)].commit(det[i](b), num, h2num[i](b), h2den[i](b), now[b],
-                                                    config_.validity);
-        }
+  }
+
+  // Eq. 7 and the outputs for instant b of a solved block: the sample is then consumed.
+  void commit(const BlockSolution& in, int b) noexcept {
+    for (int i = 0; i < N; ++i) {
+      const Scalar scaled[4] = {in.scaled[4 * i](b), in.scaled[4 * i + 1](b), in.scaled[4 * i + 2](b),
+                                in.scaled[4 * i + 3](b)};
+      if (is_reduced(i)) {
+        last_.commit_weighed(in.det[i](b), scaled, in.h2num[i](b), in.h2den[i](b),
+                             in.fed[i].col(b).template head<4>(), in.decay3(b), config_.dt);
+      } else {
+        full_[static_cast<std::size_t>(i)].commit_weighed(in.det[i](b), scaled, in.h2num[i](b), in.h2den[i](b),
+                                                          in.fed[i].col(b), in.decay4(b), config_.dt);
       }
-      collect();
-      ++samples_;
-      observe(t0 + b, Status::kOk);
     }
+    collect();
+    ++samples_;
   }
 
   // lanes[r](b) = src[b * stride + r], r < Rows, b < kBlock: Rows consecutive states of one
@@ -324,6 +360,27 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
         for (int b = 0; b < kBlock; ++b) lanes[r](b) = src[b * stride + r];
     }
   }
+  // columns(r, b) = lanes[r](b) for r < Rows: the transpose of transpose_to_lanes(), in square
+  // tiles of a register of at most 4 scalars where they tile the block.
+  template <int Rows, class Lanes, class Columns>
+  static void lanes_to_columns(const Lanes* lanes, Columns& columns) noexcept {
+    using Packet = typename Eigen::internal::find_best_packet<Scalar, 4>::type;
+    constexpr int kWidth = Eigen::internal::unpacket_traits<Packet>::size;
+    if constexpr (kWidth > 1 && Rows % kWidth == 0 && kBlock % kWidth == 0) {
+      for (int r0 = 0; r0 < Rows; r0 += kWidth) {
+        for (int b0 = 0; b0 < kBlock; b0 += kWidth) {
+          Eigen::internal::PacketBlock<Packet, kWidth> tile;
+          for (int j = 0; j < kWidth; ++j) tile.packet[j] = Eigen::internal::ploadu<Packet>(lanes[r0 + j].data() + b0);
+          Eigen::internal::ptranspose(tile);
+          for (int j = 0; j < kWidth; ++j) Eigen::internal::pstoreu(&columns(r0, b0 + j), tile.packet[j]);
+        }
+      }
+    } else {
+      for (int r = 0; r < Rows; ++r)
+        for (int b = 0; b < kBlock; ++b) columns(r, b) = lanes[r](b);
+    }
+  }
+
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
 #endif
@@ -340,34 +397,58 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
     }
   }
 
-  // One DOF's systems for kBlock instants; the last lane's system is what system() reports.
+  // DOF i's systems for kBlock instants, solved and weighed for eq. 7 into `out`, with the
+  // arithmetic of DofEstimator::update(); the last lane's system is what system() reports.
   template <int M, class Lanes, class Dof>
-  static void solve_lanes(const Lanes* left, const Lanes* self, const Lanes* right, const Lanes* force, Lanes& det,
-                          Lanes* numerator, Lanes& h2num, Lanes& h2den, Dof& dof) noexcept {
+  void solve_lanes(const Lanes* left, const Lanes* self, const Lanes* right, const Lanes* force, const Lanes& inv_tau,
+                   const Lanes& samples, int i, BlockSolution& out, Dof& dof) const noexcept {
     Lanes S[M * M], s[M];
     assemble_system<M>(left, self, right, force, S, s);
-    cramer_lanes<M>(S, s, det, numerator);
-    equilibrated_hadamard2<M>(S, det, h2num, h2den);
+    Lanes* scaled = &out.scaled[4 * i];
+    cramer_lanes<M>(S, s, out.det[i], scaled);
+    equilibrated_hadamard2<M>(S, out.det[i], out.h2num[i], out.h2den[i]);
     Scalar last_S[M * M], last_s[M];
     for (int e = 0; e < M * M; ++e) last_S[e] = S[e](kBlock - 1);
     for (int q = 0; q < M; ++q) last_s[q] = s[q](kBlock - 1);
     dof.set_system(last_S, last_s);
+    // The numerators of the time-scaled system scaled to the physical parameters, the validity
+    // rule and what eq. 7 is fed (DofEstimator::commit(), in lanes: weigh_lanes()), then one
+    // packed vector per instant.
+    const Lanes inv2 = inv_tau * inv_tau;
+    scaled[1] = scaled[1] * inv_tau;
+    for (int q = 2; q < M; ++q) scaled[q] = scaled[q] * inv2;
+    constexpr int kSlots = Dof::Packed::RowsAtCompileTime;
+    Lanes fed[kSlots];
+    weigh_lanes<M>(out.det[i], scaled, out.h2num[i], out.h2den[i], samples, config_.validity, fed[0], &fed[1]);
+    for (int q = M + 1; q < kSlots; ++q) fed[q].setZero();
+    lanes_to_columns<kSlots>(fed, out.fed[i]);
   }
 
-  // Eq. 7 estimates of every DOF into the physical views (one division per DOF); an interior
-  // spring is the mean of its two DOFs' estimates, or the one that is valid.
+  // Eq. 7 estimates of every DOF into the physical views (one division per DOF, NaN where not
+  // valid); an interior spring is the mean of its two DOFs' estimates, or the one that is valid.
   void collect() noexcept {
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     Scalar right_spring = nan;  // k_{i+1} from DOF i, for the fusion at DOF i + 1
     for (int i = 0; i < N; ++i) {
-      const Vector<Scalar, 4> t = theta(i);  // NaN where not valid
-      valid_[i] = is_reduced(i) ? last_.valid() : full_[i].valid();
-      mass_(i) = t(0);
-      damping_(i) = t(1);
+      // [m_i, c_i, k_i, k_{i+1}] in slots 1 .. 4 (k_{i+1}: NaN for a reduced DOF)
+      Scalar m, c, k_left, k_right = nan;
+      bool ok;
+      if (is_reduced(i)) {
+        const auto e = last_.packed_estimates();
+        m = e(1), c = e(2), k_left = e(3);
+        ok = last_.valid();
+      } else {
+        const auto e = full_[static_cast<std::size_t>(i)].packed_estimates();
+        m = e(1), c = e(2), k_left = e(3), k_right = e(4);
+        ok = full_[static_cast<std::size_t>(i)].valid();
+      }
+      valid_[i] = ok;
+      mass_(i) = ok ? m : nan;
+      damping_(i) = ok ? c : nan;
       // k_i: this DOF's estimate, fused with DOF i-1's estimate of the same spring.
       const bool left_ok = !std::isnan(right_spring);
-      stiffness_(i) = valid_[i] ? (left_ok ? Scalar(0.5) * (t(2) + right_spring) : t(2)) : right_spring;
-      right_spring = t(3);
+      stiffness_(i) = ok ? (left_ok ? Scalar(0.5) * (k_left + right_spring) : k_left) : right_spring;
+      right_spring = ok ? k_right : nan;
     }
     stiffness_(N) = free_end() ? Scalar(0) : right_spring;
   }
