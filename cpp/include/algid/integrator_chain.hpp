@@ -89,29 +89,52 @@ class IntegratorChain {
   template <int RuleOrders>
   bool push(const Scalar* f, const InterpolatoryRule<P, RuleOrders, Scalar>& rule) noexcept {
     static_assert(RuleOrders >= Orders, "the rule must cover every order of the chain");
-    const int slot = static_cast<int>(count_ % kRing);
-    for (int k = 0; k < K; ++k) {
-      ring_(slot, k) = f[k];
-      ring_(slot + kRing, k) = f[k];
-    }
-    ++count_;
+    store(f);
     if (count_ < P) return false;
     const long j = count_ - P;  // interval [t_j, t_{j+1}]
     const long start = Rule::stencil_start(j);
-    const int off = static_cast<int>(j - start);
+    const Weights w = weights(rule, static_cast<int>(j - start));
     const int first = static_cast<int>(start % kRing);
-    // I^r += sum_{q<r} h^(r-q)/(r-q)! I^q + h^r sum_m W(r, m) f_m, every order from the old
-    // lower orders: the step is computed whole before the state moves.
-    Matrix<Scalar, Orders, K> step;
-    step.noalias() = rule.weights(off).template topRows<Orders>().lazyProduct(
-        ring_.template block<P, K>(first, 0));
-    add_carry<0>(rule.carry(), step);
-    // The state grows like tau^r while each step adds a small amount: that is where single
-    // precision loses its digits; double keeps them without compensation.
-    detail::accumulate<kCompensated>(state_, compensation_, step);
+    for (int k = 0; k < K; ++k) {
+      Packet s[kRegs], c[kRegs];
+      load_state(k, s, c);
+      advance(w, first, k, s, c);
+      store_state(k, s, c);
+    }
     value_ = ring_.row(static_cast<int>((j + 1) % kRing)).transpose();
     return true;
   }
+
+  /// B calls of push() in a row past the start-up (every stencil centred: steady()), with the
+  /// rule's weights and the states held in registers from sample to sample: the same
+  /// arithmetic, the same bits. Sample b is f[b * stride + k], k < K; after it, the states are
+  /// written to states + b * Orders * K (Orders x K, column-major, as state()) and the values
+  /// to values + b * K (as value()). @realtime no allocation, no throw.
+  template <int B, int RuleOrders>
+  void push_steady(const Scalar* f, int stride, const InterpolatoryRule<P, RuleOrders, Scalar>& rule, Scalar* states,
+                   Scalar* values) noexcept {
+    static_assert(RuleOrders >= Orders, "the rule must cover every order of the chain");
+    const Weights w = weights(rule, Rule::kOffsets - 1);
+    Packet s[K][kRegs], c[K][kRegs];
+    for (int k = 0; k < K; ++k) load_state(k, s[k], c[k]);
+    for (int b = 0; b < B; ++b) {
+      store(f + b * stride);
+      const long j = count_ - P;
+      const int first = static_cast<int>(Rule::stencil_start(j) % kRing);
+      const int now = static_cast<int>((j + 1) % kRing);
+      for (int k = 0; k < K; ++k) {
+        advance(w, first, k, s[k], c[k]);
+        for (int g = 0; g < kRegs; ++g) Eigen::internal::pstoreu(states + (b * K + k) * Orders + g * kPW, s[k][g]);
+        values[b * K + k] = ring_(now, k);
+      }
+    }
+    for (int k = 0; k < K; ++k) store_state(k, s[k], c[k]);
+    value_ = Eigen::Map<const Vector<Scalar, K>>(values + (B - 1) * K);
+  }
+
+  /// Whether the next push() advances with a centred stencil (past the start-up), the case of
+  /// push_steady().
+  bool steady() const noexcept { return count_ + 1 - P >= Rule::kOffsets - 1; }
 
   /// push() for a single signal (K = 1). @realtime no allocation, no throw.
   template <int RuleOrders>
@@ -141,28 +164,77 @@ class IntegratorChain {
   long count() const noexcept { return count_; }
 
  private:
-  // step(r) += sum_{q<r} carry(r, q) state(q), in blocks of kCarryBlock orders (one SIMD
-  // register: Eigen's packet size) that each skip the zero upper triangle: about half the
-  // multiplications of the full product, in whole registers.
-  static constexpr int kCarryBlock = Eigen::internal::packet_traits<Scalar>::size;
-  template <int Row0, class Carry>
-  void add_carry(const Carry& carry, Matrix<Scalar, Orders, K>& step) const noexcept {
-    constexpr int kRows = Orders - Row0 < kCarryBlock ? Orders - Row0 : kCarryBlock;
-    constexpr int kDepth = Row0 + kRows - 1;  // the lower orders the block's last row needs
-    if constexpr (kDepth > 0) step.template middleRows<kRows>(Row0) += carry_terms<Row0, kRows, 0, kDepth>(carry);
-    if constexpr (Row0 + kRows < Orders) add_carry<Row0 + kRows>(carry, step);
+  // The orders of a signal in registers (Packet) of at most 256 bits, as the lane layout.
+  using Packet = typename detail::DividingPacket<Scalar, Orders>::type;
+  static constexpr int kPW = Eigen::internal::unpacket_traits<Packet>::size;
+  static constexpr int kRegs = Orders / kPW;
+  static_assert(Orders % kPW == 0, "whole registers of orders");
+
+  // The weights of one stencil offset and the carry, as registers: tap m of orders g kPW ..
+  // (g + 1) kPW - 1 in w[m][g], carry column q in c[q][g] (q < Orders - 1; the last is zero).
+  struct Weights {
+    Packet w[P][kRegs];
+    Packet c[Orders > 1 ? Orders - 1 : 1][kRegs];
+  };
+  template <int RuleOrders>
+  static Weights weights(const InterpolatoryRule<P, RuleOrders, Scalar>& rule, int off) noexcept {
+    Weights out;
+    for (int m = 0; m < P; ++m)
+      for (int g = 0; g < kRegs; ++g) out.w[m][g] = Eigen::internal::ploadu<Packet>(&rule.weights(off)(g * kPW, m));
+    for (int q = 0; q + 1 < Orders; ++q)
+      for (int g = 0; g < kRegs; ++g) out.c[q][g] = Eigen::internal::ploadu<Packet>(&rule.carry()(g * kPW, q));
+    return out;
   }
 
-  // sum_{Q0 <= q < Q1} carry(Row0 + i, q) state(q) for i < kRows, summed as a balanced tree of
-  // pairs: the next sample's state waits on this sum, and a tree of depth log2 is that much
-  // shorter a wait than a chain of fused multiply-adds one term at a time.
-  template <int Row0, int kRows, int Q0, int Q1, class Carry>
-  auto carry_terms(const Carry& carry) const noexcept {
-    if constexpr (Q1 - Q0 <= 2) {
-      return carry.template block<kRows, Q1 - Q0>(Row0, Q0).lazyProduct(state_.template middleRows<Q1 - Q0>(Q0));
-    } else {
-      constexpr int kMid = Q0 + (Q1 - Q0 + 1) / 2 / 2 * 2;  // an even split: pairs stay pairs
-      return carry_terms<Row0, kRows, Q0, kMid>(carry) + carry_terms<Row0, kRows, kMid, Q1>(carry);
+  // The new sample into both copies of the ring.
+  void store(const Scalar* f) noexcept {
+    const int slot = static_cast<int>(count_ % kRing);
+    for (int k = 0; k < K; ++k) {
+      ring_(slot, k) = f[k];
+      ring_(slot + kRing, k) = f[k];
+    }
+    ++count_;
+  }
+  void load_state(int k, Packet* s, Packet* c) const noexcept {
+    for (int g = 0; g < kRegs; ++g) {
+      s[g] = Eigen::internal::ploadu<Packet>(&state_(g * kPW, k));
+      if constexpr (kCompensated) c[g] = Eigen::internal::ploadu<Packet>(&compensation_(g * kPW, k));
+    }
+  }
+  void store_state(int k, const Packet* s, const Packet* c) noexcept {
+    for (int g = 0; g < kRegs; ++g) {
+      Eigen::internal::pstoreu(&state_(g * kPW, k), s[g]);
+      if constexpr (kCompensated) Eigen::internal::pstoreu(&compensation_(g * kPW, k), c[g]);
+    }
+  }
+
+  // Signal k over one interval, its states in s (and their compensation in c):
+  //   I^r += h^r sum_m W(r, m) f_m + sum_{q<r} h^(r-q)/(r-q)! I^q,
+  // every order from the old lower orders (the step is computed whole before the state moves),
+  // the stencil's samples from ring row `first` on.
+  void advance(const Weights& w, int first, int k, Packet* s, Packet* c) const noexcept {
+    using namespace Eigen::internal;
+    const Scalar* f = &ring_(first, k);
+    Scalar old[Orders];  // the lower orders, one at a time for the carry
+    for (int g = 0; g < kRegs; ++g) pstoreu(old + g * kPW, s[g]);
+    Packet step[kRegs];
+    for (int g = 0; g < kRegs; ++g) {
+      step[g] = pmul(w.w[0][g], pset1<Packet>(f[0]));
+      for (int m = 1; m < P; ++m) step[g] = pmadd(w.w[m][g], pset1<Packet>(f[m]), step[g]);
+      // carry(r, q) = 0 for q >= r: register g needs q <= (g + 1) kPW - 2
+      for (int q = 0; q + 1 < Orders && q <= (g + 1) * kPW - 2; ++q) step[g] = pmadd(w.c[q][g], pset1<Packet>(old[q]), step[g]);
+    }
+    // The state grows like tau^r while each step adds a small amount: that is where single
+    // precision loses its digits (Kahan-compensated there); double keeps them without.
+    for (int g = 0; g < kRegs; ++g) {
+      if constexpr (kCompensated) {
+        const Packet y = psub(step[g], c[g]);
+        const Packet t = padd(s[g], y);
+        c[g] = psub(psub(t, s[g]), y);
+        s[g] = t;
+      } else {
+        s[g] = padd(s[g], step[g]);
+      }
     }
   }
 

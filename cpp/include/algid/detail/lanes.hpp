@@ -53,6 +53,37 @@ constexpr int lane_width() noexcept {
   return w;
 }
 
+// (GCC warns that a SIMD type's alignment attribute is dropped as a template argument, as
+// Eigen's own packet code does everywhere; Eigen silences it in its headers, we here.)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wignored-attributes"
+#endif
+/// The widest SIMD register (Eigen packet) of Scalar of at most 256 bits (see lane_width())
+/// whose lane count divides Size; Scalar itself where none does.
+template <class Scalar, int Size>
+struct DividingPacket {
+ private:
+  template <class Packet>
+  static auto pick() {
+    constexpr int width = Eigen::internal::unpacket_traits<Packet>::size;
+    using Half = typename Eigen::internal::unpacket_traits<Packet>::half;
+    if constexpr (width > 1 && Size % width == 0 && width * sizeof(Scalar) <= 32) {
+      return Packet{};
+    } else if constexpr (width > 1 && Eigen::internal::unpacket_traits<Half>::size < width) {
+      return pick<Half>();
+    } else {
+      return Scalar{};
+    }
+  }
+
+ public:
+  using type = decltype(pick<typename Eigen::internal::packet_traits<Scalar>::type>());
+};
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+
 /// Lane operations on Lanes<Scalar, W>.
 template <class Scalar, int W>
 struct LaneOps {

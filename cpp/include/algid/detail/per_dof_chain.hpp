@@ -134,16 +134,14 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
       const Scalar* a = accel + t * N;
       const Scalar* f = force + t * N;
       if (pushed || (samples_ >= P - 1 && T - t >= kBlock && finite(a, f, kBlock * N))) {
-        if (!pushed)
-          for (int b = 0; b < kBlock; ++b) push_into(a + b * N, f + b * N, b, inputs[current]);
+        if (!pushed) push_block(a, f, inputs[current]);
         solve_block(inputs[current], solution);
         const long next = t + kBlock;
         const Scalar* na = accel + next * N;
         const Scalar* nf = force + next * N;
         const bool ahead = T - next >= kBlock && finite(na, nf, kBlock * N);
-        BlockInputs& following = inputs[1 - current];
+        if (ahead) push_block(na, nf, inputs[1 - current]);
         for (int b = 0; b < kBlock; ++b) {
-          if (ahead) push_into(na + b * N, nf + b * N, b, following);
           commit(solution, b);
           observe(t + b, Status::kOk);
         }
@@ -232,7 +230,7 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   struct BlockInputs {
     Matrix<Scalar, AccelChain::kOrders * N, kBlock> astate;
     Matrix<Scalar, ForceChain::kOrders * N, kBlock> fstate;
-    Eigen::Matrix<Scalar, N, kBlock, Eigen::RowMajor> avalue, fvalue;
+    Matrix<Scalar, N, kBlock> avalue, fvalue;
   };
   // Eq. 5 of every DOF solved at the kBlock instants of a block, one per lane, and what the
   // DOFs share at each instant: what commit() feeds to eq. 7 sample by sample.
@@ -244,9 +242,21 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
     Matrix<Scalar, 8, kBlock> fed[N];
   };
 
+  // Push kBlock finite samples past the warm-up (the chains advance at each) and keep the
+  // chains' states after each in `in`: with the weights in registers once the stencils are
+  // centred (IntegratorChain::push_steady()), the same bits as push() sample by sample.
+  ALGID_FLATTEN void push_block(const Scalar* accel, const Scalar* force, BlockInputs& in) noexcept {
+    if (accel_.steady()) {
+      accel_.template push_steady<kBlock>(accel, N, rule_, in.astate.data(), in.avalue.data());
+      force_.template push_steady<kBlock>(force, N, rule_, in.fstate.data(), in.fvalue.data());
+    } else {
+      for (int b = 0; b < kBlock; ++b) push_into(accel + b * N, force + b * N, b, in);
+    }
+  }
+
   // Push one finite sample past the warm-up (the chains advance) and keep the chains' state as
   // instant b of `in`.
-  ALGID_FLATTEN void push_into(const Scalar* accel, const Scalar* force, int b, BlockInputs& in) noexcept {
+  void push_into(const Scalar* accel, const Scalar* force, int b, BlockInputs& in) noexcept {
     constexpr int kAO = AccelChain::kOrders, kFO = ForceChain::kOrders;
     accel_.push(accel, rule_);
     force_.push(force, rule_);
