@@ -117,17 +117,25 @@ class IntegratorChain {
     const Weights w = weights(rule, Rule::kOffsets - 1);
     Packet s[K][kRegs], c[K][kRegs];
     for (int k = 0; k < K; ++k) load_state(k, s[k], c[k]);
+    // Ring rows as unsigned counts (count_ >= P - 1 here): the sample's slot, the stencil's
+    // first sample (centred: j - (P/2 - 1)) and the interval end j + 1, for j = count_ - P.
+    const unsigned long base = static_cast<unsigned long>(count_);
     for (int b = 0; b < B; ++b) {
-      store(f + b * stride);
-      const long j = count_ - P;
-      const int first = static_cast<int>(Rule::stencil_start(j) % kRing);
-      const int now = static_cast<int>((j + 1) % kRing);
+      const unsigned long pushed = base + static_cast<unsigned long>(b);  // samples before this one
+      const int slot = static_cast<int>(pushed % kRing);
+      for (int k = 0; k < K; ++k) {
+        ring_(slot, k) = f[b * stride + k];
+        ring_(slot + kRing, k) = f[b * stride + k];
+      }
+      const int first = static_cast<int>((pushed + 1 - P - (P / 2 - 1)) % kRing);
+      const int now = static_cast<int>((pushed + 2 - P) % kRing);
       for (int k = 0; k < K; ++k) {
         advance(w, first, k, s[k], c[k]);
         for (int g = 0; g < kRegs; ++g) Eigen::internal::pstoreu(states + (b * K + k) * Orders + g * kPW, s[k][g]);
         values[b * K + k] = ring_(now, k);
       }
     }
+    count_ += B;
     for (int k = 0; k < K; ++k) store_state(k, s[k], c[k]);
     value_ = Eigen::Map<const Vector<Scalar, K>>(values + (B - 1) * K);
   }
