@@ -105,39 +105,51 @@ class IntegratorChain {
     return true;
   }
 
-  /// B calls of push() in a row past the start-up (every stencil centred: steady()), with the
-  /// rule's weights and the states held in registers from sample to sample: the same
-  /// arithmetic, the same bits. Sample b is f[b * stride + k], k < K; after it, the states are
-  /// written to states + b * Orders * K (Orders x K, column-major, as state()) and the values
-  /// to values + b * K (as value()). @realtime no allocation, no throw.
-  template <int B, int RuleOrders>
-  void push_steady(const Scalar* f, int stride, const InterpolatoryRule<P, RuleOrders, Scalar>& rule, Scalar* states,
-                   Scalar* values) noexcept {
+  /// B calls of push() in a row past the start-up (every stencil centred: steady()) for C
+  /// chains of this type that share one rule and one clock (a chain's accelerations and its
+  /// forces), with the rule's weights and the states held in registers from sample to sample
+  /// and the C independent recurrences interleaved sample by sample: the same arithmetic as
+  /// push(), the same bits. Chain i's sample b is f[i][b * stride + k], k < K; after it, its
+  /// states are written to states[i] + b * Orders * K (Orders x K, column-major, as state())
+  /// and its values to values[i] + b * K (as value()). @realtime no allocation, no throw.
+  template <int B, int C, int RuleOrders>
+  static void push_steady(const std::array<IntegratorChain*, C>& chains, const std::array<const Scalar*, C>& f,
+                          int stride, const InterpolatoryRule<P, RuleOrders, Scalar>& rule,
+                          const std::array<Scalar*, C>& states, const std::array<Scalar*, C>& values) noexcept {
     static_assert(RuleOrders >= Orders, "the rule must cover every order of the chain");
     const Weights w = weights(rule, Rule::kOffsets - 1);
-    Packet s[K][kRegs], c[K][kRegs];
-    for (int k = 0; k < K; ++k) load_state(k, s[k], c[k]);
-    // Ring rows as unsigned counts (count_ >= P - 1 here): the sample's slot, the stencil's
-    // first sample (centred: j - (P/2 - 1)) and the interval end j + 1, for j = count_ - P.
-    const unsigned long base = static_cast<unsigned long>(count_);
+    Packet s[C][K][kRegs], c[C][K][kRegs];
+    for (int i = 0; i < C; ++i)
+      for (int k = 0; k < K; ++k) chains[i]->load_state(k, s[i][k], c[i][k]);
+    // Ring rows as unsigned counts (count_ >= P - 1 here, the same for every chain): the
+    // sample's slot, the stencil's first sample (centred: j - (P/2 - 1)) and the interval end
+    // j + 1, for j = count_ - P.
+    const unsigned long base = static_cast<unsigned long>(chains[0]->count_);
     for (int b = 0; b < B; ++b) {
       const unsigned long pushed = base + static_cast<unsigned long>(b);  // samples before this one
       const int slot = static_cast<int>(pushed % kRing);
-      for (int k = 0; k < K; ++k) {
-        ring_(slot, k) = f[b * stride + k];
-        ring_(slot + kRing, k) = f[b * stride + k];
-      }
       const int first = static_cast<int>((pushed + 1 - P - (P / 2 - 1)) % kRing);
       const int now = static_cast<int>((pushed + 2 - P) % kRing);
-      for (int k = 0; k < K; ++k) {
-        advance(w, first, k, s[k], c[k]);
-        for (int g = 0; g < kRegs; ++g) Eigen::internal::pstoreu(states + (b * K + k) * Orders + g * kPW, s[k][g]);
-        values[b * K + k] = ring_(now, k);
+      for (int i = 0; i < C; ++i) {
+        IntegratorChain& chain = *chains[i];
+        for (int k = 0; k < K; ++k) {
+          chain.ring_(slot, k) = f[i][b * stride + k];
+          chain.ring_(slot + kRing, k) = f[i][b * stride + k];
+        }
+        for (int k = 0; k < K; ++k) {
+          chain.advance(w, first, k, s[i][k], c[i][k]);
+          for (int g = 0; g < kRegs; ++g)
+            Eigen::internal::pstoreu(states[i] + (b * K + k) * Orders + g * kPW, s[i][k][g]);
+          values[i][b * K + k] = chain.ring_(now, k);
+        }
       }
     }
-    count_ += B;
-    for (int k = 0; k < K; ++k) store_state(k, s[k], c[k]);
-    value_ = Eigen::Map<const Vector<Scalar, K>>(values + (B - 1) * K);
+    for (int i = 0; i < C; ++i) {
+      IntegratorChain& chain = *chains[i];
+      chain.count_ += B;
+      for (int k = 0; k < K; ++k) chain.store_state(k, s[i][k], c[i][k]);
+      chain.value_ = Eigen::Map<const Vector<Scalar, K>>(values[i] + (B - 1) * K);
+    }
   }
 
   /// Whether the next push() advances with a centred stencil (past the start-up), the case of

@@ -16,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace algid {
 namespace detail {
@@ -247,8 +248,14 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   // centred (IntegratorChain::push_steady()), the same bits as push() sample by sample.
   ALGID_FLATTEN void push_block(const Scalar* accel, const Scalar* force, BlockInputs& in) noexcept {
     if (accel_.steady()) {
-      accel_.template push_steady<kBlock>(accel, N, rule_, in.astate.data(), in.avalue.data());
-      force_.template push_steady<kBlock>(force, N, rule_, in.fstate.data(), in.fvalue.data());
+      if constexpr (std::is_same_v<AccelChain, ForceChain>) {  // both recurrences interleaved
+        AccelChain::template push_steady<kBlock, 2>({&accel_, &force_}, {accel, force}, N, rule_,
+                                                    {in.astate.data(), in.fstate.data()},
+                                                    {in.avalue.data(), in.fvalue.data()});
+      } else {
+        AccelChain::template push_steady<kBlock, 1>({&accel_}, {accel}, N, rule_, {in.astate.data()}, {in.avalue.data()});
+        ForceChain::template push_steady<kBlock, 1>({&force_}, {force}, N, rule_, {in.fstate.data()}, {in.fvalue.data()});
+      }
     } else {
       for (int b = 0; b < kBlock; ++b) push_into(accel + b * N, force + b * N, b, in);
     }
