@@ -261,11 +261,12 @@ class DofEstimator {
     trusted_ = solvable && now.samples >= rule.min_samples &&
                hadamard2_num_ >= rule.min_hadamard * rule.min_hadamard * hadamard2_den_;
     const Scalar decay = M == 4 ? now.decay4 : now.decay3;
+    // Built in whole registers of 4 (see `scaled` above).
     Packed x = Packed::Zero();
     if (trusted_) {
       const Scalar sign = det_ > Scalar(0) ? Scalar(1) : Scalar(-1);
-      x(0) = std::abs(det_);
-      x.template segment<M>(1) = sign * scaled;
+      x.template head<4>() = Vector<Scalar, 4>(std::abs(det_), sign * scaled(0), sign * scaled(1), sign * scaled(2));
+      if constexpr (M == 4) x.template segment<4>(4) = Vector<Scalar, 4>(sign * scaled(3), Scalar(0), Scalar(0), Scalar(0));
     }
     ratio_.add(decay, now.h, x);
   }

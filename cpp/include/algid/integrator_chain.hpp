@@ -93,7 +93,7 @@ class IntegratorChain {
     if (count_ < P) return false;
     const long j = count_ - P;  // interval [t_j, t_{j+1}]
     const long start = Rule::stencil_start(j);
-    const Weights w = weights(rule, static_cast<int>(j - start));
+    const WeightsInMemory<RuleOrders> w{&rule, static_cast<int>(j - start)};
     const int first = static_cast<int>(start % kRing);
     for (int k = 0; k < K; ++k) {
       Packet s[kRegs], c[kRegs];
@@ -190,11 +190,22 @@ class IntegratorChain {
   static constexpr int kRegs = Orders / kPW;
   static_assert(Orders % kPW == 0, "whole registers of orders");
 
-  // The weights of one stencil offset and the carry, as registers: tap m of orders g kPW ..
-  // (g + 1) kPW - 1 in w[m][g], carry column q in c[q][g] (q < Orders - 1; the last is zero).
+  // The weights of one stencil offset and the carry, as registers (for a block of pushes):
+  // tap m of orders g kPW .. (g + 1) kPW - 1 in w[m][g], carry column q in c[q][g] (q < Orders
+  // - 1; the last is zero).
   struct Weights {
     Packet w[P][kRegs];
     Packet c[Orders > 1 ? Orders - 1 : 1][kRegs];
+    Packet tap(int m, int g) const noexcept { return w[m][g]; }
+    Packet carry(int q, int g) const noexcept { return c[q][g]; }
+  };
+  // The same, read from the rule where they are used (a single push: no copy).
+  template <int RuleOrders>
+  struct WeightsInMemory {
+    const InterpolatoryRule<P, RuleOrders, Scalar>* rule;
+    int off;
+    Packet tap(int m, int g) const noexcept { return Eigen::internal::ploadu<Packet>(&rule->weights(off)(g * kPW, m)); }
+    Packet carry(int q, int g) const noexcept { return Eigen::internal::ploadu<Packet>(&rule->carry()(g * kPW, q)); }
   };
   template <int RuleOrders>
   static Weights weights(const InterpolatoryRule<P, RuleOrders, Scalar>& rule, int off) noexcept {
@@ -232,17 +243,18 @@ class IntegratorChain {
   //   I^r += h^r sum_m W(r, m) f_m + sum_{q<r} h^(r-q)/(r-q)! I^q,
   // every order from the old lower orders (the step is computed whole before the state moves),
   // the stencil's samples from ring row `first` on.
-  void advance(const Weights& w, int first, int k, Packet* s, Packet* c) const noexcept {
+  template <class W>
+  void advance(const W& w, int first, int k, Packet* s, Packet* c) const noexcept {
     using namespace Eigen::internal;
     const Scalar* f = &ring_(first, k);
     Scalar old[Orders];  // the lower orders, one at a time for the carry
     for (int g = 0; g < kRegs; ++g) pstoreu(old + g * kPW, s[g]);
     Packet step[kRegs];
     for (int g = 0; g < kRegs; ++g) {
-      step[g] = pmul(w.w[0][g], pset1<Packet>(f[0]));
-      for (int m = 1; m < P; ++m) step[g] = pmadd(w.w[m][g], pset1<Packet>(f[m]), step[g]);
+      step[g] = pmul(w.tap(0, g), pset1<Packet>(f[0]));
+      for (int m = 1; m < P; ++m) step[g] = pmadd(w.tap(m, g), pset1<Packet>(f[m]), step[g]);
       // carry(r, q) = 0 for q >= r: register g needs q <= (g + 1) kPW - 2
-      for (int q = 0; q + 1 < Orders && q <= (g + 1) * kPW - 2; ++q) step[g] = pmadd(w.c[q][g], pset1<Packet>(old[q]), step[g]);
+      for (int q = 0; q + 1 < Orders && q <= (g + 1) * kPW - 2; ++q) step[g] = pmadd(w.carry(q, g), pset1<Packet>(old[q]), step[g]);
     }
     // The state grows like tau^r while each step adds a small amount: that is where single
     // precision loses its digits (Kahan-compensated there); double keeps them without.
