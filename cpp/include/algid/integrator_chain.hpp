@@ -51,8 +51,10 @@ inline void accumulate(T& state, C& compensation, const T& step) noexcept {
 }  // namespace detail
 
 /// Iterated integrals I^1 .. I^Orders of K sampled signals that share one clock (the
-/// accelerations, or the forces, of a chain): one stencil offset and one rule for all, and the
-/// update of all K is two small dense products, vectorised across orders and signals.
+/// accelerations, or the forces, of a chain): one stencil offset and one rule for all; each
+/// signal's orders advance in SIMD registers of at most 256 bits (the stencil's weighted sum
+/// and the Taylor carry as fused multiply-adds where the build has them), and a block of
+/// samples can advance with the weights held in registers (push_steady()).
 /// Storage: a doubled ring of 2P samples per signal (any stencil is a contiguous block), the
 /// Orders x K states and, in single precision, their Kahan compensation; nothing else. Do not
 /// build with -ffast-math (it would remove the compensation).

@@ -112,20 +112,19 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   /// at accel + t N) and call `observe(t, status)` after each sample t, with the estimator in exactly
   /// the state a call of update() would have left it in: every estimate, flag and accessor,
   /// to the bit. Stretches of kBlock finite samples after the warm-up go through as a block:
-  /// the chains and eq. 7 still advance sample by sample, but the rows, the systems of eq. 5,
-  /// Cramer's rule and the Hadamard ratio are computed for the kBlock instants at once, lane
-  /// by lane with the operations of update() (cramer_lanes(), equilibrated_hadamard2()).
-  /// That is the batch path of the Python `run()`; firmware calls update().
-  /// Scratch is on the stack: about 40 kBlock N scalars (125 KiB for N = 50 in double).
+  /// the chains and eq. 7 still advance sample by sample (the chains with their weights held
+  /// in registers for the block), but the rows, the systems of eq. 5, Cramer's rule, the
+  /// Hadamard ratio and the validity rule are computed for the kBlock instants at once, lane
+  /// by lane with the operations of update() (cramer_lanes(), equilibrated_hadamard2(),
+  /// weigh_lanes()). That is the batch path of the Python `run()`; firmware calls update().
+  /// Scratch is on the stack: about 50 kBlock N scalars (6.4 KiB for N = 2 in double).
   /// Returns how many of the T samples went through blocks.
   /// @realtime no allocation; no throw unless `observe` throws
   template <class Observer>
   ALGID_FLATTEN long run(const Scalar* accel, const Scalar* force, long T, Observer&& observe) {
-    // Software-pipelined: while the samples of one block are committed to eq. 7 (a recurrence
-    // from sample to sample), the chains already advance through the next block (another
-    // recurrence, independent of the first): the two latency-bound loops share one instruction
-    // stream. The chains are internal state no accessor reads, so running ahead is invisible
-    // to `observe`.
+    // The next block's chains are pushed before this block's samples are committed to eq. 7:
+    // independent work the processor can overlap with the commits. The chains are internal
+    // state no accessor reads, so running ahead is invisible to `observe`.
     BlockInputs inputs[2];
     BlockSolution solution;
     int current = 0;
