@@ -244,42 +244,38 @@ class DofEstimator {
   /// Applies the validity rule and feeds eq. 7. @realtime no allocation, no throw
   void commit(Scalar det, const Scalar* numerator, Scalar h2num, Scalar h2den, const Instant<Scalar>& now,
               const ValidityRule<Scalar>& rule) noexcept {
-    det_ = det;
     const Scalar inv2 = now.inv_tau * now.inv_tau;
-    // Built in registers and stored whole: filling numerator_ entry by entry and then reading
-    // it as one SIMD vector would stall on the store-to-load forwarding.
+    // Built in registers: filling a vector entry by entry and then reading it as one SIMD
+    // vector would stall on the store-to-load forwarding.
     Vector<Scalar, M> scaled;
     if constexpr (M == 4) {
       scaled = Vector<Scalar, 4>(numerator[0], numerator[1] * now.inv_tau, numerator[2] * inv2, numerator[3] * inv2);
     } else {
       scaled = Vector<Scalar, 3>(numerator[0], numerator[1] * now.inv_tau, numerator[2] * inv2);
     }
-    numerator_ = scaled;
-    hadamard2_num_ = std::isfinite(h2num) ? h2num : Scalar(0);
-    hadamard2_den_ = h2den;
-    const bool solvable = std::isfinite(det_) && det_ != Scalar(0);
-    trusted_ = solvable && now.samples >= rule.min_samples &&
-               hadamard2_num_ >= rule.min_hadamard * rule.min_hadamard * hadamard2_den_;
-    const Scalar decay = M == 4 ? now.decay4 : now.decay3;
-    // Built in whole registers of 4 (see `scaled` above).
-    Packed x = Packed::Zero();
-    if (trusted_) {
-      const Scalar sign = det_ > Scalar(0) ? Scalar(1) : Scalar(-1);
-      x.template head<4>() = Vector<Scalar, 4>(std::abs(det_), sign * scaled(0), sign * scaled(1), sign * scaled(2));
+    h2num = std::isfinite(h2num) ? h2num : Scalar(0);
+    const bool solvable = std::isfinite(det) && det != Scalar(0);
+    const bool trusted = solvable && now.samples >= rule.min_samples &&
+                         h2num >= rule.min_hadamard * rule.min_hadamard * h2den;
+    Packed x = Packed::Zero();  // in whole registers of 4
+    if (trusted) {
+      const Scalar sign = det > Scalar(0) ? Scalar(1) : Scalar(-1);
+      x.template head<4>() = Vector<Scalar, 4>(std::abs(det), sign * scaled(0), sign * scaled(1), sign * scaled(2));
       if constexpr (M == 4) x.template segment<4>(4) = Vector<Scalar, 4>(sign * scaled(3), Scalar(0), Scalar(0), Scalar(0));
     }
-    ratio_.add(decay, now.h, x);
+    commit_weighed(det, scaled, h2num, h2den, x, M == 4 ? now.decay4 : now.decay3, now.h);
   }
 
   /// commit() for a sample weighed elsewhere with the same arithmetic (weigh_lanes(): the block
-  /// path of ChainEstimator::run() weighs many instants side by side): `scaled` the time-scaled
-  /// Cramer numerators, `h2num` with 0 where it was not finite, `x` what eq. 7 is fed (x(0) > 0
-  /// exactly when the sample is trusted), `decay` this system size's decay factor, `h` the
-  /// sample period [s]. @realtime no allocation, no throw
-  void commit_weighed(Scalar det, const Scalar* scaled, Scalar h2num, Scalar h2den, const Packed& x, Scalar decay,
-                      Scalar h) noexcept {
+  /// path of ChainEstimator::run() weighs many instants side by side): `scaled` the M
+  /// time-scaled Cramer numerators (a vector), `h2num` with 0 where it was not finite, `x` what
+  /// eq. 7 is fed (x(0) > 0 exactly when the sample is trusted), `decay` this system size's
+  /// decay factor, `h` the sample period [s]. @realtime no allocation, no throw
+  template <class Scaled>
+  void commit_weighed(Scalar det, const Eigen::MatrixBase<Scaled>& scaled, Scalar h2num, Scalar h2den, const Packed& x,
+                      Scalar decay, Scalar h) noexcept {
     det_ = det;
-    numerator_ = Eigen::Map<const Vector<Scalar, M>>(scaled);
+    numerator_ = scaled;
     hadamard2_num_ = h2num;
     hadamard2_den_ = h2den;
     trusted_ = x(0) > Scalar(0);

@@ -124,20 +124,16 @@ class IntegratorChain {
     for (int i = 0; i < C; ++i)
       for (int k = 0; k < K; ++k) chains[i]->load_state(k, s[i][k], c[i][k]);
     // Ring rows as unsigned counts (count_ >= P - 1 here, the same for every chain): the
-    // sample's slot, the stencil's first sample (centred: j - (P/2 - 1)) and the interval end
-    // j + 1, for j = count_ - P.
+    // stencil's first sample (centred: j - (P/2 - 1)) and the interval end j + 1, for
+    // j = count_ - P after the sample is stored.
     const unsigned long base = static_cast<unsigned long>(chains[0]->count_);
     for (int b = 0; b < B; ++b) {
       const unsigned long pushed = base + static_cast<unsigned long>(b);  // samples before this one
-      const int slot = static_cast<int>(pushed % kRing);
       const int first = static_cast<int>((pushed + 1 - P - (P / 2 - 1)) % kRing);
       const int now = static_cast<int>((pushed + 2 - P) % kRing);
       for (int i = 0; i < C; ++i) {
         IntegratorChain& chain = *chains[i];
-        for (int k = 0; k < K; ++k) {
-          chain.ring_(slot, k) = f[i][b * stride + k];
-          chain.ring_(slot + kRing, k) = f[i][b * stride + k];
-        }
+        chain.store(f[i] + b * stride);
         for (int k = 0; k < K; ++k) {
           chain.advance(w, first, k, s[i][k], c[i][k]);
           for (int g = 0; g < kRegs; ++g)
@@ -148,7 +144,6 @@ class IntegratorChain {
     }
     for (int i = 0; i < C; ++i) {
       IntegratorChain& chain = *chains[i];
-      chain.count_ += B;
       for (int k = 0; k < K; ++k) chain.store_state(k, s[i][k], c[i][k]);
       chain.value_ = Eigen::Map<const Vector<Scalar, K>>(values[i] + (B - 1) * K);
     }
@@ -221,7 +216,7 @@ class IntegratorChain {
 
   // The new sample into both copies of the ring.
   void store(const Scalar* f) noexcept {
-    const int slot = static_cast<int>(count_ % kRing);
+    const int slot = static_cast<int>(static_cast<unsigned long>(count_) % kRing);  // count_ >= 0
     for (int k = 0; k < K; ++k) {
       ring_(slot, k) = f[k];
       ring_(slot + kRing, k) = f[k];

@@ -117,7 +117,7 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   /// Hadamard ratio and the validity rule are computed for the kBlock instants at once, lane
   /// by lane with the operations of update() (cramer_lanes(), equilibrated_hadamard2(),
   /// weigh_lanes()). That is the batch path of the Python `run()`; firmware calls update().
-  /// Scratch is on the stack: about 50 kBlock N scalars (6.4 KiB for N = 2 in double).
+  /// Scratch is on the stack: about 35 kBlock N scalars (4.5 KiB for N = 2 in double).
   /// Returns how many of the T samples went through blocks.
   /// @realtime no allocation; no throw unless `observe` throws
   template <class Observer>
@@ -125,28 +125,26 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
     // The next block's chains are pushed before this block's samples are committed to eq. 7:
     // independent work the processor can overlap with the commits. The chains are internal
     // state no accessor reads, so running ahead is invisible to `observe`.
-    BlockInputs inputs[2];
+    BlockInputs inputs;
     BlockSolution solution;
-    int current = 0;
-    bool pushed = false;  // inputs[current] already holds the block starting at t
+    bool pushed = false;  // inputs already holds the block starting at t
     long t = 0, blocked = 0;
     while (t < T) {
       const Scalar* a = accel + t * N;
       const Scalar* f = force + t * N;
       if (pushed || (samples_ >= P - 1 && T - t >= kBlock && finite(a, f, kBlock * N))) {
-        if (!pushed) push_block(a, f, inputs[current]);
-        solve_block(inputs[current], solution);
+        if (!pushed) push_block(a, f, inputs);
+        solve_block(inputs, solution);  // inputs is free from here
         const long next = t + kBlock;
         const Scalar* na = accel + next * N;
         const Scalar* nf = force + next * N;
         const bool ahead = T - next >= kBlock && finite(na, nf, kBlock * N);
-        if (ahead) push_block(na, nf, inputs[1 - current]);
+        if (ahead) push_block(na, nf, inputs);
         for (int b = 0; b < kBlock; ++b) {
           commit(solution, b);
           observe(t + b, Status::kOk);
         }
         pushed = ahead;
-        current = 1 - current;
         t = next;
         blocked += kBlock;
       } else {
@@ -332,10 +330,10 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   // Eq. 7 and the outputs for instant b of a solved block: the sample is then consumed.
   void commit(const BlockSolution& in, int b) noexcept {
     for (int i = 0; i < N; ++i) {
-      const Scalar scaled[4] = {in.scaled[4 * i](b), in.scaled[4 * i + 1](b), in.scaled[4 * i + 2](b),
-                                in.scaled[4 * i + 3](b)};
+      const Vector<Scalar, 4> scaled(in.scaled[4 * i](b), in.scaled[4 * i + 1](b), in.scaled[4 * i + 2](b),
+                                     is_reduced(i) ? Scalar(0) : in.scaled[4 * i + 3](b));  // 3x3: 3 numerators
       if (is_reduced(i)) {
-        last_.commit_weighed(in.det[i](b), scaled, in.h2num[i](b), in.h2den[i](b),
+        last_.commit_weighed(in.det[i](b), scaled.template head<3>(), in.h2num[i](b), in.h2den[i](b),
                              in.fed[i].col(b).template head<4>(), in.decay3(b), config_.dt);
       } else {
         full_[static_cast<std::size_t>(i)].commit_weighed(in.det[i](b), scaled, in.h2num[i](b), in.h2den[i](b),
