@@ -13,8 +13,8 @@ What it does, in one process so every ratio compares figures from the same run:
    ``_core_v4``, reported as ``*_v3`` / ``*_v4``) where this CPU runs them;
 2. runs ``bench_per_sample`` (steady_clock; median / p99 of 16-sample batches, worst single
    sample, per DOF-sample) for ChainEstimator ``update()`` ("default"), its batch path
-   ``run()`` ("batch": blocks of 8 instants for n = 1, update() sample by sample in the lane
-   layout of n >= 3), the continuous configuration and an RLS baseline at n = 1, 3, 10, 50 in
+   ``record()`` ("batch", what the Python ``run()`` calls: blocks of 8 instants for n = 1, update()
+   sample by sample in the lane layout of n >= 3), the continuous configuration and an RLS baseline at n = 1, 3, 10, 50 in
    double and float;
 3. counts instructions per DOF-sample under ``valgrind --tool=callgrind`` (client requests
    bracket the measured loop);
@@ -442,7 +442,7 @@ def main(argv: list[str] | None = None) -> int:
         "linear_in_n_n50_per_dof_le_n3": {
             "n50": n50.get("ns_per_dof_sample_median"), "n3": n3.get("ns_per_dof_sample_median"),
             "met": (n50.get("ns_per_dof_sample_median") or 1e9) <= (n3.get("ns_per_dof_sample_median") or 0)},
-        # Python run() against the C++ loop it wraps, same build: ChainEstimator::run() blocks
+        # Python run() against the C++ loop it wraps, same build: ChainEstimator::record() blocks
         # in the wider builds (blocks for n = 1, the lane layout for n >= 3), update() sample by
         # sample in the baseline build.
         "python_run_within_1.5x_of_cpp": {
@@ -516,15 +516,15 @@ def main(argv: list[str] | None = None) -> int:
                                  "the worst data-dependent path with interference filtered out",
                      "window_min": "a whole window's batch pass / T, min over windows and rounds: the protocol of "
                                    "python_run (whole-record run() call / T, min over calls)",
-                     "instructions_per_dof_sample": "callgrind Ir of the update loop (batch: one run() call) "
+                     "instructions_per_dof_sample": "callgrind Ir of the update loop (batch: one record() call) "
                                                     "after 64 warm-up samples (continuous: 400), / (updates n)",
                      "numpy_reference_over_python_run_interleaved": "per repetition: the numpy reference (cached "
                                                                     "weights) at 1000 and 4000 samples (marginal cost) "
                                                                     "and Python run() (min of 5 calls on 2000 samples), "
                                                                     "back to back; the ratio of each repetition",
-                     "batch": "ChainEstimator::run() in 16-sample chunks (median, p99, max = slowest chunk) and "
-                              "whole windows (window_min), storing every sample's estimates as the Python run() "
-                              "does"},
+                     "batch": "ChainEstimator::record() in 16-sample chunks (median, p99, max = slowest chunk) "
+                              "and whole windows (window_min), writing every sample's estimates into arrays as the "
+                              "Python run() does"},
                  "continuous": continuous_note},
         "configurations": configs,
         "flops": {"per_dof_sample": {str(k): v for k, v in flops_per_dof.items()},

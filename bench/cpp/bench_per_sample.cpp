@@ -13,9 +13,9 @@
 // timing windows); "continuous" = ContinuousEstimator<N, Scalar> with its default configuration
 // (K = 4 staggered reseeded 0.3 s windows, block-median aggregation, change detection), fed one
 // uninterrupted signal (never reset between timing windows); "rls" = the baseline; "batch" =
-// ChainEstimator::run() (what the Python run() calls: blocks of 8 instants for n <= 2, update()
-// sample by sample in the lane layout of n >= 3), in 16-sample chunks and whole
-// windows, storing the estimate history of every sample.
+// ChainEstimator::record() (what the Python run() calls: blocks of 8 instants for n <= 2,
+// update() sample by sample in the lane layout of n >= 3), in 16-sample chunks and whole
+// windows, writing the estimate history of every sample into arrays.
 //
 // Timing protocol, per configuration: one untimed warm-up window, then W windows of T samples
 // each (default and rls: each starting from reset()/reseed(), not timed):
@@ -58,6 +58,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -117,36 +118,37 @@ struct EstimatorSubject {
   double observe() const { return static_cast<double>(est->mass()(0) + est->stiffness()(N)); }
 };
 
-// The batch path: ChainEstimator::run() over the same samples, called on chunks of kBatch
-// samples (two blocks), with an observer that stores the estimate history as the Python run()
-// does (masses, dampings, springs and validity of every sample).
+// The batch path: ChainEstimator::record() over the same samples, called on chunks of kBatch
+// samples (two blocks), writing the estimate histories the Python run() returns (masses,
+// dampings, springs, validity and status of every sample) into arrays.
 template <int N, class Scalar>
-struct BatchSubject : EstimatorSubject<N, Scalar> {  // the same estimator, fed through run()
+struct BatchSubject : EstimatorSubject<N, Scalar> {  // the same estimator, fed through record()
   using EstimatorSubject<N, Scalar>::s;
   using EstimatorSubject<N, Scalar>::est;
   static constexpr bool kChunked = true;
-  std::vector<Scalar> history;
+  std::vector<Scalar> mass, damping, stiffness;
   std::vector<char> valid;
+  std::vector<std::int8_t> status;
   explicit BatchSubject(const algid_bench::Signals<Scalar>& sig)
       : EstimatorSubject<N, Scalar>(sig),
-        history(static_cast<std::size_t>(sig.samples) * (3 * N + 1)),
-        valid(static_cast<std::size_t>(sig.samples) * N) {}
+        mass(static_cast<std::size_t>(sig.samples) * N),
+        damping(mass.size()),
+        stiffness(static_cast<std::size_t>(sig.samples) * (N + 1)),
+        valid(mass.size()),
+        status(static_cast<std::size_t>(sig.samples)) {}
   // Samples [k0, k0 + count).
   void chunk(int k0, int count) noexcept {
     const std::size_t at = static_cast<std::size_t>(k0) * N;
-    est->run(s->accel.data() + at, s->force.data() + at, count, [&](long t, algid::Status) {
-      const std::size_t k = static_cast<std::size_t>(k0 + t);
-      Scalar* h = history.data() + k * (3 * N + 1);
-      for (int i = 0; i < N; ++i) {
-        h[i] = est->mass()(i);
-        h[N + i] = est->damping()(i);
-        valid[k * N + static_cast<std::size_t>(i)] = est->valid()[static_cast<std::size_t>(i)];
-      }
-      for (int j = 0; j <= N; ++j) h[2 * N + j] = est->stiffness()(j);
-    });
+    algid::Histories<Scalar> out;
+    out.status = status.data() + k0;
+    out.mass = mass.data() + at;
+    out.damping = damping.data() + at;
+    out.stiffness = stiffness.data() + static_cast<std::size_t>(k0) * (N + 1);
+    out.valid = reinterpret_cast<bool*>(valid.data()) + at;
+    est->record(s->accel.data() + at, s->force.data() + at, count, out);
   }
   void step(int k) noexcept { chunk(k, 1); }
-  double observe() const { return static_cast<double>(est->mass()(0) + est->stiffness()(N)) + history[history.size() / 2]; }
+  double observe() const { return static_cast<double>(est->mass()(0) + est->stiffness()(N)) + mass[mass.size() / 2]; }
 };
 
 #if ALGID_BENCH_HAVE_CONTINUOUS

@@ -191,9 +191,14 @@ void bind_chain(py::module_& m) {
                 }
               };
 #if ALGID_BINDINGS_BLOCK_RUN
-              // ChainEstimator::run(): blocks of 8 instants in the per-DOF layout (N <= 2),
-              // update() sample by sample in the lane layout; the same bits as update().
-              e.run(a, f, static_cast<long>(T), record);
+              // Blocks of 8 instants in the per-DOF layout (N <= 2), update() sample by sample
+              // in the lane layout; the same bits as update(). The default histories straight
+              // from ChainEstimator::record(); the per-DOF extras through run()'s observer.
+              if (full) {
+                e.run(a, f, static_cast<long>(T), record);
+              } else {
+                e.record(a, f, static_cast<long>(T), algid::Histories<double>{st, pm, pc, pk, pv});
+              }
 #else
               for (py::ssize_t t = 0; t < T; ++t) record(static_cast<long>(t), e.update(a + t * N, f + t * N));
 #endif

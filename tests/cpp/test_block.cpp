@@ -1,6 +1,7 @@
 // ChainEstimator::run(), the block path that solves kBlock instants side by side, leaves the
 // estimator in the state the per-sample update() leaves it in, to the bit, after every sample:
-// estimates, flags, instantaneous solutions, Hadamard ratios and the last system. Records of
+// estimates, flags, instantaneous solutions, Hadamard ratios and the last system; record()
+// writes the histories of those estimates, to the bit, and ends in the same state. Records of
 // lengths that are and are not multiples of the block, a bad sample in the middle of a block,
 // a reseed between two calls, free and fixed ends, double and float.
 #include <algid/chain_estimator.hpp>
@@ -9,6 +10,7 @@
 #include "closed_form.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <vector>
@@ -40,6 +42,45 @@ long compare_states(const algid::ChainEstimator<N, Scalar>& x, const algid::Chai
   return differences;
 }
 
+// Histories of T samples in vectors, and a view of them from row t0 on for record().
+template <class Scalar>
+struct Histories {
+  long T;
+  int n;
+  std::vector<std::int8_t> status;
+  std::vector<Scalar> mass, damping, stiffness;
+  std::vector<unsigned char> valid;  // bool, but addressable (std::vector<bool> is not)
+  Histories(long samples, int dofs)
+      : T(samples), n(dofs), status(static_cast<std::size_t>(samples), std::int8_t(-1)),
+        mass(static_cast<std::size_t>(samples * dofs), Scalar(-1)), damping(mass), stiffness(static_cast<std::size_t>(samples * (dofs + 1)), Scalar(-1)),
+        valid(static_cast<std::size_t>(samples * dofs), 2) {}
+  algid::Histories<Scalar> view(long t0) {
+    static_assert(sizeof(bool) == 1, "bool histories as bytes");
+    return {status.data() + t0, mass.data() + t0 * n, damping.data() + t0 * n, stiffness.data() + t0 * (n + 1),
+            reinterpret_cast<bool*>(valid.data()) + t0 * n};
+  }
+  template <class Estimator>
+  void put(long t, algid::Status s, const Estimator& e) {
+    status[static_cast<std::size_t>(t)] = static_cast<std::int8_t>(s);
+    for (int i = 0; i < n; ++i) {
+      mass[static_cast<std::size_t>(t * n + i)] = e.mass()(i);
+      damping[static_cast<std::size_t>(t * n + i)] = e.damping()(i);
+      valid[static_cast<std::size_t>(t * n + i)] = e.valid()[static_cast<std::size_t>(i)];
+    }
+    for (int j = 0; j <= n; ++j) stiffness[static_cast<std::size_t>(t * (n + 1) + j)] = e.stiffness()(j);
+  }
+  long differences(const Histories& other) const {
+    long d = 0;
+    for (std::size_t k = 0; k < status.size(); ++k) d += status[k] != other.status[k];
+    for (std::size_t k = 0; k < mass.size(); ++k) {
+      d += !same(mass[k], other.mass[k]) + !same(damping[k], other.damping[k]);
+      d += valid[k] != other.valid[k];
+    }
+    for (std::size_t k = 0; k < stiffness.size(); ++k) d += !same(stiffness[k], other.stiffness[k]);
+    return d;
+  }
+};
+
 // Feeds `record` (T x N accelerations then forces) sample by sample to one estimator and with
 // run() to the other, in two calls split at `split`, comparing after every sample.
 template <int N, class Scalar>
@@ -56,7 +97,9 @@ void bitwise_case(algid::Boundary boundary, long T, long split, long bad_at, uns
   typename algid::ChainEstimator<N, Scalar>::Config cfg;
   cfg.dt = Scalar(1e-3);
   cfg.boundary = boundary;
-  algid::ChainEstimator<N, Scalar> one_by_one(cfg), batch(cfg);
+  algid::ChainEstimator<N, Scalar> one_by_one(cfg), batch(cfg), recorded(cfg);
+  // What update() leaves after each sample, as record() writes it.
+  Histories<Scalar> expected_rows(T, N), recorded_rows(T, N);
   long differences = 0, compared = 0, ok = 0, status_mismatch = 0;
   const auto observe = [&](long t, algid::Status status) {
     const algid::Status expected = one_by_one.update(&accel[static_cast<std::size_t>(t * N)],
@@ -64,17 +107,28 @@ void bitwise_case(algid::Boundary boundary, long T, long split, long bad_at, uns
     status_mismatch += status != expected;
     ok += status == algid::Status::kOk;
     differences += compare_states(one_by_one, batch);
+    expected_rows.put(t, expected, one_by_one);
     ++compared;
   };
   long blocked = batch.run(accel.data(), force.data(), split, observe);
   blocked += batch.run(accel.data() + split * N, force.data() + split * N, T - split,
                        [&](long t, algid::Status status) { observe(t + split, status); });
-  std::printf("N=%d %s %s T=%ld split=%ld bad=%ld: %ld samples compared (%ld kOk, %ld in blocks), %ld differing values\n",
+  // record(): the same split, the histories written straight into arrays.
+  long recorded_blocks = recorded.record(accel.data(), force.data(), split, recorded_rows.view(0));
+  recorded_blocks += recorded.record(accel.data() + split * N, force.data() + split * N, T - split,
+                                     recorded_rows.view(split));
+  const long history_differences = expected_rows.differences(recorded_rows);
+  const long end_differences = compare_states(one_by_one, recorded);
+  std::printf("N=%d %s %s T=%ld split=%ld bad=%ld: %ld samples compared (%ld kOk, %ld in blocks), %ld differing values; "
+              "record(): %ld differing history entries, %ld differing values at the end\n",
               N, boundary == algid::Boundary::kFree ? "free" : "fixed", sizeof(Scalar) == 4 ? "float" : "double", T,
-              split, bad_at, compared, ok, blocked, differences);
+              split, bad_at, compared, ok, blocked, differences, history_differences, end_differences);
   CHECK(compared == T);
   CHECK(status_mismatch == 0);
   CHECK(differences == 0);
+  CHECK(history_differences == 0);
+  CHECK(end_differences == 0);
+  CHECK(recorded_blocks == blocked);
   if constexpr (algid::ChainEstimator<N, Scalar>::kLaneLayout) {
     CHECK(blocked == 0);  // the lane layout's run() is update() sample by sample
   } else {

@@ -42,7 +42,20 @@ int run() {
   long observed = 0;
   batch.run(record_a, record_u, 300, [&](long, algid::Status) { ++observed; });
   const bool same = observed == 300 && batch.mass()(0) == est.mass()(0) && batch.stiffness()(3) == est.stiffness()(3);
-  return est.all_valid() && same ? 0 : 1;
+  // So does record(), into statically allocated histories.
+  static std::int8_t status[300];
+  static Scalar mass[900], damping[900], stiffness[1200];
+  static bool valid[900];
+  algid::ChainEstimator<3, Scalar> recorder(cfg);
+  algid::Histories<Scalar> out;
+  out.status = status;
+  out.mass = mass;
+  out.damping = damping;
+  out.stiffness = stiffness;
+  out.valid = valid;
+  recorder.record(record_a, record_u, 300, out);
+  const bool recorded = mass[897] == est.mass()(0) && stiffness[1199] == est.stiffness()(3) && valid[899];
+  return est.all_valid() && same && recorded ? 0 : 1;
 }
 }  // namespace
 

@@ -52,8 +52,8 @@ void no_allocation_in_hot_path() {
 }
 
 
-// The batch path too: run() over a whole record (with a bad sample and a reseed) allocates
-// nothing either; in the per-DOF layout it went through blocks of instants.
+// The batch paths too: run() and record() over a whole record (with a bad sample and a reseed)
+// allocate nothing either; in the per-DOF layout they went through blocks of instants.
 template <int N, class Scalar>
 void run_does_not_allocate() {
   using Est = algid::ChainEstimator<N, Scalar>;
@@ -73,6 +73,12 @@ void run_does_not_allocate() {
   bool threw = false;
   long allocations = -1, blocked = 0;
   double sink = 0;
+  // record() writes the histories into caller-owned arrays (outside the guarded scope)
+  static std::int8_t status[kT];
+  static Scalar mass[kT * N], damping[kT * N], stiffness[kT * (N + 1)];
+  static bool valid[kT * N];
+  Est recorder(cfg);
+  long recorded_blocks = 0, record_allocations = -1;
   try {
     NoAllocationScope scope;
     blocked = est.run(accel, force, kT, [&](long, algid::Status) { sink += static_cast<double>(est.mass()(0)); });
@@ -80,14 +86,30 @@ void run_does_not_allocate() {
   } catch (const algid_test::EigenAssertion&) {
     threw = true;
   }
+  try {
+    NoAllocationScope scope;
+    algid::Histories<Scalar> out;
+    out.status = status;
+    out.mass = mass;
+    out.damping = damping;
+    out.stiffness = stiffness;
+    out.valid = valid;
+    recorded_blocks = recorder.record(accel, force, kT, out);
+    record_allocations = scope.allocations();
+  } catch (const algid_test::EigenAssertion&) {
+    threw = true;
+  }
   CHECK(!threw);
   CHECK(allocations == 0);
+  CHECK(record_allocations == 0);
+  CHECK(recorded_blocks == blocked);
   if constexpr (Est::kLaneLayout) {
     CHECK(blocked == 0);  // update() sample by sample
   } else {
     CHECK(blocked > kT - 40);
   }
   CHECK(est.all_valid());
+  CHECK(recorder.all_valid() && valid[kT * N - 1] && mass[kT * N - 1] == est.mass()(N - 1));
   (void)sink;
 }
 

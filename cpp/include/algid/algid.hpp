@@ -7,6 +7,7 @@
 #include "algid/continuous_estimator.hpp"
 #include "algid/cramer.hpp"
 #include "algid/dof_estimator.hpp"
+#include "algid/histories.hpp"
 #include "algid/integrator_chain.hpp"
 #include "algid/quadrature.hpp"
 #include "algid/ratio_estimator.hpp"

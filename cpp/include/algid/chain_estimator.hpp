@@ -26,7 +26,9 @@
 ///   - `static ConfigError validate(const Config&)`, `explicit ChainEstimator(const Config&)`;
 ///   - `Status update(const Scalar* accel, const Scalar* force)` (N values each, [m/s^2], [N]),
 ///     `reseed()`, `long run(accel, force, T, observe)` (T x N row-major, `observe(t, status)`
-///     after each sample);
+///     after each sample), `long record(accel, force, T, histories)` (the estimates after
+///     each sample written into caller-owned arrays: Histories, histories.hpp; the batch path
+///     of the Python `run()`);
 ///   - `mass()`, `damping()` (N), `stiffness()` (N + 1: k_1 .. k_{N+1}, an interior spring the
 ///     mean of its two DOF's estimates; k_1 = k_1 + k_2 and k_2 NaN for N = 1 with walls,
 ///     k_{N+1} = 0 at a free end), `valid()`, `all_valid()`;

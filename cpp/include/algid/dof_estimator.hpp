@@ -58,20 +58,22 @@ inline constexpr int kForceOrders = 5;
 inline constexpr int kRowA[4] = {4, 6, 8, 10};
 inline constexpr int kRowB[4] = {6, 12, 20, 30};
 
-/// The rows of one signal at one instant: column c holds R(q, q + c), q = 0..3 (the recurrence
-/// in the file comment), for c < Cols.
+/// The rows of one signal at one instant: column c holds R(q, q + c), q = 0 .. Rows - 1 (the
+/// recurrence in the file comment), for c < Cols; rows q >= Rows are left as they are.
 /// @tparam Cols 3 for an acceleration (mass, damping, spring columns), 1 for a force.
-/// @param J time-scaled integrals J_0 .. J_(Cols + 4).
+/// @tparam Rows 4, or 3 where only 3x3 systems are solved (a chain of one DOF).
+/// @param J time-scaled integrals J_0 .. J_(Cols + Rows).
 /// @realtime no allocation, no throw
-template <int Cols, class Scalar>
+template <int Cols, int Rows = 4, class Scalar>
 inline void signal_rows(const Scalar* J, Matrix<Scalar, 4, Cols>& rows) noexcept {
-  using Column = Eigen::Array<Scalar, 4, 1>;
-  const Column a = Eigen::Array<int, 4, 1>(kRowA[0], kRowA[1], kRowA[2], kRowA[3]).cast<Scalar>();
-  const Column b = Eigen::Array<int, 4, 1>(kRowB[0], kRowB[1], kRowB[2], kRowB[3]).cast<Scalar>();
-  const Eigen::Map<const Eigen::Array<Scalar, Cols + 5, 1>> j(J);
+  static_assert(Rows == 3 || Rows == 4, "eq. 5 systems are 3x3 or 4x4");
+  using Column = Eigen::Array<Scalar, Rows, 1>;
+  const Column a = Eigen::Array<int, 4, 1>(kRowA[0], kRowA[1], kRowA[2], kRowA[3]).template head<Rows>().template cast<Scalar>();
+  const Column b = Eigen::Array<int, 4, 1>(kRowB[0], kRowB[1], kRowB[2], kRowB[3]).template head<Rows>().template cast<Scalar>();
+  const Eigen::Map<const Eigen::Array<Scalar, Cols + Rows + 1, 1>> j(J);
   for (int c = 0; c < Cols; ++c) {
-    rows.col(c).array() =
-        j.template segment<4>(c) - a * j.template segment<4>(c + 1) + b * j.template segment<4>(c + 2);
+    rows.col(c).template head<Rows>().array() = j.template segment<Rows>(c) - a * j.template segment<Rows>(c + 1) +
+                                                b * j.template segment<Rows>(c + 2);
   }
 }
 
@@ -281,6 +283,14 @@ class DofEstimator {
     trusted_ = x(0) > Scalar(0);
     ratio_.add(decay, h, x);
   }
+
+  /// Eq. 7 alone for a sample weighed elsewhere (`x`, `decay`, `h` as commit_weighed()), when
+  /// nothing reads this sample's instantaneous solution, Hadamard ratio or trust flag: they
+  /// keep the values of the last commit. @realtime no allocation, no throw
+  void accumulate(const Packed& x, Scalar decay, Scalar h) noexcept { ratio_.add(decay, h, x); }
+
+  /// Eq. 7's scaled double integrals (RatioEstimator::integrals()).
+  const Packed& integrals() const noexcept { return ratio_.integrals(); }
 
   /// Set the system reported by system() / rhs() (the block path solves it elsewhere).
   /// @realtime no allocation, no throw

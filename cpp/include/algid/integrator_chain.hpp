@@ -27,6 +27,7 @@
 #include "algid/quadrature.hpp"
 #include "algid/types.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 
@@ -250,8 +251,27 @@ class IntegratorChain {
     for (int g = 0; g < kRegs; ++g) {
       step[g] = pmul(w.tap(0, g), pset1<Packet>(f[0]));
       for (int m = 1; m < P; ++m) step[g] = pmadd(w.tap(m, g), pset1<Packet>(f[m]), step[g]);
-      // carry(r, q) = 0 for q >= r: register g needs q <= (g + 1) kPW - 2
-      for (int q = 0; q + 1 < Orders && q <= (g + 1) * kPW - 2; ++q) step[g] = pmadd(w.carry(q, g), pset1<Packet>(old[q]), step[g]);
+      // The carry, the part that depends on the state: in three partial sums, so that the
+      // chain of dependent operations from one sample's state to the next is short (the
+      // weighted samples above do not wait for the state). carry(r, q) = 0 for q >= r:
+      // register g needs q <= (g + 1) kPW - 2.
+      const int last = std::min(Orders - 2, (g + 1) * kPW - 2);
+      Packet part[2];
+      for (int q = 0; q <= last; ++q) {
+        const Packet weight = w.carry(q, g), lower = pset1<Packet>(old[q]);
+        if (q % 3 == 0) {
+          step[g] = pmadd(weight, lower, step[g]);
+        } else if (q < 3) {
+          part[q - 1] = pmul(weight, lower);
+        } else {
+          part[q % 3 - 1] = pmadd(weight, lower, part[q % 3 - 1]);
+        }
+      }
+      if (last >= 2) {
+        step[g] = padd(step[g], padd(part[0], part[1]));
+      } else if (last == 1) {
+        step[g] = padd(step[g], part[0]);
+      }
     }
     // The state grows like tau^r while each step adds a small amount: that is where single
     // precision loses its digits (Kahan-compensated there); double keeps them without.

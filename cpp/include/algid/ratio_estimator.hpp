@@ -86,6 +86,10 @@ class RatioEstimator {
   /// All M eq. 7 estimates at once (one division).
   Vector<Scalar, M> estimates() const noexcept { return packed_estimates().template segment<M>(1); }
 
+  /// The scaled double integrals [I^2 |Delta|, I^2 sgn(Delta) Delta_0 .. Delta_(M-1), 0 ...]
+  /// * tau^-q, whose ratios are the estimates.
+  const Packed& integrals() const noexcept { return i2_; }
+
   /// Scaled denominator I^2|Delta| * tau^-q (a confidence weight for fusion and diagnostics).
   Scalar denominator() const noexcept { return i2_(0); }
 

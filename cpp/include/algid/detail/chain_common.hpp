@@ -2,9 +2,11 @@
 /// @file chain_common.hpp
 /// What both layouts of ChainEstimator share (detail::PerDofChain, detail::LaneChain): the
 /// configuration phase, the boundary, the sample check, and the accessors derived from the
-/// layout's own (`update(const Scalar*, const Scalar*)`, `valid()`, `samples()`).
+/// layout's own (`update(const Scalar*, const Scalar*)`, `run()`, the accessors), and
+/// record() where the layout has no faster one.
 
 #include "algid/chain_config.hpp"
+#include "algid/histories.hpp"
 #include "algid/types.hpp"
 
 #include <cmath>
@@ -31,6 +33,14 @@ class ChainCommon {
     return self().update(accel.data(), force.data());
   }
 
+  /// Consume a record of T samples (T x N, row-major, as run()) and write the estimates after
+  /// each sample into row t of `out` (see Histories): what run() with an observer that copies
+  /// the accessors writes, to the bit. Returns what run() returns.
+  /// @realtime no allocation, no throw
+  long record(const Scalar* accel, const Scalar* force, long T, const Histories<Scalar>& out) noexcept {
+    return self().run(accel, force, T, [&](long t, Status s) { write_row(t, s, out); });
+  }
+
   /// True when every DOF is valid.
   bool all_valid() const noexcept {
     for (bool v : self().valid())
@@ -50,6 +60,18 @@ class ChainCommon {
   explicit ChainCommon(const Config& config) : config_(config) {
     const ConfigError e = validate(config);
     if (e != ConfigError::kNone) config_error(to_string(e));
+  }
+
+  /// Row t of `out` from the accessors, after a sample of status `s`.
+  void write_row(long t, Status s, const Histories<Scalar>& out) const noexcept {
+    const Derived& d = self();
+    out.status[t] = static_cast<std::int8_t>(s);
+    for (int i = 0; i < N; ++i) {
+      out.mass[t * N + i] = d.mass()(i);
+      out.damping[t * N + i] = d.damping()(i);
+      out.valid[t * N + i] = d.valid()[static_cast<std::size_t>(i)];
+    }
+    for (int j = 0; j <= N; ++j) out.stiffness[t * (N + 1) + j] = d.stiffness()(j);
   }
 
   bool free_end() const noexcept { return config_.boundary == Boundary::kFree; }

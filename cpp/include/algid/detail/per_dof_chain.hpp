@@ -9,12 +9,14 @@
 #include "algid/detail/chain_common.hpp"
 #include "algid/cramer.hpp"
 #include "algid/dof_estimator.hpp"
+#include "algid/histories.hpp"
 #include "algid/integrator_chain.hpp"
 #include "algid/ratio_estimator.hpp"
 #include "algid/types.hpp"
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <type_traits>
 
@@ -34,10 +36,14 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   static_assert(N >= 1, "a chain has at least one DOF");
 
  public:
+  /// Rows of the largest system of eq. 5 solved: a chain of one DOF only has the 3x3 system of
+  /// k_1 + k_2 (or of a free end), whose rows need one order less of each signal.
+  static constexpr int kSystemRows = N == 1 ? 3 : 4;
   /// Integrator chains of the N accelerations (orders 1..7 needed, 8 kept) and of the N forces
-  /// (1..5 needed, kForceKept kept): the extra orders pad to whole SIMD registers (6 with SSE2,
-  /// 8 with AVX), which costs less than the partial registers they replace.
-  static constexpr int kForceKept = simd_padded<Scalar>(kForceOrders + 1, kAccelOrders + 1);
+  /// (1..5 needed, 1..4 for one DOF; kForceKept kept): the extra orders pad to whole SIMD
+  /// registers (6 with SSE2, 8 with AVX; 4 for one DOF), which costs less than the partial
+  /// registers they replace.
+  static constexpr int kForceKept = simd_padded<Scalar>(kForceOrders - (4 - kSystemRows), kAccelOrders + 1);
   using AccelChain = IntegratorChain<P, kAccelOrders + 1, Scalar, N>;
   using ForceChain = IntegratorChain<P, kForceKept, Scalar, N>;
   /// The quadrature rule both are advanced with.
@@ -87,8 +93,8 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
     accel_.scaled(inv_pow, accel_scaled_);
     force_.scaled(inv_pow, force_scaled_);
     for (int i = 0; i < N; ++i) {
-      signal_rows(accel_scaled_.col(i).data(), accel_rows_[i]);
-      signal_rows(force_scaled_.col(i).data(), force_rows_[i]);
+      signal_rows<3, kSystemRows>(accel_scaled_.col(i).data(), accel_rows_[i]);
+      signal_rows<1, kSystemRows>(force_scaled_.col(i).data(), force_rows_[i]);
     }
     for (int i = 0; i < N; ++i) {
       const auto* left = i > 0 ? &accel_rows_[i - 1] : nullptr;
@@ -116,44 +122,34 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   /// in registers for the block), but the rows, the systems of eq. 5, Cramer's rule, the
   /// Hadamard ratio and the validity rule are computed for the kBlock instants at once, lane
   /// by lane with the operations of update() (cramer_lanes(), equilibrated_hadamard2(),
-  /// weigh_lanes()). That is the batch path of the Python `run()`; firmware calls update().
+  /// weigh_lanes()). That is the batch path; firmware calls update().
   /// Scratch is on the stack: about 35 kBlock N scalars (4.5 KiB for N = 2 in double).
   /// Returns how many of the T samples went through blocks.
   /// @realtime no allocation; no throw unless `observe` throws
   template <class Observer>
   ALGID_FLATTEN long run(const Scalar* accel, const Scalar* force, long T, Observer&& observe) {
-    // The next block's chains are pushed before this block's samples are committed to eq. 7:
-    // independent work the processor can overlap with the commits. The chains are internal
-    // state no accessor reads, so running ahead is invisible to `observe`.
-    BlockInputs inputs;
-    BlockSolution solution;
-    bool pushed = false;  // inputs already holds the block starting at t
-    long t = 0, blocked = 0;
-    while (t < T) {
-      const Scalar* a = accel + t * N;
-      const Scalar* f = force + t * N;
-      if (pushed || (samples_ >= P - 1 && T - t >= kBlock && finite(a, f, kBlock * N))) {
-        if (!pushed) push_block(a, f, inputs);
-        solve_block(inputs, solution);  // inputs is free from here
-        const long next = t + kBlock;
-        const Scalar* na = accel + next * N;
-        const Scalar* nf = force + next * N;
-        const bool ahead = T - next >= kBlock && finite(na, nf, kBlock * N);
-        if (ahead) push_block(na, nf, inputs);
-        for (int b = 0; b < kBlock; ++b) {
-          commit(solution, b);
-          observe(t + b, Status::kOk);
-        }
-        pushed = ahead;
-        t = next;
-        blocked += kBlock;
-      } else {
-        const Status s = update(a, f);
-        observe(t, s);
-        ++t;
-      }
-    }
-    return blocked;
+    return drive(
+        accel, force, T,
+        [&](const BlockSolution& solution, long t) {
+          for (int b = 0; b < kBlock; ++b) {
+            commit(solution, b);
+            observe(t + b, Status::kOk);
+          }
+        },
+        [&](long t, Status s) { observe(t, s); });
+  }
+
+  /// ChainCommon::record() (the histories of a record; what the Python `run()` returns) through
+  /// the block path, with eq. 7's estimates at a block's instants formed side by side as well
+  /// (one reciprocal per DOF and block rather than per sample) and written straight into `out`
+  /// (write_block()). Between the blocks' last instants nothing reads the per-sample state, so
+  /// only eq. 7 advances there. The same bits as run() with an observer that copies the
+  /// accessors; the estimator is left as update() would leave it.
+  /// @realtime no allocation, no throw
+  ALGID_FLATTEN long record(const Scalar* accel, const Scalar* force, long T, const Histories<Scalar>& out) noexcept {
+    return drive(
+        accel, force, T, [&](const BlockSolution& solution, long t) { commit_block(solution, t, out); },
+        [&](long t, Status s) { this->write_row(t, s, out); });
   }
 
   /// Eq. 7 estimates of the masses m_i [kg] (NaN where not valid).
@@ -200,6 +196,41 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   long samples() const noexcept { return samples_; }
 
  private:
+  // The loop of run() and record(): blocks where they can be taken (solved by solve_block(),
+  // then handed to `on_block(solution, t)` to commit instants t .. t + kBlock - 1), update()
+  // and `on_sample(t, status)` elsewhere. Returns the number of samples in blocks.
+  template <class OnBlock, class OnSample>
+  ALGID_FLATTEN long drive(const Scalar* accel, const Scalar* force, long T, OnBlock&& on_block, OnSample&& on_sample) {
+    // The next block's chains are pushed before this block's samples are committed to eq. 7:
+    // independent work the processor can overlap with the commits. The chains are internal
+    // state no accessor reads, so running ahead is invisible to the callbacks.
+    BlockInputs inputs;
+    BlockSolution solution;
+    bool pushed = false;  // inputs already holds the block starting at t
+    long t = 0, blocked = 0;
+    while (t < T) {
+      const Scalar* a = accel + t * N;
+      const Scalar* f = force + t * N;
+      if (pushed || (samples_ >= P - 1 && T - t >= kBlock && finite(a, f, kBlock * N))) {
+        if (!pushed) push_block(a, f, inputs);
+        solve_block(inputs, solution);  // inputs is free from here
+        const long next = t + kBlock;
+        const Scalar* na = accel + next * N;
+        const Scalar* nf = force + next * N;
+        const bool ahead = T - next >= kBlock && finite(na, nf, kBlock * N);
+        if (ahead) push_block(na, nf, inputs);
+        on_block(static_cast<const BlockSolution&>(solution), t);
+        pushed = ahead;
+        t = next;
+        blocked += kBlock;
+      } else {
+        on_sample(t, update(a, f));
+        ++t;
+      }
+    }
+    return blocked;
+  }
+
   // What every DOF shares at the interval end after `samples` samples (>= P), once per sample.
   Instant<Scalar> instant(long samples) const noexcept {
     Instant<Scalar> now;
@@ -274,9 +305,12 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   // follow the samples_ samples already committed: see run().
   ALGID_FLATTEN void solve_block(const BlockInputs& in, BlockSolution& out) noexcept {
     using Lanes = BlockLanes;
-    constexpr int kA = kAccelOrders + 1;  // J_0 .. J_7 of an acceleration: what its rows need
-    constexpr int kF = kForceOrders + 1;  // J_0 .. J_5 of a force
+    // What the rows need: J_0 .. J_7 of an acceleration and J_0 .. J_5 of a force (one order
+    // less of each for 3x3 systems only).
+    constexpr int kA = kAccelOrders + 1 - (4 - kSystemRows);
+    constexpr int kF = kForceOrders + 1 - (4 - kSystemRows);
     constexpr int kAO = AccelChain::kOrders, kFO = ForceChain::kOrders;
+    static_assert(kA <= kAO + 1 && kF <= kFO + 1, "the chains keep the orders the rows need");
     // What the DOFs share at each instant (instant()), and the time scaling J_r = I^r tau^-r,
     // lane by lane as in update().
     Lanes intervals, inv_tau, samples;
@@ -307,8 +341,8 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
         if (ka >= 0) JA[r] = inv_pow[r] * JA[r];
         if (kf >= 0 && r < kF) JF[r] = inv_pow[r] * JF[r];
       }
-      if (ka >= 0) lane_rows<3>(JA, arows_k);
-      if (kf >= 0) lane_rows<1>(JF, frows_k);
+      if (ka >= 0) lane_rows<3, kSystemRows>(JA, arows_k);
+      if (kf >= 0) lane_rows<1, kSystemRows>(JF, frows_k);
     };
     // Eq. 5 of every DOF for the kBlock instants, one per lane. The rows of the accelerations
     // i - 1, i, i + 1 (4 x 3 column-major each) roll through three slots; force i's rows go
@@ -344,11 +378,86 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
     ++samples_;
   }
 
+  // Eq. 7's double integrals of every DOF after each instant of a block: column b of
+  // integrals[i] holds DOF i's [I^2 |Delta|, I^2 sgn(Delta) Delta_j ...] after instant b (the
+  // first 4 rows for a 3x3 system).
+  using BlockIntegrals = Matrix<Scalar, 8, kBlock>;
+
+  // The instants of a solved block into eq. 7 with their estimates written to rows t ..
+  // t + kBlock - 1 of `out`; the last instant is committed in full (commit()), so that the
+  // estimator ends the block as update() would leave it.
+  void commit_block(const BlockSolution& in, long t, const Histories<Scalar>& out) noexcept {
+    BlockIntegrals integrals[N];
+    for (int b = 0; b < kBlock; ++b) {
+      if (b + 1 < kBlock) {
+        for (int i = 0; i < N; ++i) {
+          if (is_reduced(i)) {
+            last_.accumulate(in.fed[i].col(b).template head<4>(), in.decay3(b), config_.dt);
+          } else {
+            full_[static_cast<std::size_t>(i)].accumulate(in.fed[i].col(b), in.decay4(b), config_.dt);
+          }
+        }
+        ++samples_;
+      } else {
+        commit(in, b);
+      }
+      for (int i = 0; i < N; ++i) {
+        if (is_reduced(i)) {
+          integrals[i].col(b).template head<4>() = last_.integrals();
+        } else {
+          integrals[i].col(b) = full_[static_cast<std::size_t>(i)].integrals();
+        }
+      }
+    }
+    write_block(integrals, t, out);
+  }
+
+  // collect() for the kBlock instants of a block, lane by lane with the same operations
+  // (RatioEstimator::packed_estimates(): one reciprocal, then products), written to rows t ..
+  // t + kBlock - 1 of `out`.
+  void write_block(const BlockIntegrals* integrals, long t, const Histories<Scalar>& out) const noexcept {
+    using Lanes = BlockLanes;
+    using Ops = LaneOps<Scalar, kBlock>;
+    const Lanes zero = Lanes::Zero(), nan = Lanes::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+    // row t + b of a T x Cols history from lane b, from column c on
+    const auto put = [t](Scalar* history, int cols, int c, const Lanes& x) {
+      for (int b = 0; b < kBlock; ++b) history[(t + b) * cols + c] = x(b);
+    };
+    Lanes right_spring = nan;  // k_{i+1} from DOF i, for the fusion at DOF i + 1
+    for (int i = 0; i < N; ++i) {
+      // [I^2 |Delta|, m_i, c_i, k_i, k_{i+1}] numerators in lanes (k_{i+1}: a full DOF only)
+      Lanes I[8];
+      const bool reduced = is_reduced(i);
+      if (reduced) {
+        transpose_to_lanes<4>(integrals[i].data(), 8, I);
+      } else {
+        transpose_to_lanes<8>(integrals[i].data(), 8, I);
+      }
+      const Lanes inv = Lanes::Ones() / I[0];
+      // valid: a trusted sample has entered (I^2 |Delta| > 0)
+      const Lanes m = Ops::if_less(zero, I[0], Lanes(I[1] * inv), nan);
+      const Lanes c = Ops::if_less(zero, I[0], Lanes(I[2] * inv), nan);
+      const Lanes k_left = I[3] * inv;
+      const Lanes k_right = reduced ? nan : Lanes(I[4] * inv);
+      // k_i: this DOF's estimate, fused with DOF i-1's estimate of the same spring (if valid)
+      const Lanes fused = Ops::if_equal(right_spring, right_spring, Lanes(Scalar(0.5) * (k_left + right_spring)), k_left);
+      const Lanes k_i = Ops::if_less(zero, I[0], fused, right_spring);
+      right_spring = Ops::if_less(zero, I[0], k_right, nan);
+      put(out.mass, N, i, m);
+      put(out.damping, N, i, c);
+      put(out.stiffness, N + 1, i, k_i);
+      for (int b = 0; b < kBlock; ++b) out.valid[(t + b) * N + i] = I[0](b) > Scalar(0);
+    }
+    put(out.stiffness, N + 1, N, free_end() ? zero : right_spring);
+    for (int b = 0; b < kBlock; ++b) out.status[t + b] = static_cast<std::int8_t>(Status::kOk);
+  }
+
   // lanes[r](b) = src[b * stride + r], r < Rows, b < kBlock: Rows consecutive states of one
   // signal at the kBlock instants of a block (src: column-major, one column per instant) as
   // lanes. Square tiles of one SIMD register are transposed in registers (Eigen's ptranspose:
   // 2 x 2 in SSE2, 4 x 4 in AVX, 8 x 8 in AVX-512); element by element where the register
-  // does not tile the block.
+  // does not tile the block (half registers would be written and then read as one, which
+  // stalls the store-to-load forwarding).
   // (GCC warns that a SIMD type's alignment attribute is dropped as a template argument, as
   // Eigen's own packet code does everywhere; Eigen silences it in its headers, we here.)
 #if defined(__GNUC__) && !defined(__clang__)
@@ -359,6 +468,23 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   static void transpose_to_lanes(const Scalar* src, int stride, Lanes* lanes) noexcept {
     using Packet = typename Eigen::internal::packet_traits<Scalar>::type;
     constexpr int kWidth = Eigen::internal::unpacket_traits<Packet>::size;
+#if defined(__AVX512F__)
+    if constexpr (std::is_same_v<Scalar, double> && kWidth == 8 && Rows == 4 && kBlock == 8) {
+      // Four rows in AVX-512 (a single DOF's force): two 4 x 4 tiles of 256 bits, each row's
+      // two halves joined into one 512-bit register before it is stored.
+      using Half = Eigen::internal::Packet4d;
+      Eigen::internal::PacketBlock<Half, 4> low, high;
+      for (int j = 0; j < 4; ++j) {
+        low.packet[j] = Eigen::internal::ploadu<Half>(src + j * stride);
+        high.packet[j] = Eigen::internal::ploadu<Half>(src + (4 + j) * stride);
+      }
+      Eigen::internal::ptranspose(low);
+      Eigen::internal::ptranspose(high);
+      for (int r = 0; r < 4; ++r)
+        _mm512_storeu_pd(lanes[r].data(), _mm512_insertf64x4(_mm512_castpd256_pd512(low.packet[r]), high.packet[r], 1));
+      return;
+    }
+#endif
     if constexpr (kWidth > 1 && Rows % kWidth == 0 && kBlock % kWidth == 0) {
       for (int r0 = 0; r0 < Rows; r0 += kWidth) {
         for (int b0 = 0; b0 < kBlock; b0 += kWidth) {
@@ -399,12 +525,12 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
 #pragma GCC diagnostic pop
 #endif
 
-  // signal_rows() for kBlock instants: column c of the rows holds R(q, q + c), q = 0..3, with
+  // signal_rows() for kBlock instants: column c of the rows holds R(q, q + c), q < Rows, with
   // the operations of signal_rows() (J_s - a J_(s+1)) + b J_(s+2).
-  template <int Cols, class Lanes>
+  template <int Cols, int Rows, class Lanes>
   static void lane_rows(const Lanes* J, Lanes* rows) noexcept {
     for (int c = 0; c < Cols; ++c) {
-      for (int q = 0; q < 4; ++q) {
+      for (int q = 0; q < Rows; ++q) {
         rows[c * 4 + q] =
             J[c + q] - static_cast<Scalar>(kRowA[q]) * J[c + q + 1] + static_cast<Scalar>(kRowB[q]) * J[c + q + 2];
       }
