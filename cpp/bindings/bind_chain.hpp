@@ -7,8 +7,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -54,59 +56,63 @@ inline algid::Boundary parse_boundary(const std::string& b) {
 /// The histories run() returns, carved out of one numpy allocation: a record of many DOF
 /// returns megabytes, and one buffer (rather than one per history) lets the allocator reuse the
 /// same pages from call to call instead of faulting fresh ones in (about 10 ns per DOF-sample
-/// at n = 50 otherwise). Each history is a C-contiguous view whose base is the buffer.
+/// at n = 50 otherwise). Each history is a C-contiguous view whose base is the buffer. The
+/// bookkeeping is fixed-size (no heap beyond numpy's): at n = 1 a whole call costs about as
+/// much as 100 samples, so its fixed part shows.
 class RecordBuffer {
  public:
-  using Shape = std::vector<py::ssize_t>;
-  using Entries = std::vector<std::pair<std::string, Shape>>;
+  /// One history: its name, its type ('d' float64, '?' bool, 'b' int8) and shape.
+  struct History {
+    const char* name;
+    char kind;
+    int ndim;
+    py::ssize_t shape[3];
+  };
 
-  RecordBuffer(const Entries& f8, const Entries& booleans, const Entries& int8) {
-    std::size_t bytes = 0;
-    const auto place = [&](const Entries& entries, std::size_t item, char kind) {
-      for (const auto& [name, shape] : entries) {
-        std::size_t count = 1;
-        for (py::ssize_t d : shape) count *= static_cast<std::size_t>(d);
-        slots_.push_back({name, shape, kind, bytes});
-        bytes += (count * item + 63) / 64 * 64;  // every history on its own cache lines
-      }
-    };
-    place(f8, sizeof(double), 'd');
-    place(booleans, sizeof(bool), '?');
-    place(int8, sizeof(std::int8_t), 'b');
-    buffer_ = py::array_t<std::uint8_t>(static_cast<py::ssize_t>(bytes > 0 ? bytes : 1));
+  /// Add a history (before allocate()).
+  void add(const History& h) {
+    if (count_ == kMax) throw std::logic_error("RecordBuffer: too many histories");
+    std::size_t elements = 1;
+    for (int d = 0; d < h.ndim; ++d) elements *= static_cast<std::size_t>(h.shape[d]);
+    const std::size_t item = h.kind == 'd' ? sizeof(double) : 1;
+    slots_[count_++] = {h, bytes_};
+    bytes_ += (elements * item + 63) / 64 * 64;  // every history on its own cache lines
   }
+  /// The one numpy allocation for every history added.
+  void allocate() { buffer_ = py::array_t<std::uint8_t>(static_cast<py::ssize_t>(bytes_ > 0 ? bytes_ : 1)); }
 
-  double* f8(const std::string& name) { return reinterpret_cast<double*>(at(name)); }
-  bool* boolean(const std::string& name) { return reinterpret_cast<bool*>(at(name)); }
-  std::int8_t* int8(const std::string& name) { return reinterpret_cast<std::int8_t*>(at(name)); }
+  double* f8(const char* name) { return reinterpret_cast<double*>(at(name)); }
+  bool* boolean(const char* name) { return reinterpret_cast<bool*>(at(name)); }
+  std::int8_t* int8(const char* name) { return reinterpret_cast<std::int8_t*>(at(name)); }
 
   /// {name: view} of every history.
   py::dict views() {
     py::dict out;
-    for (const Slot& s : slots_) {
-      void* p = buffer_.mutable_data() + s.offset;
-      switch (s.kind) {
-        case 'd': out[s.name.c_str()] = py::array_t<double>(s.shape, static_cast<double*>(p), buffer_); break;
-        case '?': out[s.name.c_str()] = py::array_t<bool>(s.shape, static_cast<bool*>(p), buffer_); break;
-        default: out[s.name.c_str()] = py::array_t<std::int8_t>(s.shape, static_cast<std::int8_t*>(p), buffer_); break;
-      }
+    for (int k = 0; k < count_; ++k) {
+      const Slot& s = slots_[k];
+      const py::dtype type = s.history.kind == 'd'   ? py::dtype::of<double>()
+                             : s.history.kind == '?' ? py::dtype::of<bool>()
+                                                     : py::dtype::of<std::int8_t>();
+      out[s.history.name] = py::array(type, std::vector<py::ssize_t>(s.history.shape, s.history.shape + s.history.ndim),
+                                      {}, buffer_.mutable_data() + s.offset, buffer_);
     }
     return out;
   }
 
  private:
+  static constexpr int kMax = 8;
   struct Slot {
-    std::string name;
-    Shape shape;
-    char kind;
+    History history;
     std::size_t offset;
   };
-  std::uint8_t* at(const std::string& name) {
-    for (const Slot& s : slots_)
-      if (s.name == name) return buffer_.mutable_data() + s.offset;
-    throw std::logic_error("RecordBuffer: no history " + name);
+  std::uint8_t* at(const char* name) {
+    for (int k = 0; k < count_; ++k)
+      if (std::strcmp(slots_[k].history.name, name) == 0) return buffer_.mutable_data() + slots_[k].offset;
+    throw std::logic_error(std::string("RecordBuffer: no history ") + name);
   }
-  std::vector<Slot> slots_;
+  std::array<Slot, kMax> slots_{};
+  int count_ = 0;
+  std::size_t bytes_ = 0;
   py::array_t<std::uint8_t> buffer_;
 };
 
@@ -152,9 +158,18 @@ void bind_chain(py::module_& m) {
             require_record(accel, force, N);
             const py::ssize_t T = accel.shape(0);
             const py::ssize_t n = N;
-            RecordBuffer::Entries histories = {{"mass", {T, n}}, {"damping", {T, n}}, {"stiffness", {T, n + 1}}};
-            if (full) histories.insert(histories.end(), {{"theta", {T, n, 4}}, {"theta_instant", {T, n, 4}}, {"hadamard", {T, n}}});
-            RecordBuffer out(histories, {{"valid", {T, n}}}, {{"status", {T}}});
+            RecordBuffer out;
+            out.add({"mass", 'd', 2, {T, n}});
+            out.add({"damping", 'd', 2, {T, n}});
+            out.add({"stiffness", 'd', 2, {T, n + 1}});
+            if (full) {
+              out.add({"theta", 'd', 3, {T, n, 4}});
+              out.add({"theta_instant", 'd', 3, {T, n, 4}});
+              out.add({"hadamard", 'd', 2, {T, n}});
+            }
+            out.add({"valid", '?', 2, {T, n}});
+            out.add({"status", 'b', 1, {T}});
+            out.allocate();
             const double* a = accel.data();
             const double* f = force.data();
             std::int8_t* st = out.int8("status");
