@@ -47,12 +47,7 @@ int run() {
   static Scalar mass[900], damping[900], stiffness[1200];
   static bool valid[900];
   algid::ChainEstimator<3, Scalar> recorder(cfg);
-  algid::Histories<Scalar> out;
-  out.status = status;
-  out.mass = mass;
-  out.damping = damping;
-  out.stiffness = stiffness;
-  out.valid = valid;
+  const algid::Histories<Scalar> out{status, mass, damping, stiffness, valid};
   recorder.record(record_a, record_u, 300, out);
   const bool recorded = mass[897] == est.mass()(0) && stiffness[1199] == est.stiffness()(3) && valid[899];
   return est.all_valid() && same && recorded ? 0 : 1;

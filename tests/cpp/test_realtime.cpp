@@ -88,12 +88,7 @@ void run_does_not_allocate() {
   }
   try {
     NoAllocationScope scope;
-    algid::Histories<Scalar> out;
-    out.status = status;
-    out.mass = mass;
-    out.damping = damping;
-    out.stiffness = stiffness;
-    out.valid = valid;
+    const algid::Histories<Scalar> out{status, mass, damping, stiffness, valid};
     recorded_blocks = recorder.record(accel, force, kT, out);
     record_allocations = scope.allocations();
   } catch (const algid_test::EigenAssertion&) {
