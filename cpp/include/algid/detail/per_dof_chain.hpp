@@ -2,8 +2,9 @@
 /// @file per_dof_chain.hpp
 /// ChainEstimator's layout for chains of one or two DOF (see chain_estimator.hpp for the
 /// interface): one DofEstimator per DOF, the integrator chains vectorised across their orders
-/// (IntegratorChain), and a batch path, run(), that solves the eq. 5 systems of kBlock
-/// consecutive instants side by side, one instant per SIMD lane, to the bit as update() would.
+/// (IntegratorChain), and a batch path, run() and record(), that solves the eq. 5 systems of
+/// kBlock consecutive instants side by side, one instant per SIMD lane, to the bit as update()
+/// would.
 
 #include "algid/chain_config.hpp"
 #include "algid/detail/chain_common.hpp"
@@ -144,7 +145,8 @@ class PerDofChain : public ChainCommon<PerDofChain<N, Scalar, P>, N, Scalar, P> 
   /// (one reciprocal per DOF and block rather than per sample) and written straight into `out`
   /// (write_block()). Between the blocks' last instants nothing reads the per-sample state, so
   /// only eq. 7 advances there. The same bits as run() with an observer that copies the
-  /// accessors; the estimator is left as update() would leave it.
+  /// accessors; the estimator is left as update() would leave it. Scratch: run()'s, plus
+  /// 8 kBlock N scalars (eq. 7's integrals of a block).
   /// @realtime no allocation, no throw
   ALGID_FLATTEN long record(const Scalar* accel, const Scalar* force, long T, const Histories<Scalar>& out) noexcept {
     return drive(
