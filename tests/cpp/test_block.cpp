@@ -44,13 +44,13 @@ long compare_states(const algid::ChainEstimator<N, Scalar>& x, const algid::Chai
 
 // Histories of T samples in vectors, and a view of them from row t0 on for record().
 template <class Scalar>
-struct Histories {
+struct HistoryArrays {
   long T;
   int n;
   std::vector<std::int8_t> status;
   std::vector<Scalar> mass, damping, stiffness;
   std::vector<unsigned char> valid;  // bool, but addressable (std::vector<bool> is not)
-  Histories(long samples, int dofs)
+  HistoryArrays(long samples, int dofs)
       : T(samples), n(dofs), status(static_cast<std::size_t>(samples), std::int8_t(-1)),
         mass(static_cast<std::size_t>(samples * dofs), Scalar(-1)), damping(mass), stiffness(static_cast<std::size_t>(samples * (dofs + 1)), Scalar(-1)),
         valid(static_cast<std::size_t>(samples * dofs), 2) {}
@@ -69,7 +69,7 @@ struct Histories {
     }
     for (int j = 0; j <= n; ++j) stiffness[static_cast<std::size_t>(t * (n + 1) + j)] = e.stiffness()(j);
   }
-  long differences(const Histories& other) const {
+  long differences(const HistoryArrays& other) const {
     long d = 0;
     for (std::size_t k = 0; k < status.size(); ++k) d += status[k] != other.status[k];
     for (std::size_t k = 0; k < mass.size(); ++k) {
@@ -99,7 +99,7 @@ void bitwise_case(algid::Boundary boundary, long T, long split, long bad_at, uns
   cfg.boundary = boundary;
   algid::ChainEstimator<N, Scalar> one_by_one(cfg), batch(cfg), recorded(cfg);
   // What update() leaves after each sample, as record() writes it.
-  Histories<Scalar> expected_rows(T, N), recorded_rows(T, N);
+  HistoryArrays<Scalar> expected_rows(T, N), recorded_rows(T, N);
   long differences = 0, compared = 0, ok = 0, status_mismatch = 0;
   const auto observe = [&](long t, algid::Status status) {
     const algid::Status expected = one_by_one.update(&accel[static_cast<std::size_t>(t * N)],
