@@ -172,27 +172,15 @@ void bind_chain(py::module_& m) {
             out.allocate();
             const double* a = accel.data();
             const double* f = force.data();
-            std::int8_t* st = out.int8("status");
-            double* pm = out.f8("mass");
-            double* pc = out.f8("damping");
-            double* pk = out.f8("stiffness");
-            bool* pv = out.boolean("valid");
+            const algid::Histories<double> histories{out.int8("status"), out.f8("mass"), out.f8("damping"),
+                                                     out.f8("stiffness"), out.boolean("valid")};
             double* pt = full ? out.f8("theta") : nullptr;
             double* pi = full ? out.f8("theta_instant") : nullptr;
             double* ph = full ? out.f8("hadamard") : nullptr;
             {
               py::gil_scoped_release release;
               const auto record = [&](long t, algid::Status s) {
-                st[t] = static_cast<std::int8_t>(s);
-                const auto m = e.mass();
-                const auto c = e.damping();
-                const auto k = e.stiffness();
-                for (int i = 0; i < N; ++i) {
-                  pm[t * N + i] = m(i);
-                  pc[t * N + i] = c(i);
-                  pv[t * N + i] = e.valid()[static_cast<std::size_t>(i)];
-                }
-                for (int j = 0; j <= N; ++j) pk[t * (N + 1) + j] = k(j);
+                e.write_row(t, s, histories);
                 if (full) {
                   for (int i = 0; i < N; ++i) {
                     const auto th = e.theta(i);
@@ -212,7 +200,7 @@ void bind_chain(py::module_& m) {
               if (full) {
                 e.run(a, f, static_cast<long>(T), record);
               } else {
-                e.record(a, f, static_cast<long>(T), algid::Histories<double>{st, pm, pc, pk, pv});
+                e.record(a, f, static_cast<long>(T), histories);
               }
 #else
               for (py::ssize_t t = 0; t < T; ++t) record(static_cast<long>(t), e.update(a + t * N, f + t * N));

@@ -63,16 +63,5 @@ inline Eigen::Array<Scalar, B, 1> reciprocal(const Eigen::Array<Scalar, B, 1>& x
   return x.inverse();
 }
 
-/// `count` rounded up to a whole number of SIMD registers of Scalar of at most 256 bits in this
-/// build (the registers of the integrator chains: 2 doubles with SSE2, 4 with AVX and
-/// AVX-512), but no more than `cap`.
-template <class Scalar>
-constexpr int simd_padded(int count, int cap) noexcept {
-  constexpr int packet = Eigen::internal::packet_traits<Scalar>::size;
-  constexpr int width = packet * sizeof(Scalar) <= 32 ? packet : static_cast<int>(32 / sizeof(Scalar));
-  const int padded = (count + width - 1) / width * width;
-  return padded < cap ? padded : cap;
-}
-
 }  // namespace detail
 }  // namespace algid

@@ -41,6 +41,19 @@ class ChainCommon {
     return self().run(accel, force, T, [&](long t, Status s) { write_row(t, s, out); });
   }
 
+  /// Write row t of `out` (see Histories) from the accessors, after a sample of status `s`:
+  /// what record() writes after sample t. @realtime no allocation, no throw
+  void write_row(long t, Status s, const Histories<Scalar>& out) const noexcept {
+    const Derived& d = self();
+    out.status[t] = static_cast<std::int8_t>(s);
+    for (int i = 0; i < N; ++i) {
+      out.mass[t * N + i] = d.mass()(i);
+      out.damping[t * N + i] = d.damping()(i);
+      out.valid[t * N + i] = d.valid()[static_cast<std::size_t>(i)];
+    }
+    for (int j = 0; j <= N; ++j) out.stiffness[t * (N + 1) + j] = d.stiffness()(j);
+  }
+
   /// True when every DOF is valid.
   bool all_valid() const noexcept {
     for (bool v : self().valid())
@@ -60,18 +73,6 @@ class ChainCommon {
   explicit ChainCommon(const Config& config) : config_(config) {
     const ConfigError e = validate(config);
     if (e != ConfigError::kNone) config_error(to_string(e));
-  }
-
-  /// Row t of `out` from the accessors, after a sample of status `s`.
-  void write_row(long t, Status s, const Histories<Scalar>& out) const noexcept {
-    const Derived& d = self();
-    out.status[t] = static_cast<std::int8_t>(s);
-    for (int i = 0; i < N; ++i) {
-      out.mass[t * N + i] = d.mass()(i);
-      out.damping[t * N + i] = d.damping()(i);
-      out.valid[t * N + i] = d.valid()[static_cast<std::size_t>(i)];
-    }
-    for (int j = 0; j <= N; ++j) out.stiffness[t * (N + 1) + j] = d.stiffness()(j);
   }
 
   bool free_end() const noexcept { return config_.boundary == Boundary::kFree; }

@@ -53,6 +53,15 @@ constexpr int lane_width() noexcept {
   return w;
 }
 
+/// `count` rounded up to a whole number of the registers lane_width() picks for many DOF (at
+/// most 256 bits: 2 doubles with SSE2, 4 with AVX and AVX-512), but no more than `cap`.
+template <class Scalar>
+constexpr int simd_padded(int count, int cap) noexcept {
+  constexpr int width = lane_width<1 << 30, Scalar>();
+  const int padded = (count + width - 1) / width * width;
+  return padded < cap ? padded : cap;
+}
+
 // (GCC warns that a SIMD type's alignment attribute is dropped as a template argument, as
 // Eigen's own packet code does everywhere; Eigen silences it in its headers, we here.)
 #if defined(__GNUC__) && !defined(__clang__)

@@ -8,6 +8,7 @@
 
 #include "algid/chain_config.hpp"
 #include "algid/detail/chain_common.hpp"
+#include "algid/detail/lanes.hpp"
 #include "algid/cramer.hpp"
 #include "algid/dof_estimator.hpp"
 #include "algid/histories.hpp"
