@@ -3,9 +3,11 @@
 from .chain import TABLE1, Chain
 from .continuous import ChangeEvent, ContinuousEstimator
 from .estimator import ISA, SIZES, ChainEstimator, Status
+from .identification import Identification, identify
+from .recording import Recording, load_recording
 
-__all__ = ["Chain", "ChainEstimator", "ChangeEvent", "ContinuousEstimator", "ISA", "SIZES", "Status", "TABLE1",
-           "get_include"]
+__all__ = ["Chain", "ChainEstimator", "ChangeEvent", "ContinuousEstimator", "ISA", "Identification", "Recording",
+           "SIZES", "Status", "TABLE1", "get_include", "identify", "load_recording"]
 __version__ = "0.1.0"
 
 

@@ -8,15 +8,16 @@ import sys
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand registered."""
-    from . import __version__, demo, identify
+    from . import __version__, demo
     from .diagnosis import cli as diagnosis_cli
+    from .identification import cli as identify_cli
 
     parser = argparse.ArgumentParser(
         prog="algid", description="On-line algebraic identification of mass-spring-damper chains.")
     parser.add_argument("--version", action="version", version=f"algid {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     demo.add_parser(sub)
-    identify.add_parser(sub)
+    identify_cli.add_parser(sub)
     diagnosis_cli.add_parser(sub)
     return parser
 

@@ -133,6 +133,7 @@ _EFFECT_SPECS: dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]] = {
     "sensor_bias": ("dof", ("bias",), ()),
     "sensor_lowpass": ("dof", ("cutoff_hz",), ()),
     "parameter_drift": ("spring", ("rel_change",), ()),
+    "force_offset": ("dof", ("offset",), ()),
 }
 
 #: The effect names the simulator knows (part of the public interface).
@@ -168,6 +169,9 @@ class Effect:
             (``a_meas(0) = a(0+)``).
         ``parameter_drift``  ``{"spring": j}``, ``{"rel_change": r}``: stiffness of spring j
             becomes ``k_j (1 + r t / duration)`` (linear over the record).
+        ``force_offset``  ``{"dof": i}``, ``{"offset": [N]}``: a constant force on mass i
+            that the force sensor does not see (gravity on an inclined axis, a preload,
+            a drive's current-sensor offset).
     location : dict
         ``{"dof": i}`` with ``1 <= i <= n`` or ``{"spring": j}`` with ``1 <= j <= n+1``
         (``j <= n`` for a free right end); 1-based as in the paper.
@@ -475,7 +479,10 @@ class _Plant:
         f = [0.0] * n
         for kind, i, a, eps in self.dof_terms:
             vi = vs[i]
-            f[i] -= a * math.tanh(vi / eps) if kind == "cf" else a * vi * abs(vi)
+            if kind == "fo":
+                f[i] += a
+            else:
+                f[i] -= a * math.tanh(vi / eps) if kind == "cf" else a * vi * abs(vi)
         for kind, j, a, b in self.spring_terms:  # spring j (0-based) joins DOF j-1 and DOF j
             d = (xs[j] if j < n else 0.0) - (xs[j - 1] if j >= 1 else 0.0)
             if kind == "cs":
@@ -512,6 +519,8 @@ class _Plant:
                 self.dof_terms.append(("cf", e.dof, e.params["force"], v_eps[q]))
             elif e.name == "quadratic_damping":
                 self.dof_terms.append(("qd", e.dof, e.params["c2"], 0.0))
+            elif e.name == "force_offset":
+                self.dof_terms.append(("fo", e.dof, e.params["offset"], 0.0))
 
         def rows(kind: str) -> tuple[Optional[np.ndarray], list[Effect]]:
             sel = [e for e in effects if e.name == kind]
@@ -553,7 +562,9 @@ class _Plant:
         f = np.zeros(np.shape(x))
         for kind, i, a, eps in self.dof_terms:
             vi = v[..., i]
-            if kind == "cf":
+            if kind == "fo":
+                f[..., i] += a
+            elif kind == "cf":
                 f[..., i] -= a * np.tanh(vi / eps)
             else:
                 f[..., i] -= a * vi * np.abs(vi)
@@ -593,6 +604,7 @@ def simulate(
     noise: Optional[SensorNoise] = None,
     force_interp: str = "cubic",
     substeps: Optional[int] = None,
+    encoder_resolution_m: float = 0.0,
 ) -> SimulationResult:
     """Simulate the chain and sample its sensors (conventions in the module docstring).
 
@@ -632,6 +644,10 @@ def simulate(
         Interpolation of a force array in continuous mode (cubic: C2 not-a-knot spline).
     substeps : int or None
         Integration steps per sample interval (None: 1, or more if a steep effect needs).
+    encoder_resolution_m : float
+        Position sensors that count increments of this size [m] (an incremental encoder:
+        the reading is ``q round(x / q)``, after any position noise); 0 = exact readings.
+        A closed loop sees the quantised readings too.
 
     Returns
     -------
@@ -661,6 +677,13 @@ def simulate(
         raise ValueError(f"actuator_lag_s must be >= 0, got {actuator_lag_s}")
     if substeps is not None and (int(substeps) != substeps or substeps < 1):
         raise ValueError(f"substeps must be a positive integer, got {substeps}")
+    encoder_resolution_m = float(encoder_resolution_m)
+    if not (math.isfinite(encoder_resolution_m) and encoder_resolution_m >= 0):
+        raise ValueError(f"encoder_resolution_m must be >= 0, got {encoder_resolution_m}")
+
+    def encoder(x: np.ndarray) -> np.ndarray:
+        q = encoder_resolution_m
+        return x if q == 0 else q * np.round(x / q)
 
     effs = tuple(_as_effect(e) for e in effects)
     for e in effs:
@@ -1001,10 +1024,10 @@ def simulate(
             base = -cdamp * v - Kmat @ x
             if nonlinear:
                 base = base + plant.effect_force(tk, x, v)
+            xm_k = x + noise_scale["position"] * unit["position"][k] if "position" in noise_scale else x.copy()
+            xm_k = encoder(xm_k)
             if mode == "sampled":
-                xm = s[:n].copy()
-                if "position" in noise_scale:
-                    xm = xm + noise_scale["position"] * unit["position"][k]
+                xm = xm_k.copy()
                 u_k = np.asarray(controller.sampled_force(k, tk, xm), dtype=float).reshape(n)
                 rec_hist[k] = u_k
                 app_q = np.empty((J, n))
@@ -1040,7 +1063,6 @@ def simulate(
             if "accel" in noise_scale:
                 am = am + noise_scale["accel"] * unit["accel"][k]
             um = U_rec[k] + noise_scale["force"] * unit["force"][k] if "force" in noise_scale else U_rec[k].copy()
-            xm_k = x + noise_scale["position"] * unit["position"][k] if "position" in noise_scale else x.copy()
             A_meas[k], U_meas[k], X_meas[k] = am, um, xm_k
             controller.observe(k, tk, am, um, x.copy() if ctrl_cont else xm_k, s[o_z:].copy() if ctrl_cont else None)
             report(k)
@@ -1091,7 +1113,7 @@ def simulate(
                 noise_rms[c] = sc * np.sqrt(np.mean(unit[c] ** 2, axis=0))
         a_out = noisy.get("accel", A_clean)
         u_out = noisy.get("force", U_rec.copy())
-        x_out = noisy.get("position", X.copy())
+        x_out = encoder(noisy.get("position", X.copy()))
     for c, r in noise_rms.items():
         with np.errstate(divide="ignore", invalid="ignore"):
             snr[c] = 20 * np.log10(_rms(level[c]) / np.where(r > 0, r, np.nan))

@@ -1,0 +1,88 @@
+"""``algid identify RECORDING [--json OUT] [--trace CSV] [--estimator auto|window|continuous]``.
+
+Estimates every mass, damping and spring of the chain in a recording with one standard
+deviation each, and says of every estimate whether it is valid and, if not, why
+(:func:`algid.identify`). The table goes to stdout, one line per invalid estimate and the
+progress to stderr. Exit codes: 0 when something was identified (invalid entries carry
+their reasons), 3 when nothing in the recording is identifiable, 2 on bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..progress import Progress
+from ..recording import RecordingError, load_recording
+from .plan import ESTIMATORS
+from .surrogate import REPLICATES
+
+
+class IdentifyError(Exception):
+    """A problem to report in one line with exit code 2."""
+
+
+def add_parser(sub) -> None:
+    """Register ``algid identify``."""
+    p = sub.add_parser("identify", help="estimate m, c, k of a chain from a recording, with uncertainties",
+                       description="Estimate every mass, damping and spring of the chain in a recording, with "
+                                   "one standard deviation each and a verdict (valid, or why not). The "
+                                   "estimator is chosen from the recording unless --estimator says otherwise.")
+    p.add_argument("recording", type=Path, help="CSV or .npz with t, u1..un, a1..an (or x1..xn)")
+    p.add_argument("--json", type=Path, help="write the estimates, uncertainties and verdicts as JSON")
+    p.add_argument("--trace", type=Path, help="write the estimate history (with sigma_ columns) as CSV")
+    p.add_argument("--boundary", choices=("fixed", "free"), default="fixed",
+                   help="right end: wall (k_{n+1} estimated) or free (k_{n+1} = 0)")
+    p.add_argument("--estimator", choices=ESTIMATORS, default="auto",
+                   help="single growing window, continuous windows, or chosen from the recording (default)")
+    p.add_argument("--replicates", type=int, default=REPLICATES,
+                   help=f"bootstrap replicates for the uncertainties (default {REPLICATES})")
+    p.add_argument("--quiet", action="store_true", help="no progress and no table")
+    p.set_defaults(func=run)
+
+
+def _check_output(path: Path, flag: str) -> None:
+    if path.is_dir():
+        raise IdentifyError(f"{flag} {path}: is a directory")
+    if not path.parent.exists():
+        raise IdentifyError(f"{flag} {path}: folder {path.parent} does not exist")
+
+
+def run(args) -> int:
+    """Entry point of ``algid identify``; returns the exit code."""
+    from .engine import identify
+
+    progress = Progress("identify", quiet=args.quiet)
+    try:
+        for path, flag in ((args.json, "--json"), (args.trace, "--trace")):
+            if path is not None:
+                _check_output(path, flag)
+        if args.replicates < 2:
+            raise IdentifyError(f"--replicates must be >= 2, got {args.replicates}")
+        rec = load_recording(args.recording)
+        try:
+            result = identify(rec, args.boundary, args.estimator, replicates=args.replicates, progress=progress)
+        except ValueError as err:  # e.g. a chain size that is not compiled in
+            raise IdentifyError(str(err)) from err
+        finally:
+            progress.close()
+        if args.json is not None:
+            args.json.write_text(json.dumps(result.to_json(), indent=2) + "\n", encoding="utf-8")
+        if args.trace is not None:
+            result.write_trace(args.trace)
+    except (RecordingError, IdentifyError) as err:
+        print(f"algid identify: error: {' '.join(str(err).split())}", file=sys.stderr)
+        return 2
+    except OSError as err:
+        print(f"algid identify: error: {err.strerror}: {err.filename}", file=sys.stderr)
+        return 2
+    for line in result.reasons:
+        print(f"algid identify: {line}", file=sys.stderr)
+    if not args.quiet:
+        print(result.summary())
+    if not result.identified_any:
+        print("algid identify: nothing in this recording is identifiable", file=sys.stderr)
+        return 3
+    return 0

@@ -1,0 +1,125 @@
+"""``algid.identify(recording)``: the whole-record identification with uncertainty and
+verdicts.
+
+1. Signals: the measured accelerations, or the second derivative of the displacements
+   (:func:`algid.recording.accelerations`); the forces.
+2. Noise model and signal band of the recording (:mod:`algid.noise`).
+3. Plan (:mod:`.plan`): which estimator; for the continuous estimator, a first run with a
+   window from the force's median frequency gives a first chain, whose lowest natural
+   frequency gives the first guess of the window; every multiple of it in
+   :data:`~.plan.WINDOW_MULTIPLES` is then run and scored by the root-mean-square error the
+   bootstrap measures on :data:`SELECT_REPLICATES` surrogates (in shares of the force, mean
+   over the parameters), and the best is kept. Longer windows average more but integrate
+   more noise (their bias grows); which wins depends on the record, so the record decides.
+4. Uncertainty and bias by parametric bootstrap on surrogates of the recording
+   (:mod:`.surrogate`). A bias larger than twice its own standard error is taken off
+   the estimate (the noise bias of the iterated integrals, errors-in-variables), and the
+   uncertainty then includes the bias's standard error.
+5. Verdicts per parameter and DOF (:mod:`.verdicts`).
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Optional
+
+import numpy as np
+
+from ..noise import NoiseModel, analyse
+from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations
+from .plan import Plan, make_plan, natural_frequencies_hz, window_candidates
+from .result import Identification
+from .runner import Run, run_plan
+from .surrogate import REPLICATES, bootstrap
+from .verdicts import judge, scales
+
+#: Replicates per candidate window when the window length is chosen.
+SELECT_REPLICATES = 4
+
+ProgressFn = Optional[Callable[[str, float], None]]
+
+
+def _progress(cb: ProgressFn, stage: str, fraction: float) -> None:
+    if cb is not None:
+        cb(stage, fraction)
+
+
+def _surrogate_band(nm: NoiseModel, theta: np.ndarray, n: int, boundary: str) -> float:
+    """Band edge [Hz] of the surrogate motion: the signal band, widened to hold every
+    natural frequency of the estimate with a margin."""
+    return max([nm.f_hi] + [1.25 * float(f) for f in natural_frequencies_hz(theta, n, boundary)])
+
+
+def _select_window(a, u, motion, nm: NoiseModel, plan: Plan, boundary: str, forced, duration: float,
+                   seed: int, progress: ProgressFn) -> tuple[Plan, Run]:
+    """Try the window candidates of ``plan``; keep the one with the lowest bootstrap error."""
+    n = u.shape[1]
+    cands = window_candidates(plan, nm, duration)
+    best = None
+    for q, cand in enumerate(cands):
+        run = run_plan(a, u, nm.dt, boundary, cand)
+        boot = bootstrap(run.theta, motion, nm, cand, boundary, _surrogate_band(nm, run.theta, n, boundary),
+                         forced, SELECT_REPLICATES, seed)
+        rmse = np.sqrt(np.nanmean((boot.replicates - run.theta) ** 2, axis=0))
+        ratio, _ = scales(n, boundary, boot.motion, u, forced)
+        score = float(np.nanmean(rmse * ratio)) if np.any(np.isfinite(rmse * ratio)) else np.inf
+        if best is None or score < best[0]:
+            best = (score, cand, run)
+        _progress(progress, "window length", (q + 1) / len(cands))
+    return best[1], best[2]
+
+
+def identify(rec: Recording, boundary: str = "fixed", estimator: str = "auto", replicates: int = REPLICATES,
+             seed: int = 0, progress: ProgressFn = None) -> Identification:
+    """Identify the chain of a whole recording, with one standard deviation per parameter
+    and a verdict on each.
+
+    Parameters
+    ----------
+    rec : Recording
+        Forces and accelerations or displacements (:class:`algid.recording.Recording`).
+    boundary : {"fixed", "free"}
+        Right end of the chain.
+    estimator : {"auto", "window", "continuous"}
+        ``auto`` chooses from the recording (:mod:`algid.identification.plan`).
+    replicates : int
+        Surrogate replicates of the bootstrap (>= 2).
+    seed : int
+        Seed of the surrogates' noise (the result is reproducible).
+    progress : callable ``(stage, fraction)`` or None
+        Called as the work proceeds.
+
+    Returns
+    -------
+    Identification
+    """
+    if boundary not in ("fixed", "free"):
+        raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
+    if int(replicates) < 2:
+        raise ValueError(f"replicates must be >= 2, got {replicates}")
+    n, dt = rec.n, float(rec.dt)
+    a = accelerations(rec, DEFAULT_DIFF_POINTS)
+    kind = "acceleration" if rec.a is not None else "displacement"
+    motion = rec.a if rec.a is not None else rec.x
+    nm = analyse(rec.u, motion, dt, kind)
+    duration = rec.t.size * dt
+    forced = np.any(rec.u != 0.0, axis=0)
+    plan = make_plan(nm, duration, estimator)
+    _progress(progress, "first estimate", 0.0)
+    run = run_plan(a, rec.u, dt, boundary, plan)
+    _progress(progress, "first estimate", 1.0)
+    if plan.estimator == "continuous":
+        plan = make_plan(nm, duration, estimator, natural_frequencies_hz(run.theta, n, boundary))
+        plan, run = _select_window(a, rec.u, motion, nm, plan, boundary, forced, duration, seed, progress)
+    boot = bootstrap(run.theta, motion, nm, plan, boundary, _surrogate_band(nm, run.theta, n, boundary), forced,
+                     int(replicates), seed, DEFAULT_DIFF_POINTS,
+                     progress=lambda f: _progress(progress, "uncertainty", f))
+    stderr_bias = boot.sigma / np.sqrt(replicates)
+    correct = np.isfinite(boot.bias) & (np.abs(boot.bias) > 2.0 * stderr_bias)
+    theta = np.where(correct, run.theta - np.nan_to_num(boot.bias), run.theta)
+    sigma = np.where(correct, np.sqrt(boot.sigma**2 + stderr_bias**2), boot.sigma)
+    verdicts = judge(theta, sigma, n, boundary, boot.motion, rec.u, forced, nm)
+    return Identification(n=n, boundary=boundary, dt=dt, samples=int(rec.t.size), plan=plan, noise=nm,
+                          theta=theta, sigma=sigma, raw=run.theta, bias=np.where(correct, boot.bias, 0.0),
+                          verdicts=verdicts, time_s=run.time_s, history=run.history,
+                          history_sigma=boot.history_sigma, windows=run.windows, replicates=int(replicates),
+                          motion=kind, path=rec.path)

@@ -1,0 +1,178 @@
+"""How to estimate from a recording: the single window or the continuous estimator, and
+their settings, from the recording's own time scales.
+
+Rules (every threshold named below):
+
+* **Which estimator.** The paper's single growing window is exact on clean signals and
+  needs no settings, but the iterated integrals of sensor noise grow with the window, so
+  its error grows with the record under noise (``docs/continuous.md``). The record is
+  *clean* when every channel's in-band SNR is at least :data:`CLEAN_SNR_DB` and no
+  displacement comes in encoder counts. ``auto`` takes the single window for a clean record
+  of at most :data:`SHORT_S`, and for any record too short to give the continuous estimator
+  :data:`MIN_WINDOW_RESULTS` window results; otherwise the continuous estimator.
+* **Window length** of the continuous estimator: a first guess, then the best of its
+  multiples :data:`WINDOW_MULTIPLES` by the error the bootstrap measures
+  (:func:`algid.identification.engine.identify`). The guess is half a period of the
+  lowest natural frequency when a first estimate of the chain has one inside the signal
+  band (a window must see the slowest mode swing to tell its spring from its mass; longer
+  windows integrate more noise), otherwise one period of the force's median frequency (a
+  chain without springs, such as a positioning axis, has no mode; its windows must hold
+  whole moves). Clipped to at least :data:`MIN_WINDOW_SAMPLES` samples and at most the
+  record over :data:`MIN_WINDOW_RESULTS` / ``stagger``.
+* **Prefilter** (the same low-pass on forces and accelerations, which leaves eq. 1
+  unchanged): :data:`PREFILTER_MARGIN` times the top of the signal band or of the natural
+  frequencies, whichever is higher; off when that is above :data:`PREFILTER_MAX` of the
+  sampling rate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from ..noise import NoiseModel
+
+#: In-band SNR [dB] of every channel above which a record counts as noise-free.
+CLEAN_SNR_DB = 90.0
+#: Longest clean record [s] that ``auto`` gives to the single growing window.
+SHORT_S = 2.0
+#: Fewest window results the continuous estimator must deliver over the record.
+MIN_WINDOW_RESULTS = 24
+#: Shortest window of the continuous estimator [samples].
+MIN_WINDOW_SAMPLES = 48
+#: Multiples of the first guess of the window length that are tried.
+WINDOW_MULTIPLES = (0.5, 0.7, 1.0, 1.4, 2.0)
+#: Windows in flight (staggered) of the continuous estimator.
+STAGGER = 4
+#: Prefilter cut-off over the top of the band.
+PREFILTER_MARGIN = 1.25
+#: Highest prefilter cut-off as a fraction of the sampling rate (above it: no prefilter).
+PREFILTER_MAX = 0.2
+
+ESTIMATORS = ("auto", "window", "continuous")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Which estimator runs and with which settings, and why."""
+
+    estimator: str          #: "window" or "continuous"
+    reason: str             #: one line: why this estimator
+    window_s: float         #: continuous window length [s] (nan for the single window)
+    prefilter_hz: float     #: continuous prefilter cut-off [Hz] (0 = off; nan for the single window)
+    stagger: int            #: continuous windows in flight
+    window_basis: str       #: what set the window length
+
+    def to_json(self) -> dict:
+        d = asdict(self)
+        for key in ("window_s", "prefilter_hz"):
+            if not np.isfinite(d[key]):
+                d[key] = None
+        return d
+
+
+def clean(nm: NoiseModel) -> bool:
+    """Noise-free to the eye of the estimator (see the module docstring)."""
+    if nm.quantised:
+        return False
+    snr = [c.snr_db for c in nm.forces + nm.motions if np.isfinite(c.snr_db)]
+    return bool(snr) and min(snr) >= CLEAN_SNR_DB
+
+
+def natural_frequencies_hz(theta: np.ndarray, n: int, boundary: str) -> np.ndarray:
+    """Undamped natural frequencies [Hz] of packed estimates ``m1..mn, c1..cn, k1..k{n+1}``;
+    empty when the estimates are not a physical chain (a mass not positive, a spring
+    negative or not finite)."""
+    m, k = theta[:n], theta[2 * n:].copy()
+    if n == 1 and boundary == "fixed":
+        k = np.array([k[0], 0.0])
+    if boundary == "free":
+        k[-1] = 0.0
+    if not (np.all(np.isfinite(m)) and np.all(m > 0) and np.all(np.isfinite(k)) and np.all(k >= 0)):
+        return np.array([])
+    K = np.diag(k[:-1] + k[1:]) - np.diag(k[1:-1], 1) - np.diag(k[1:-1], -1)
+    lam = np.linalg.eigvals(K / m[:, None]).real
+    return np.sort(np.sqrt(np.clip(lam, 0.0, None))) / (2 * np.pi)
+
+
+def window_limits(nm: NoiseModel, duration_s: float) -> tuple[float, float]:
+    """Shortest and longest continuous window [s] (module docstring)."""
+    lo = MIN_WINDOW_SAMPLES * nm.dt
+    return lo, max(lo, duration_s * STAGGER / MIN_WINDOW_RESULTS)
+
+
+def window_length(nm: NoiseModel, duration_s: float, f_natural: np.ndarray) -> tuple[float, str]:
+    """First guess of the continuous window length [s] and what set it (module docstring)."""
+    fn = np.asarray(f_natural, dtype=float)
+    fn = fn[np.isfinite(fn) & (fn > 2.0 / duration_s) & (fn <= nm.f_hi)]
+    if fn.size:
+        f_ref, basis = 2.0 * float(fn.min()), f"half a period of the lowest natural frequency ({fn.min():.3g} Hz)"
+    elif np.isfinite(nm.f_mid) and nm.f_mid > 0:
+        f_ref, basis = nm.f_mid, f"one period of the force's median frequency ({nm.f_mid:.3g} Hz)"
+    else:
+        f_ref, basis = 10.0 / duration_s, "a tenth of the record (no force stands out of its noise)"
+    lo, hi = window_limits(nm, duration_s)
+    L = float(np.clip(1.0 / f_ref, lo, hi))
+    if L == lo and 1.0 / f_ref < lo:
+        basis += f", raised to {MIN_WINDOW_SAMPLES} samples"
+    elif L < 1.0 / f_ref:
+        basis += f", shortened to give {MIN_WINDOW_RESULTS} window results"
+    return L, basis
+
+
+def prefilter_hz(nm: NoiseModel, f_natural: np.ndarray) -> float:
+    """Prefilter cut-off [Hz] (0 = off), see the module docstring."""
+    fn = np.asarray(f_natural, dtype=float)
+    top = max([nm.f_hi] + [float(f) for f in fn if np.isfinite(f)])
+    fc = PREFILTER_MARGIN * top
+    return 0.0 if fc > PREFILTER_MAX / nm.dt else float(fc)
+
+
+def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto",
+              f_natural: np.ndarray = np.array([])) -> Plan:
+    """The plan for a record of ``duration_s`` [s] with noise model ``nm``.
+
+    ``f_natural``: natural frequencies [Hz] of a first estimate (empty if none yet).
+    """
+    if requested not in ESTIMATORS:
+        raise ValueError(f"estimator must be one of {ESTIMATORS}, got {requested!r}")
+    L, basis = window_length(nm, duration_s, f_natural)
+    fits = duration_s >= L * MIN_WINDOW_RESULTS / STAGGER - 1e-12
+    is_clean = clean(nm)
+    if requested != "auto":
+        estimator, reason = requested, "requested (--estimator)"
+    elif not fits:
+        estimator = "window"
+        reason = (f"record of {duration_s:.3g} s too short for {MIN_WINDOW_RESULTS} continuous windows of "
+                  f"{L:.3g} s")
+    elif is_clean and duration_s <= SHORT_S:
+        estimator = "window"
+        reason = f"clean record (in-band SNR >= {CLEAN_SNR_DB:g} dB) of at most {SHORT_S:g} s: the paper's single window is exact"
+    else:
+        estimator = "continuous"
+        why = "noisy" if not is_clean else f"longer than {SHORT_S:g} s"
+        if nm.quantised:
+            why = "displacement in encoder counts"
+        reason = f"{why} record: reseeded windows of the recording's time scale, aggregated"
+    if estimator == "window":
+        return Plan("window", reason, float("nan"), float("nan"), 1, "the whole record")
+    return Plan("continuous", reason, L, prefilter_hz(nm, f_natural), STAGGER, basis)
+
+
+def window_candidates(plan: Plan, nm: NoiseModel, duration_s: float) -> list[Plan]:
+    """The plan with its window scaled by :data:`WINDOW_MULTIPLES` (within the limits,
+    duplicates removed); the plan itself for the single window."""
+    if plan.estimator != "continuous":
+        return [plan]
+    lo, hi = window_limits(nm, duration_s)
+    seen, out = set(), []
+    for f in WINDOW_MULTIPLES:
+        L = float(np.clip(plan.window_s * f, lo, hi))
+        key = round(L / nm.dt)
+        if key in seen:
+            continue
+        seen.add(key)
+        basis = plan.window_basis if f == 1.0 else f"{f:g} x ({plan.window_basis})"
+        out.append(replace(plan, window_s=L, window_basis=basis))
+    return out

@@ -1,0 +1,180 @@
+"""The result of :func:`algid.identify`: estimates, uncertainties, verdicts, history."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from ..noise import NoiseModel
+from .plan import Plan
+from .verdicts import Verdict, dof_validity, parameter_names
+
+
+def _num(v: float):
+    return float(v) if math.isfinite(v) else None
+
+
+@dataclass
+class Identification:
+    """Estimates of an n-DOF chain from a whole recording.
+
+    Attributes
+    ----------
+    n, boundary, dt [s], samples : the recording and the chain.
+    plan : the estimator used, its settings and why (:class:`~.plan.Plan`).
+    noise : noise model and signal band of the recording (:class:`algid.noise.NoiseModel`).
+    theta, sigma : (3n+1,) estimates ``m1..mn, c1..cn, k1..k{n+1}`` [kg, N s/m, N/m] and
+        one standard deviation each.
+    raw : the estimates before the bias correction; bias : the correction taken off.
+    verdicts : one :class:`~.verdicts.Verdict` per parameter.
+    time_s, history, history_sigma : estimate history (R rows) and its standard deviation.
+    windows : continuous window results aggregated (0 for the single window).
+    replicates : bootstrap replicates; motion : "acceleration" or "displacement" (derived).
+    """
+
+    n: int
+    boundary: str
+    dt: float
+    samples: int
+    plan: Plan
+    noise: NoiseModel
+    theta: np.ndarray
+    sigma: np.ndarray
+    raw: np.ndarray
+    bias: np.ndarray
+    verdicts: list
+    time_s: np.ndarray
+    history: np.ndarray
+    history_sigma: np.ndarray
+    windows: int
+    replicates: int
+    motion: str
+    path: Optional[Path] = None
+
+    # ---- views -------------------------------------------------------------------------
+    @property
+    def names(self) -> list[str]:
+        """``m1..mn, c1..cn, k1..k{n+1}``."""
+        return parameter_names(self.n)
+
+    @property
+    def mass(self) -> np.ndarray:
+        """Masses [kg] (n,)."""
+        return self.theta[: self.n]
+
+    @property
+    def damping(self) -> np.ndarray:
+        """Dampings [N s/m] (n,)."""
+        return self.theta[self.n: 2 * self.n]
+
+    @property
+    def stiffness(self) -> np.ndarray:
+        """Springs k_1..k_{n+1} [N/m] (n+1,)."""
+        return self.theta[2 * self.n:]
+
+    @property
+    def sigma_mass(self) -> np.ndarray:
+        return self.sigma[: self.n]
+
+    @property
+    def sigma_damping(self) -> np.ndarray:
+        return self.sigma[self.n: 2 * self.n]
+
+    @property
+    def sigma_stiffness(self) -> np.ndarray:
+        return self.sigma[2 * self.n:]
+
+    @property
+    def valid_dof(self) -> np.ndarray:
+        """(n,) DOF whose mass, damping and springs are all valid."""
+        return dof_validity(self.verdicts, self.n)
+
+    @property
+    def valid(self) -> bool:
+        """Every DOF valid."""
+        return bool(np.all(self.valid_dof))
+
+    @property
+    def identified_any(self) -> bool:
+        """At least one parameter estimated and ``ok``."""
+        return any(v.status == "ok" for v in self.verdicts)
+
+    @property
+    def reasons(self) -> list[str]:
+        """One line per parameter that is not ``ok`` (``"k3: ..."``)."""
+        return [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
+
+    def verdict(self, name: str) -> Verdict:
+        """The verdict of parameter ``name`` (``"m1"``, ``"k2"``, ...)."""
+        return next(v for v in self.verdicts if v.name == name)
+
+    def __repr__(self) -> str:
+        ok = sum(v.valid for v in self.verdicts)
+        return (f"<Identification n={self.n} {self.boundary} estimator={self.plan.estimator} "
+                f"valid={self.valid} ({ok}/{len(self.verdicts)} parameters valid)>")
+
+    # ---- output ------------------------------------------------------------------------
+    def to_json(self) -> dict:
+        """The JSON document of ``algid identify``."""
+        n = self.n
+        params = [{"name": v.name, "value": _num(self.theta[p]), "sigma": _num(self.sigma[p]),
+                   "status": v.status, "valid": v.valid, "reason": v.reason or None,
+                   "bias_corrected": _num(self.bias[p]), "force_share": _num(v.share),
+                   "sigma_force_share": _num(v.sigma_share)}
+                  for p, v in enumerate(self.verdicts)]
+        doc = {
+            "n": n, "boundary": self.boundary,
+            "mass": [_num(v) for v in self.mass], "damping": [_num(v) for v in self.damping],
+            "stiffness": [_num(v) for v in self.stiffness],
+            "sigma_mass": [_num(v) for v in self.sigma_mass], "sigma_damping": [_num(v) for v in self.sigma_damping],
+            "sigma_stiffness": [_num(v) for v in self.sigma_stiffness],
+            "valid": self.valid, "valid_dof": [bool(v) for v in self.valid_dof],
+            "reasons": self.reasons, "parameters": params,
+            "estimator": self.plan.estimator, "estimator_reason": self.plan.reason, "plan": self.plan.to_json(),
+            "window_results": self.windows, "bootstrap_replicates": self.replicates,
+            "samples": self.samples, "dt_s": self.dt, "duration_s": self.samples * self.dt,
+            "motion": self.motion, "noise_model": self.noise.to_json(),
+        }
+        if n == 1 and self.boundary == "fixed":
+            doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
+        if self.motion == "displacement":
+            doc["note_accel"] = "accelerations derived from displacements by 5-point differentiation"
+        return doc
+
+    def write_trace(self, path: Path) -> None:
+        """History CSV ``t,m1..,c1..,k1..,sigma_m1..,sigma_c1..,sigma_k1..,valid``: one row per
+        history instant (every sample for the single window; window-result instants for the
+        continuous estimator), ``t`` the end of the data described [s]."""
+        names = self.names
+        header = ["t"] + names + [f"sigma_{k}" for k in names] + ["valid"]
+        rows = min(self.history.shape[0], self.history_sigma.shape[0])
+        H, S, t = self.history[-rows:], self.history_sigma[-rows:], self.time_s[-rows:]
+        valid_now = np.all(np.isfinite(H[:, : 2 * self.n]), axis=1)
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(",".join(header) + "\n")
+            for r in range(rows):
+                vals = [t[r]] + list(H[r]) + list(S[r])
+                fields = ["" if not math.isfinite(v) else repr(float(v)) for v in vals]
+                fields.append(str(int(valid_now[r] and (r < rows - 1 or self.valid))))
+                fh.write(",".join(fields) + "\n")
+
+    def summary(self) -> str:
+        """The table ``algid identify`` prints."""
+        lines = [f"n = {self.n}, {self.plan.estimator} estimator ({self.plan.reason})"]
+        if self.plan.estimator == "continuous":
+            lines.append(f"  windows of {self.plan.window_s:.3g} s ({self.plan.window_basis}), prefilter "
+                         + (f"{self.plan.prefilter_hz:.3g} Hz" if self.plan.prefilter_hz > 0 else "off")
+                         + f", {self.windows} window results")
+        units = {"m": "kg", "c": "N s/m", "k": "N/m"}
+        for p, v in enumerate(self.verdicts):
+            val, sg = self.theta[p], self.sigma[p]
+            txt = "       n/a" if not math.isfinite(val) else f"{val:10.5g}"
+            sd = "" if not math.isfinite(sg) else f" +- {sg:.2g}"
+            flag = "" if v.status == "ok" else f"  [{v.status}]"
+            lines.append(f"  {v.name:>4} = {txt}{sd} {units[v.name[0]]}{flag}")
+        lines.append(f"valid: {self.valid} (DOF: {', '.join(str(bool(x)) for x in self.valid_dof)})")
+        return "\n".join(lines)

@@ -1,0 +1,103 @@
+"""Run a :class:`~algid.identification.plan.Plan` over whole signals: one estimate of the
+3n+1 parameters and its history.
+
+* Single window: :class:`algid.ChainEstimator` from the first sample to the last; the
+  estimate is eq. 7 at the end, the history its value after every sample.
+* Continuous: :class:`algid.ContinuousEstimator` with the plan's window and prefilter; the
+  estimate aggregates *every* window result of the record (:func:`aggregate`, an
+  interquartile mean per parameter: the window results are heavy-tailed ratios of random
+  determinants, so the middle half is averaged and the tails are dropped, which costs
+  little against the mean on Gaussian results and is immune to the odd wild window). The
+  history is that aggregate over the window results harvested up to each of at most
+  :data:`HISTORY_ROWS` instants.
+
+Parameters are packed ``m1..mn, c1..cn, k1..k{n+1}`` (interior springs fused as the
+estimators do; n = 1 with walls: k1 holds k1 + k2, k2 is NaN; free end: k_{n+1} = 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..continuous import ContinuousEstimator
+from ..estimator import ChainEstimator
+from .plan import Plan
+
+#: Most rows of a continuous history.
+HISTORY_ROWS = 400
+#: Share of the window results dropped at each end before averaging.
+TRIM = 0.25
+
+
+@dataclass
+class Run:
+    """One estimate and its history.
+
+    theta : (3n+1,) packed estimate; ``time_s`` (R,) history instants [s] (end of the data
+    described); ``history`` (R, 3n+1); ``windows`` number of window results used
+    (0 for the single window).
+    """
+
+    theta: np.ndarray
+    time_s: np.ndarray
+    history: np.ndarray
+    windows: int
+
+
+def aggregate(results: np.ndarray) -> np.ndarray:
+    """Interquartile mean of every column over its finite entries (NaN if none)."""
+    R = np.asarray(results, dtype=float)
+    out = np.full(R.shape[1], np.nan)
+    for j in range(R.shape[1]):
+        col = np.sort(R[np.isfinite(R[:, j]), j])
+        if col.size == 0:
+            continue
+        cut = int(np.floor(TRIM * col.size))
+        keep = col[cut: col.size - cut] if col.size - 2 * cut > 0 else col
+        out[j] = float(np.mean(keep))
+    return out
+
+
+def run_window(a: np.ndarray, u: np.ndarray, dt: float, boundary: str) -> Run:
+    """The paper's single growing window over the whole record."""
+    est = ChainEstimator(a.shape[1], dt, boundary=boundary)
+    out = est.run(a, u)
+    hist = np.concatenate([out["mass"], out["damping"], out["stiffness"]], axis=1)
+    hist[~np.repeat(np.all(out["valid"], axis=1, keepdims=True), hist.shape[1], axis=1)] = np.nan
+    theta = np.concatenate([est.mass, est.damping, est.stiffness])
+    theta[np.concatenate([~est.valid, ~est.valid, _spring_validity(est.valid, boundary)])] = np.nan
+    return Run(theta=theta, time_s=out["time_index"] * dt, history=hist, windows=0)
+
+
+def _spring_validity(valid: np.ndarray, boundary: str) -> np.ndarray:
+    """Springs without a valid neighbouring DOF: their estimate is not reported."""
+    n = valid.size
+    ok = np.zeros(n + 1, bool)
+    ok[:n] |= valid
+    ok[1:] |= valid
+    return ~ok
+
+
+def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan) -> Run:
+    """Reseeded staggered windows of the plan, aggregated over the whole record."""
+    est = ContinuousEstimator(a.shape[1], dt, boundary=boundary, window_s=plan.window_s,
+                              prefilter_hz=plan.prefilter_hz, stagger=plan.stagger, detect=False)
+    out = est.run(a, u, stride=max(1, a.shape[0]))
+    W, at = out["windows"], out["window_sample"]
+    keep = np.any(np.isfinite(W), axis=1)
+    W, at = W[keep], at[keep]
+    if W.shape[0] == 0:
+        nan = np.full(a.shape[1] * 3 + 1, np.nan)
+        return Run(theta=nan, time_s=np.array([a.shape[0] * dt]), history=nan[None, :], windows=0)
+    stops = np.unique(np.linspace(1, W.shape[0], min(HISTORY_ROWS, W.shape[0])).round().astype(int))
+    history = np.array([aggregate(W[:s]) for s in stops])
+    return Run(theta=aggregate(W), time_s=at[stops - 1] * dt, history=history, windows=int(W.shape[0]))
+
+
+def run_plan(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan) -> Run:
+    """Run ``plan`` on accelerations ``a`` [m/s^2] and forces ``u`` [N], both (T, n)."""
+    if plan.estimator == "window":
+        return run_window(a, u, dt, boundary)
+    return run_continuous(a, u, dt, boundary, plan)

@@ -1,0 +1,174 @@
+"""Is each estimate physically admissible, and does the record determine it?
+
+Every parameter is measured against the force it stands for in the record: its
+*share* is ``|theta| s / F`` and its *uncertainty share* ``sigma s / F``, with ``s`` the
+standard deviation of its regressor in the signal band (the surrogate motion of
+:mod:`.surrogate`: acceleration for a mass, velocity for a damping, deformation for a
+spring) and ``F`` that of the recorded force on its DOF (the larger of the two DOF a spring
+joins). Statuses, in the order they are tested:
+
+* ``known``: a spring fixed by the model (free right end: 0); ``not_separable``: k2 of one
+  DOF between walls (only k1 + k2 is identifiable; it is reported as k1).
+* ``not_identifiable``: the DOF carries no force (its equation has no scale: only ratios
+  of its parameters are determined); the estimator returned no value; the uncertainty
+  share exceeds :data:`UNDETERMINED`; or the relative uncertainty exceeds
+  :data:`RELATIVE` while the parameter is not negligible. A mass that is not positive
+  within three sigma, or whose whole three-sigma interval is negligible, is not
+  identifiable either (inertia is not determined by the record).
+* ``inadmissible``: a mass below zero, or a damping or spring below zero by more than
+  three sigma, that is not negligible: eq. 1 does not fit the record.
+* ``negligible``: the share plus three uncertainty shares stays below :data:`NEGLIGIBLE`:
+  the term does not matter in this record (a spring of an axis without one); valid.
+* ``ok``: valid.
+
+A DOF is valid when its mass, damping and both springs are ``ok``, ``negligible``,
+``known`` or ``not_separable``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..noise import NoiseModel
+from .surrogate import Motion
+
+#: Uncertainty share above which a parameter is not determined by the record.
+UNDETERMINED = 0.2
+#: Relative uncertainty above which a non-negligible parameter is not determined.
+RELATIVE = 0.5
+#: Share below which a term does not matter in the record.
+NEGLIGIBLE = 0.01
+#: In-band acceleration over its in-band noise below which inertia is lost in the noise.
+ACCEL_SNR = 3.0
+
+VALID = ("ok", "negligible", "known", "not_separable")
+DIAGNOSE = "the linear chain does not fit this record, run `algid diagnose`"
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Status of one parameter (module docstring) and the one-line reason when it is not
+    ``ok``; ``share`` and ``sigma_share`` as defined there (nan where undefined)."""
+
+    name: str
+    status: str
+    reason: str
+    share: float
+    sigma_share: float
+
+    @property
+    def valid(self) -> bool:
+        return self.status in VALID
+
+
+def parameter_names(n: int) -> list[str]:
+    return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
+
+
+def _deformation(x: np.ndarray, j: int, n: int, boundary: str) -> np.ndarray:
+    """Deformation of spring ``j`` (0-based; joins DOF j-1 and j, walls fixed)."""
+    if n == 1 and boundary == "fixed":
+        return x[:, 0]
+    right = x[:, j] if j < n else 0.0
+    left = x[:, j - 1] if j >= 1 else 0.0
+    return right - left
+
+
+def accel_noise_in_band(nm: NoiseModel, i: int) -> float:
+    """Standard deviation of the noise the estimator sees on acceleration i in the band
+    ``[0, f_hi]`` [m/s^2]: a white floor for a measured acceleration, the twice
+    differentiated floor (``(2 pi f)^4`` times the displacement floor) for a derived one."""
+    ch, f = nm.motions[i], nm.f_hi
+    if nm.motion == "acceleration":
+        return float(np.sqrt(ch.floor_psd * f))
+    return float(np.sqrt(ch.floor_psd * (2 * np.pi) ** 4 * f**5 / 5.0))
+
+
+def _mass_reason(m: float, share: float, snr: float) -> str:
+    if snr < ACCEL_SNR:
+        return "mass not identifiable: the acceleration is at the noise floor in the forced band"
+    if share < 0.05:
+        return (f"mass not identifiable: the inertia force is {100 * share:.2g} % of the force in the band "
+                "(the record is quasi-static)")
+    return "mass not identifiable: not determined by the record"
+
+
+def scales(n: int, boundary: str, mo: Motion, u: np.ndarray, forced: np.ndarray) -> tuple[np.ndarray, list]:
+    """Per packed parameter: ``s / F`` (regressor over force standard deviation, module
+    docstring; NaN where no adjacent DOF is forced) and the DOF it belongs to."""
+    F = np.std(u, axis=0)
+    ratio, dofs = [], []
+    for name in parameter_names(n):
+        fam, idx = name[0], int(name[1:]) - 1
+        if fam == "k":
+            near = [i for i in (idx - 1, idx) if 0 <= i < n]
+            reg = np.std(_deformation(mo.x, idx, n, boundary))
+        else:
+            near = [idx]
+            reg = np.std(mo.a[:, idx] if fam == "m" else mo.v[:, idx])
+        force = max((F[i] for i in near if forced[i]), default=0.0)
+        ratio.append(reg / force if force > 0 else np.nan)
+        dofs.append(near)
+    return np.array(ratio), dofs
+
+
+def judge(theta: np.ndarray, sigma: np.ndarray, n: int, boundary: str, mo: Motion, u: np.ndarray,
+          forced: np.ndarray, nm: NoiseModel) -> list[Verdict]:
+    """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``."""
+    ratio, dofs = scales(n, boundary, mo, u, forced)
+    out: list[Verdict] = []
+    for p, name in enumerate(parameter_names(n)):
+        fam, idx = name[0], int(name[1:]) - 1
+        if fam == "k" and idx == n and boundary == "free":
+            out.append(Verdict(name, "known", f"free right end: k{n + 1} = 0", np.nan, np.nan))
+        elif fam == "k" and n == 1 and boundary == "fixed" and idx == 1:
+            out.append(Verdict(name, "not_separable", "one DOF between walls: only k1 + k2 is identifiable, "
+                               "reported as k1", np.nan, np.nan))
+        else:
+            out.append(_one(name, fam, float(theta[p]), float(sigma[p]), ratio[p], dofs[p],
+                            [i for i in dofs[p] if forced[i]], mo, nm))
+    return out
+
+
+def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm) -> Verdict:
+    what = {"m": "mass", "c": "damping", "k": "stiffness"}[fam]
+    if not dofs_f:
+        where = " and ".join(str(i + 1) for i in dofs)
+        return Verdict(name, "not_identifiable", f"{what} not identifiable: no force on DOF {where} (its equation "
+                       "has no scale; only ratios of its parameters are determined)", np.nan, np.nan)
+    if not (np.isfinite(th) and np.isfinite(sg)):
+        return Verdict(name, "not_identifiable", f"{what} not identifiable: the estimator's systems were singular "
+                       "throughout (the record does not excite this DOF enough)", np.nan, np.nan)
+    share = abs(th) * ratio
+    ss = sg * ratio
+    tiny = share + 3 * ss <= NEGLIGIBLE
+    rel = sg / abs(th) if th != 0 else np.inf
+    if fam == "m":
+        i = dofs[0]
+        snr = np.std(mo.a[:, i]) / max(accel_noise_in_band(nm, i), 1e-300)
+        if th < -3 * sg and not tiny and ss <= UNDETERMINED:
+            return Verdict(name, "inadmissible", f"negative mass: {DIAGNOSE}", share, ss)
+        if th <= 3 * sg or tiny or ss > UNDETERMINED or rel > RELATIVE:
+            return Verdict(name, "not_identifiable", _mass_reason(th, share, snr), share, ss)
+        return Verdict(name, "ok", "", share, ss)
+    if ss > UNDETERMINED:
+        return Verdict(name, "not_identifiable", f"{what} not identifiable: its uncertainty is "
+                       f"{100 * ss:.2g} % of the force in the band", share, ss)
+    if th < -3 * sg and not tiny:
+        return Verdict(name, "inadmissible", f"negative {what}: {DIAGNOSE}", share, ss)
+    if tiny:
+        return Verdict(name, "negligible", f"{what} negligible: it stands for {100 * (share + 3 * ss):.2g} % "
+                       "of the force at most (three sigma)", share, ss)
+    if rel > RELATIVE:
+        return Verdict(name, "not_identifiable", f"{what} not identifiable: relative uncertainty "
+                       f"{100 * rel:.3g} %", share, ss)
+    return Verdict(name, "ok", "", share, ss)
+
+
+def dof_validity(verdicts: list[Verdict], n: int) -> np.ndarray:
+    """(n,) a DOF is valid when its m, c and both springs are valid (module docstring)."""
+    by = {v.name: v for v in verdicts}
+    return np.array([all(by[k].valid for k in (f"m{i + 1}", f"c{i + 1}", f"k{i + 1}", f"k{i + 2}"))
+                     for i in range(n)])

@@ -1,0 +1,193 @@
+"""What a recording carries: signal band, noise floor and encoder resolution per channel.
+
+Everything here is read off the recording alone (no model), so that the identification and
+the diagnosis can choose their settings, and describe the sensor noise, on records nobody
+labelled.
+
+Per channel (every force, and every measured acceleration or displacement):
+
+* **PSD** by Welch's method (Hann, segments of :func:`segment_length` samples: about 4 s,
+  so that the slow motions of a positioning axis are resolved, and at least 8 segments).
+* **Noise floor**: the median PSD over the upper third of the spectrum [unit^2/Hz]; the
+  white-noise standard deviation it stands for is ``sqrt(floor fs / 2)``.
+* **Signal**: the PSD bins more than :data:`DETECT` times above the floor; ``f_hi`` is the
+  frequency below which :data:`POWER` of their power above the floor lies, ``f_mid`` the
+  median frequency of that power (half below, half above).
+* **Encoder resolution** of a displacement channel: the largest ``q`` such that every
+  reading is a whole multiple of ``q`` (to 1e-6 q) with at least 3 distinct counts; 0 when
+  the readings are not quantised. Quantisation adds white noise of variance ``q^2 / 12``.
+
+The **signal band** of the record is ``[0, f_hi]`` with ``f_hi`` the largest ``f_hi`` of the
+forces and, where accelerations are measured, of the accelerations. Accelerations derived
+from encoder counts carry differentiated quantisation noise that grows like ``f^2``, which
+no band rule on their own spectrum could tell from signal, so then only the forces set the
+band. The characteristic frequency ``f_mid`` of the record is that of the forces.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: A PSD bin carries signal above this multiple of the channel's noise floor.
+DETECT = 10.0
+#: ``f_hi`` holds this share of a channel's above-floor power.
+POWER = 0.99
+
+
+@dataclass(frozen=True)
+class Channel:
+    """Spectral summary of one recorded signal.
+
+    Attributes
+    ----------
+    name : "u1", "a2", "x1", ...
+    floor_psd : noise floor [unit^2/Hz] (one-sided PSD).
+    sigma : white-noise standard deviation of that floor [unit].
+    f_hi : frequency below which :data:`POWER` of the above-floor power lies [Hz] (nan if
+        no bin is above the floor).
+    f_mid : median frequency of the above-floor power [Hz] (nan if none).
+    snr_db : above-floor power over the floor's power in ``[0, f_hi]`` [dB] (nan if none).
+    quantum : encoder resolution of a displacement channel [unit] (0: not quantised).
+    rms : RMS of the channel about its mean [unit].
+    """
+
+    name: str
+    floor_psd: float
+    sigma: float
+    f_hi: float
+    f_mid: float
+    snr_db: float
+    quantum: float = 0.0
+    rms: float = 0.0
+
+    def to_json(self) -> dict:
+        return {k: _num(v) for k, v in self.__dict__.items()}
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """Signal band and per-channel noise of a recording (:func:`analyse`).
+
+    Attributes
+    ----------
+    dt : sample period [s].
+    motion : "acceleration" (measured) or "displacement" (accelerations derived).
+    forces, motions : per DOF :class:`Channel` of ``u_i`` and of ``a_i`` or ``x_i``.
+    f_hi : upper edge of the signal band [Hz] (Nyquist when nothing stands out).
+    f_mid : median frequency of the force power [Hz] (nan when no force stands out).
+    band_source : the channel that sets ``f_hi``.
+    """
+
+    dt: float
+    motion: str
+    forces: list[Channel]
+    motions: list[Channel]
+    f_hi: float
+    f_mid: float
+    band_source: str
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def nyquist(self) -> float:
+        return 0.5 / self.dt
+
+    @property
+    def quantised(self) -> bool:
+        """True when displacement readings come in encoder counts."""
+        return any(c.quantum > 0 for c in self.motions)
+
+    def to_json(self) -> dict:
+        return {"motion": self.motion, "band_hz": [0.0, _num(self.f_hi)], "f_mid_hz": _num(self.f_mid),
+                "band_source": self.band_source, "nyquist_hz": self.nyquist,
+                "forces": [c.to_json() for c in self.forces], "motions": [c.to_json() for c in self.motions],
+                "rule": (f"per channel: Welch PSD, floor = median PSD of the upper third, signal = bins above "
+                         f"{DETECT:g}x floor, f_hi = frequency below which {POWER:.0%} of the above-floor power "
+                         "lies; band edge = largest f_hi of the forces and of measured accelerations (derived "
+                         "accelerations are not used: their noise grows like f^2)")}
+
+
+def _num(v):
+    if isinstance(v, (float, np.floating)):
+        return float(v) if np.isfinite(v) else None
+    return v
+
+
+def segment_length(T: int, dt: float) -> int:
+    """Welch segment: about 4 s, at most a quarter of the record, at least 64 samples."""
+    return int(max(min(64, T), min(T // 4, int(round(4.0 / dt)))))
+
+
+def psd(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Welch PSD (Hann, :func:`segment_length`, linear detrend per segment) of the
+    columns of ``x``: frequencies [Hz] and (F, ...) one-sided PSD [unit^2/Hz]."""
+    from scipy.signal import welch
+
+    x = np.asarray(x, dtype=float)
+    return welch(x, fs=1.0 / dt, nperseg=segment_length(x.shape[0], dt), axis=0, detrend="linear")
+
+
+def encoder_quantum(x: np.ndarray) -> float:
+    """Largest ``q`` with every reading a whole multiple of ``q`` (3 counts at least), or 0."""
+    x = np.asarray(x, dtype=float)
+    steps = np.abs(np.diff(np.unique(x)))
+    steps = steps[steps > 0]
+    if steps.size < 2:
+        return 0.0
+    q = float(np.min(steps))
+    scale = max(float(np.max(np.abs(x))), q)
+    if q < 1e-12 * scale:  # steps at rounding level: analogue readings
+        return 0.0
+    counts = x / q
+    if np.max(np.abs(counts - np.round(counts))) > 1e-3:  # off the grid: analogue readings
+        return 0.0
+    if np.unique(np.round(counts)).size < 3:
+        return 0.0
+    return q
+
+
+def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False) -> Channel:
+    """Spectral summary of one signal (module docstring)."""
+    x = np.asarray(x, dtype=float)
+    f, S = psd(x, dt)
+    floor = float(np.median(S[f >= (2.0 / 3.0) * f[-1]]))
+    above = np.where(S > DETECT * floor, S - floor, 0.0)
+    total = float(above.sum())
+    if total > 0:
+        c = np.cumsum(above) / total
+        f_hi = float(f[min(int(np.searchsorted(c, POWER)), f.size - 1)])
+        f_mid = float(f[min(int(np.searchsorted(c, 0.5)), f.size - 1)])
+        noise = floor * max(f_hi, f[1])
+        snr = 10 * np.log10(total * (f[1] - f[0]) / noise) if noise > 0 else np.inf
+    else:
+        f_hi = f_mid = snr = float("nan")
+    q = encoder_quantum(x) if quantised else 0.0
+    return Channel(name=name, floor_psd=floor, sigma=float(np.sqrt(floor * 0.5 / dt)), f_hi=f_hi, f_mid=f_mid,
+                   snr_db=float(snr), quantum=q, rms=float(np.std(x)))
+
+
+def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "acceleration") -> NoiseModel:
+    """Noise model of a recording: forces ``u`` (T, n) and the measured motion (T, n),
+    accelerations (``kind="acceleration"``) or displacements (``"displacement"``)."""
+    if kind not in ("acceleration", "displacement"):
+        raise ValueError(f"kind must be 'acceleration' or 'displacement', got {kind!r}")
+    u = np.asarray(u, dtype=float).reshape(u.shape[0], -1)
+    motion = np.asarray(motion, dtype=float).reshape(motion.shape[0], -1)
+    sym = "a" if kind == "acceleration" else "x"
+    forces = [channel(f"u{i + 1}", u[:, i], dt) for i in range(u.shape[1])]
+    motions = [channel(f"{sym}{i + 1}", motion[:, i], dt, quantised=kind == "displacement")
+               for i in range(motion.shape[1])]
+    setting = [c for c in forces if np.any(u[:, int(c.name[1:]) - 1] != 0.0)]
+    if kind == "acceleration":
+        setting += motions
+    found = [c for c in setting if np.isfinite(c.f_hi)]
+    if found:
+        top = max(found, key=lambda c: c.f_hi)
+        f_hi, source = top.f_hi, top.name
+    else:
+        f_hi, source = 0.5 / dt, ""
+    mids = [c.f_mid for c in forces if np.isfinite(c.f_mid)]
+    f_mid = float(np.median(mids)) if mids else float("nan")
+    return NoiseModel(dt=float(dt), motion=kind, forces=forces, motions=motions, f_hi=float(f_hi), f_mid=f_mid,
+                      band_source=source)
