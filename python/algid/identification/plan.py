@@ -161,18 +161,23 @@ def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto",
 
 
 def window_candidates(plan: Plan, nm: NoiseModel, duration_s: float) -> list[Plan]:
-    """The plan with its window scaled by :data:`WINDOW_MULTIPLES` (within the limits,
-    duplicates removed); the plan itself for the single window."""
+    """The plan with its window scaled by :data:`WINDOW_MULTIPLES`, and the same around the
+    force-based guess when the plan's guess came from a natural frequency (a first estimate
+    of a chain the record does not fit can put its modes anywhere); within the limits,
+    lengths closer than 10 % to one already tried dropped. The plan itself for the single
+    window."""
     if plan.estimator != "continuous":
         return [plan]
     lo, hi = window_limits(nm, duration_s)
-    seen, out = set(), []
-    for f in WINDOW_MULTIPLES:
-        L = float(np.clip(plan.window_s * f, lo, hi))
-        key = round(L / nm.dt)
-        if key in seen:
-            continue
-        seen.add(key)
-        basis = plan.window_basis if f == 1.0 else f"{f:g} x ({plan.window_basis})"
-        out.append(replace(plan, window_s=L, window_basis=basis))
+    guesses = [(plan.window_s, plan.window_basis)]
+    force_L, force_basis = window_length(nm, duration_s, np.array([]))
+    if force_basis != plan.window_basis:
+        guesses.append((force_L, force_basis))
+    out: list[Plan] = []
+    for L0, basis in guesses:
+        for f in WINDOW_MULTIPLES:
+            L = float(np.clip(L0 * f, lo, hi))
+            if any(abs(L / p.window_s - 1.0) < 0.1 for p in out):
+                continue
+            out.append(replace(plan, window_s=L, window_basis=basis if f == 1.0 else f"{f:g} x ({basis})"))
     return out

@@ -17,6 +17,7 @@ estimators do; n = 1 with walls: k1 holds k1 + k2, k2 is NaN; free end: k_{n+1} 
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +27,7 @@ from ..estimator import ChainEstimator
 from .plan import Plan
 
 #: Most rows of a continuous history.
-HISTORY_ROWS = 400
+HISTORY_ROWS = 200
 #: Share of the window results dropped at each end before averaging.
 TRIM = 0.25
 
@@ -37,27 +38,31 @@ class Run:
 
     theta : (3n+1,) packed estimate; ``time_s`` (R,) history instants [s] (end of the data
     described); ``history`` (R, 3n+1); ``windows`` number of window results used
-    (0 for the single window).
+    (0 for the single window); ``spread`` (3n+1,) the window results' scatter, 1.4826 times
+    their median absolute deviation (NaN for the single window).
     """
 
     theta: np.ndarray
     time_s: np.ndarray
     history: np.ndarray
     windows: int
+    spread: np.ndarray = None
+
+    def __post_init__(self) -> None:
+        if self.spread is None:
+            self.spread = np.full(self.theta.shape, np.nan)
 
 
 def aggregate(results: np.ndarray) -> np.ndarray:
     """Interquartile mean of every column over its finite entries (NaN if none)."""
-    R = np.asarray(results, dtype=float)
-    out = np.full(R.shape[1], np.nan)
-    for j in range(R.shape[1]):
-        col = np.sort(R[np.isfinite(R[:, j]), j])
-        if col.size == 0:
-            continue
-        cut = int(np.floor(TRIM * col.size))
-        keep = col[cut: col.size - cut] if col.size - 2 * cut > 0 else col
-        out[j] = float(np.mean(keep))
-    return out
+    S = np.sort(np.asarray(results, dtype=float), axis=0)  # NaN sorts last
+    count = np.sum(np.isfinite(S), axis=0)
+    cut = np.floor(TRIM * count).astype(int)
+    cum = np.vstack([np.zeros(S.shape[1]), np.cumsum(np.where(np.isfinite(S), S, 0.0), axis=0)])
+    lo, hi = cut, count - cut
+    cols = np.arange(S.shape[1])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(count > 0, (cum[hi, cols] - cum[lo, cols]) / (hi - lo), np.nan)
 
 
 def run_window(a: np.ndarray, u: np.ndarray, dt: float, boundary: str) -> Run:
@@ -80,8 +85,10 @@ def _spring_validity(valid: np.ndarray, boundary: str) -> np.ndarray:
     return ~ok
 
 
-def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan) -> Run:
-    """Reseeded staggered windows of the plan, aggregated over the whole record."""
+def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan,
+                   history: bool = True) -> Run:
+    """Reseeded staggered windows of the plan, aggregated over the whole record (and, with
+    ``history``, over the window results up to each history instant)."""
     est = ContinuousEstimator(a.shape[1], dt, boundary=boundary, window_s=plan.window_s,
                               prefilter_hz=plan.prefilter_hz, stagger=plan.stagger, detect=False)
     out = est.run(a, u, stride=max(1, a.shape[0]))
@@ -91,13 +98,19 @@ def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan:
     if W.shape[0] == 0:
         nan = np.full(a.shape[1] * 3 + 1, np.nan)
         return Run(theta=nan, time_s=np.array([a.shape[0] * dt]), history=nan[None, :], windows=0)
-    stops = np.unique(np.linspace(1, W.shape[0], min(HISTORY_ROWS, W.shape[0])).round().astype(int))
+    rows = min(HISTORY_ROWS, W.shape[0]) if history else 1
+    stops = np.unique(np.linspace(1, W.shape[0], rows).round().astype(int))
     history = np.array([aggregate(W[:s]) for s in stops])
-    return Run(theta=aggregate(W), time_s=at[stops - 1] * dt, history=history, windows=int(W.shape[0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: parameters not estimated
+        spread = 1.4826 * np.nanmedian(np.abs(W - np.nanmedian(W, axis=0)), axis=0)
+    return Run(theta=aggregate(W), time_s=at[stops - 1] * dt, history=history, windows=int(W.shape[0]),
+               spread=spread)
 
 
-def run_plan(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan) -> Run:
-    """Run ``plan`` on accelerations ``a`` [m/s^2] and forces ``u`` [N], both (T, n)."""
+def run_plan(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan, history: bool = True) -> Run:
+    """Run ``plan`` on accelerations ``a`` [m/s^2] and forces ``u`` [N], both (T, n); without
+    ``history`` a continuous run keeps only its final row."""
     if plan.estimator == "window":
         return run_window(a, u, dt, boundary)
-    return run_continuous(a, u, dt, boundary, plan)
+    return run_continuous(a, u, dt, boundary, plan, history)

@@ -19,14 +19,20 @@ sensor noise, so that the estimator's error on it is known:
    random offset of the count grid) plus whatever white floor lies above the quantisation
    noise, then differentiated like the recording's.
 
-The same plan is run on ``B`` replicates. Their spread is the estimate's standard
-deviation, their mean minus the chain they came from its bias. The noise the surrogates
+The same plan is run on ``B`` replicates and once on the noise-free surrogate. The
+replicates' spread is the estimate's standard deviation; their mean minus the noise-free
+surrogate's estimate is the bias the noise causes (measured against the noise-free run,
+not against the chain itself, so that what the band-limited surrogate costs the
+estimator's quadrature, at the record's ends for instance, is not mistaken for it). The noise the surrogates
 cannot reproduce (coloured or correlated with the input through a controller) and the
 model error (effects outside eq. 1) are not in it; :func:`algid.diagnose` looks for those.
 """
 
 from __future__ import annotations
 
+import os
+import warnings
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Callable, Optional
 
@@ -39,6 +45,25 @@ from .runner import run_plan
 
 #: Replicates of the bootstrap.
 REPLICATES = 8
+
+
+def parallel_map(fn: Callable, items: list, progress: Optional[Callable[[int], None]] = None) -> list:
+    """``[fn(x) for x in items]`` on a thread per core (the estimators release the GIL while
+    they run), results in order; ``progress(done)`` after each."""
+    workers = min(len(items), os.cpu_count() or 1)
+    if workers <= 1:
+        out = []
+        for x in items:
+            out.append(fn(x))
+            if progress is not None:
+                progress(len(out))
+        return out
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        futures = [pool.submit(fn, x) for x in items]
+        for done, _ in enumerate(as_completed(futures), start=1):
+            if progress is not None:
+                progress(done)
+        return [f.result() for f in futures]
 
 
 @dataclass
@@ -120,13 +145,15 @@ def replicate_signals(mo: Motion, u_s: np.ndarray, nm: NoiseModel, rng: np.rando
 class Bootstrap:
     """Spread and bias of a plan's estimates on surrogates of the recording.
 
-    sigma, bias : (3n+1,) standard deviation and mean error [parameter units];
+    sigma, bias : (3n+1,) standard deviation and noise-induced mean error [parameter units];
+    spread : (3n+1,) median over the replicates of their window results' scatter;
     history_sigma : (R, 3n+1) standard deviation of the history rows; replicates : (B, 3n+1);
     motion : the surrogate motion (also the in-band regressors of the verdicts).
     """
 
     sigma: np.ndarray
     bias: np.ndarray
+    spread: np.ndarray
     history_sigma: np.ndarray
     replicates: np.ndarray
     motion: Motion
@@ -134,30 +161,37 @@ class Bootstrap:
 
 def bootstrap(theta: np.ndarray, motion_rec: np.ndarray, nm: NoiseModel, plan: Plan, boundary: str,
               f_cut: float, forced: np.ndarray, replicates: int = REPLICATES, seed: int = 0,
-              diff_points: int = 5, progress: Optional[Callable[[float], None]] = None) -> Bootstrap:
+              diff_points: int = 5, progress: Optional[Callable[[float], None]] = None,
+              history: bool = True) -> Bootstrap:
     """Run ``plan`` on ``replicates`` surrogates of the chain ``theta`` (module docstring).
 
     ``motion_rec``: the recorded motion (T, n) of kind ``nm.motion``; ``f_cut``: band edge of
     the surrogate motion [Hz]; ``forced``: (n,) DOF that carry a force (the others keep a
-    zero force, as recorded).
+    zero force, as recorded); ``history``: also the spread of the estimate histories.
     """
     n = motion_rec.shape[1]
     mo = band_limited_motion(motion_rec, nm.motion, nm.dt, f_cut)
     u_s = chain_forces(theta, n, boundary, mo) * forced
-    rng = np.random.default_rng(seed)
-    thetas, hists = [], []
-    for b in range(replicates):
-        a_b, u_b = replicate_signals(mo, u_s, nm, rng, diff_points)
-        r = run_plan(a_b, u_b, nm.dt, boundary, plan)
-        thetas.append(r.theta)
-        hists.append(r.history)
-        if progress is not None:
-            progress((b + 1) / replicates)
+    a0 = mo.a if nm.motion == "acceleration" else second_derivative(mo.x, nm.dt, diff_points)
+    seeds = np.random.SeedSequence(seed).spawn(replicates)  # one stream per replicate: any order
+
+    def one(b: int):
+        if b < 0:
+            return run_plan(a0, u_s, nm.dt, boundary, plan, history=False)
+        a_b, u_b = replicate_signals(mo, u_s, nm, np.random.default_rng(seeds[b]), diff_points)
+        return run_plan(a_b, u_b, nm.dt, boundary, plan, history)
+
+    runs = parallel_map(one, list(range(-1, replicates)),
+                        None if progress is None else (lambda k: progress(k / (replicates + 1))))
+    theta0 = runs[0].theta
+    thetas, hists = [r.theta for r in runs[1:]], [r.history for r in runs[1:]]
     R = np.array(thetas)
     rows = min(h.shape[0] for h in hists)
     H = np.array([h[-rows:] for h in hists])
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: parameters not estimated
         sigma = np.nanstd(R, axis=0, ddof=1) if replicates > 1 else np.full(R.shape[1], np.nan)
-        bias = np.nanmean(R, axis=0) - np.asarray(theta, dtype=float)
+        bias = np.nanmean(R, axis=0) - theta0
+        spread = np.nanmedian(np.array([r.spread for r in runs[1:]]), axis=0)
         hsig = np.nanstd(H, axis=0, ddof=1) if replicates > 1 else np.full(H.shape[1:], np.nan)
-    return Bootstrap(sigma=sigma, bias=bias, history_sigma=hsig, replicates=R, motion=mo)
+    return Bootstrap(sigma=sigma, bias=bias, spread=spread, history_sigma=hsig, replicates=R, motion=mo)

@@ -11,14 +11,20 @@ joins). Statuses, in the order they are tested:
   DOF between walls (only k1 + k2 is identifiable; it is reported as k1).
 * ``not_identifiable``: the DOF carries no force (its equation has no scale: only ratios
   of its parameters are determined); the estimator returned no value; the uncertainty
-  share exceeds :data:`UNDETERMINED`; or the relative uncertainty exceeds
-  :data:`RELATIVE` while the parameter is not negligible. A mass that is not positive
-  within three sigma, or whose whole three-sigma interval is negligible, is not
-  identifiable either (inertia is not determined by the record).
-* ``inadmissible``: a mass below zero, or a damping or spring below zero by more than
+  share exceeds :data:`UNDETERMINED`; a damping or spring consistent with zero (within
+  three sigma) whose three sigma stand for more than :data:`ZERO_BOUND` of the force. A
+  mass is not identifiable unless it is above zero by three sigma, its relative
+  uncertainty is at most :data:`RELATIVE` and its term is not negligible (inertia is then
+  not determined by the record: quasi-static, or the acceleration lost in the noise).
+* ``inadmissible``: a mass below zero by three sigma, or a damping or spring below zero by
   three sigma, that is not negligible: eq. 1 does not fit the record.
-* ``negligible``: the share plus three uncertainty shares stays below :data:`NEGLIGIBLE`:
-  the term does not matter in this record (a spring of an axis without one); valid.
+* ``model_misfit``: the recording's window results scatter more than :data:`EXCESS_MAX`
+  times as much as its surrogates' (``excess``, see :mod:`.engine`): the record varies in a
+  way eq. 1 with its noise cannot explain, and the estimate depends on how the record is
+  cut into windows.
+* ``negligible``: the share plus three uncertainty shares stays below :data:`NEGLIGIBLE`,
+  or a damping or spring is consistent with zero within :data:`ZERO_BOUND` of the force:
+  the term does not matter in this record (the spring of an axis without one); valid.
 * ``ok``: valid.
 
 A DOF is valid when its mass, damping and both springs are ``ok``, ``negligible``,
@@ -40,10 +46,17 @@ UNDETERMINED = 0.2
 RELATIVE = 0.5
 #: Share below which a term does not matter in the record.
 NEGLIGIBLE = 0.01
+#: A damping or spring consistent with zero is determined (as zero) when three sigma of it
+#: stand for at most this share of the force.
+ZERO_BOUND = 0.05
+#: Window-result scatter of the recording over that of its surrogates above which the
+#: linear chain is taken not to fit (the cubic spring of the Silverbox gives 1.5-2.5).
+EXCESS_MAX = 5.0
 #: In-band acceleration over its in-band noise below which inertia is lost in the noise.
 ACCEL_SNR = 3.0
 
 VALID = ("ok", "negligible", "known", "not_separable")
+STATUSES = ("ok", "negligible", "known", "not_separable", "not_identifiable", "inadmissible", "model_misfit")
 DIAGNOSE = "the linear chain does not fit this record, run `algid diagnose`"
 
 
@@ -115,8 +128,10 @@ def scales(n: int, boundary: str, mo: Motion, u: np.ndarray, forced: np.ndarray)
 
 
 def judge(theta: np.ndarray, sigma: np.ndarray, n: int, boundary: str, mo: Motion, u: np.ndarray,
-          forced: np.ndarray, nm: NoiseModel) -> list[Verdict]:
-    """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``."""
+          forced: np.ndarray, nm: NoiseModel, excess: np.ndarray | None = None) -> list[Verdict]:
+    """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``; ``excess``
+    (3n+1,): window-result scatter of the record over its surrogates' (1 if not given)."""
+    excess = np.ones(theta.shape) if excess is None else np.asarray(excess, dtype=float)
     ratio, dofs = scales(n, boundary, mo, u, forced)
     out: list[Verdict] = []
     for p, name in enumerate(parameter_names(n)):
@@ -127,13 +142,21 @@ def judge(theta: np.ndarray, sigma: np.ndarray, n: int, boundary: str, mo: Motio
             out.append(Verdict(name, "not_separable", "one DOF between walls: only k1 + k2 is identifiable, "
                                "reported as k1", np.nan, np.nan))
         else:
-            out.append(_one(name, fam, float(theta[p]), float(sigma[p]), ratio[p], dofs[p],
-                            [i for i in dofs[p] if forced[i]], mo, nm))
+            v = _one(name, fam, float(theta[p]), float(sigma[p]), ratio[p], dofs[p],
+                     [i for i in dofs[p] if forced[i]], mo, nm)
+            if v.status in ("ok", "negligible", "inadmissible") and excess[p] > EXCESS_MAX:
+                v = Verdict(name, "model_misfit", f"{_WHAT[fam]} not determined: the record's window results scatter "
+                            f"{excess[p]:.3g}x more than its noise explains (an effect outside eq. 1, or noise that "
+                            "is not white); run `algid diagnose`", v.share, v.sigma_share)
+            out.append(v)
     return out
 
 
+_WHAT = {"m": "mass", "c": "damping", "k": "stiffness"}
+
+
 def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm) -> Verdict:
-    what = {"m": "mass", "c": "damping", "k": "stiffness"}[fam]
+    what = _WHAT[fam]
     if not dofs_f:
         where = " and ".join(str(i + 1) for i in dofs)
         return Verdict(name, "not_identifiable", f"{what} not identifiable: no force on DOF {where} (its equation "
@@ -158,12 +181,15 @@ def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm) -> Verdict:
                        f"{100 * ss:.2g} % of the force in the band", share, ss)
     if th < -3 * sg and not tiny:
         return Verdict(name, "inadmissible", f"negative {what}: {DIAGNOSE}", share, ss)
+    if abs(th) <= 3 * sg:
+        if 3 * ss <= ZERO_BOUND:
+            return Verdict(name, "negligible", f"{what} consistent with zero: |{name}| < {3 * sg:.3g} (three "
+                           f"sigma), {100 * 3 * ss:.2g} % of the force at most", share, ss)
+        return Verdict(name, "not_identifiable", f"{what} not identifiable: consistent with zero within "
+                       f"{100 * 3 * ss:.2g} % of the force (three sigma)", share, ss)
     if tiny:
         return Verdict(name, "negligible", f"{what} negligible: it stands for {100 * (share + 3 * ss):.2g} % "
                        "of the force at most (three sigma)", share, ss)
-    if rel > RELATIVE:
-        return Verdict(name, "not_identifiable", f"{what} not identifiable: relative uncertainty "
-                       f"{100 * rel:.3g} %", share, ss)
     return Verdict(name, "ok", "", share, ss)
 
 
