@@ -36,16 +36,21 @@ def test_identify_table1(table1_csv, tmp_path):
     proc = _identify(path, "--json", out, "--trace", trace)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(out.read_text())
-    assert doc["n"] == 3 and doc["valid"] is True
+    assert doc["n"] == 3 and doc["valid"] is True and doc["estimator"] == "window"
+    assert "clean record" in doc["estimator_reason"]
     np.testing.assert_allclose(doc["mass"], TABLE1.mass, rtol=1e-6)
     np.testing.assert_allclose(doc["damping"], TABLE1.damping, rtol=1e-6)
     np.testing.assert_allclose(doc["stiffness"], TABLE1.stiffness, rtol=1e-6)
+    assert all(s is not None and s >= 0 for s in doc["sigma_mass"] + doc["sigma_damping"] + doc["sigma_stiffness"])
+    assert [p["status"] for p in doc["parameters"]] == ["ok"] * 10
     lines = trace.read_text().splitlines()
-    assert lines[0] == "t,m1,m2,m3,c1,c2,c3,k1,k2,k3,k4,valid"
-    assert len(lines) == 302
+    names = "m1,m2,m3,c1,c2,c3,k1,k2,k3,k4"
+    assert lines[0] == "t," + names + "," + ",".join("sigma_" + k for k in names.split(",")) + ",valid"
+    assert len(lines) == 302  # one row per sample of the single window
     last = np.array(lines[-1].split(","), dtype=float)
     np.testing.assert_allclose(last[1:4], TABLE1.mass, rtol=1e-6)
     assert last[-1] == 1.0
+    assert "m1 =" in proc.stdout and "window estimator" in proc.stdout
 
 
 def test_identify_from_displacements_and_n1(tmp_path):
@@ -59,6 +64,7 @@ def test_identify_from_displacements_and_n1(tmp_path):
     assert doc["stiffness"][1] is None  # only k1 + k2 is identifiable, reported in k1
     assert doc["stiffness"][0] == pytest.approx(1200.0, rel=1e-3)
     assert doc["mass"][0] == pytest.approx(2.0, rel=1e-3)
+    assert doc["parameters"][3]["status"] == "not_separable" and doc["valid"] is True
     assert trace.read_text().splitlines()[-1].split(",")[4] == ""  # k2 empty
 
 
@@ -69,8 +75,48 @@ def test_identify_free_end(tmp_path):
     proc = _identify(_write(tmp_path / "free.csv", t, u, a=a), "--json", out, "--boundary", "free")
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(out.read_text())
-    assert doc["stiffness"][2] == 0.0
+    assert doc["stiffness"][2] == 0.0 and doc["parameters"][6]["status"] == "known"
     np.testing.assert_allclose(doc["stiffness"][:2], chain.stiffness[:2], rtol=1e-6)
+
+
+def test_invalid_estimates_carry_reasons_on_stderr_and_in_json(tmp_path):
+    from algid.scenarios import positioning_axis
+
+    sc = positioning_axis(seed=5, duration_s=12.0, coulomb_n=1.5, offset_n=3.0)
+    out = tmp_path / "axis.json"
+    proc = _identify(save_recording(tmp_path / "axis.npz", sc.recording), "--json", out, "--replicates", "4")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(out.read_text())
+    assert doc["valid"] is False and doc["estimator"] == "continuous"
+    bad = [p for p in doc["parameters"] if not p["valid"]]
+    assert bad and all(p["reason"] for p in bad)
+    assert any("algid diagnose" in line for line in proc.stderr.splitlines())
+    assert all(line.startswith("algid identify: ") for line in proc.stderr.splitlines() if line.strip())
+
+
+def test_nothing_identifiable_exits_3(tmp_path):
+    T = 3000
+    t = np.arange(T) * 1e-3
+    rng = np.random.default_rng(6)
+    path = _write(tmp_path / "unforced.csv", t, np.zeros((T, 2)), a=rng.standard_normal((T, 2)))
+    proc = _identify(path)  # --json is optional
+    assert proc.returncode == 3, proc.stderr
+    assert "nothing in this recording is identifiable" in proc.stderr
+    assert "no force on DOF 1" in proc.stderr
+
+
+def test_estimator_override_and_bad_options(table1_csv, tmp_path):
+    path, _ = table1_csv
+    out = tmp_path / "c.json"
+    proc = _identify(path, "--json", out, "--estimator", "continuous", "--replicates", "2", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(out.read_text())
+    assert doc["estimator"] == "continuous" and doc["estimator_reason"] == "requested (--estimator)"
+    assert proc.stdout == ""
+    proc = _identify(path, "--replicates", "1")
+    assert proc.returncode == 2 and "replicates" in proc.stderr
+    proc = _identify(path, "--json", tmp_path / "no" / "such" / "dir.json")
+    assert proc.returncode == 2 and "does not exist" in proc.stderr
 
 
 def _rows(T=12, dt=1e-3):

@@ -139,6 +139,9 @@ def encoder_quantum(x: np.ndarray) -> float:
     scale = max(float(np.max(np.abs(x))), q)
     if q < 1e-12 * scale:  # steps at rounding level: analogue readings
         return 0.0
+    whole = np.round(x / q)
+    if np.any(whole != 0):  # the least-squares step of the grid (float32 storage blurs the smallest step)
+        q = float(np.dot(x, whole) / np.dot(whole, whole))
     counts = x / q
     if np.max(np.abs(counts - np.round(counts))) > 1e-3:  # off the grid: analogue readings
         return 0.0

@@ -1,8 +1,9 @@
 """Progress of long work on stderr, the same for every command.
 
-On a terminal one status line is rewritten in place (``\\r``); anywhere else (a log file, a
-pipe, CI) each stage prints one line when it starts and one when it ends, so logs stay
-readable. ``quiet`` prints nothing.
+On a terminal one status line is rewritten in place (``\\r``) once a stage has run for
+:data:`SHOW_AFTER_S`; anywhere else (a log file, a pipe, CI) a stage that took longer than
+that prints one line when it ends, so logs stay readable and quick work prints nothing.
+``quiet`` prints nothing.
 """
 
 from __future__ import annotations
@@ -10,6 +11,10 @@ from __future__ import annotations
 import sys
 import time
 from typing import Optional, TextIO
+
+
+#: Stages shorter than this [s] print nothing.
+SHOW_AFTER_S = 1.0
 
 
 class Progress:
@@ -29,14 +34,14 @@ class Progress:
             return
         if stage != self._stage:
             self._stage, self._t0, self._shown = stage, time.perf_counter(), -1
-            if not self.tty:
-                self.stream.write(f"[{self.command}] {stage} ...\n")
+        elapsed = time.perf_counter() - self._t0
         pct = int(100 * min(max(fraction, 0.0), 1.0))
-        if self.tty and pct != self._shown:
+        if self.tty and elapsed >= SHOW_AFTER_S and pct != self._shown:
             self.stream.write(f"\r\033[K[{self.command}] {stage} {pct:3d} %")
-        elif not self.tty and fraction >= 1.0 and self._shown < 100:
-            self.stream.write(f"[{self.command}] {stage} done in {time.perf_counter() - self._t0:.1f} s\n")
-        self._shown = pct
+            self._shown = pct
+        elif not self.tty and fraction >= 1.0 and elapsed >= SHOW_AFTER_S and self._shown < 100:
+            self.stream.write(f"[{self.command}] {stage} done in {elapsed:.1f} s\n")
+            self._shown = 100
         self.stream.flush()
 
     def close(self) -> None:

@@ -9,7 +9,8 @@ Rules (every threshold named below):
   *clean* when every channel's in-band SNR is at least :data:`CLEAN_SNR_DB` and no
   displacement comes in encoder counts. ``auto`` takes the single window for a clean record
   of at most :data:`SHORT_S`, and for any record too short to give the continuous estimator
-  :data:`MIN_WINDOW_RESULTS` window results; otherwise the continuous estimator.
+  :data:`MIN_WINDOW_RESULTS` window results of at least :data:`SHORTEN_MAX` of the window
+  its time scale asks for; otherwise the continuous estimator.
 * **Window length** of the continuous estimator: a first guess, then the best of its
   multiples :data:`WINDOW_MULTIPLES` by the error the bootstrap measures
   (:func:`algid.identification.engine.identify`). The guess is half a period of the
@@ -41,6 +42,9 @@ SHORT_S = 2.0
 MIN_WINDOW_RESULTS = 24
 #: Shortest window of the continuous estimator [samples].
 MIN_WINDOW_SAMPLES = 48
+#: A window shortened below this fraction of its guess to give enough window results
+#: means the record is too short for the continuous estimator.
+SHORTEN_MAX = 0.5
 #: Multiples of the first guess of the window length that are tried.
 WINDOW_MULTIPLES = (0.5, 0.7, 1.0, 1.4, 2.0)
 #: Windows in flight (staggered) of the continuous estimator.
@@ -116,7 +120,7 @@ def window_length(nm: NoiseModel, duration_s: float, f_natural: np.ndarray) -> t
     L = float(np.clip(1.0 / f_ref, lo, hi))
     if L == lo and 1.0 / f_ref < lo:
         basis += f", raised to {MIN_WINDOW_SAMPLES} samples"
-    elif L < 1.0 / f_ref:
+    elif L < SHORTEN_MAX * (1.0 / f_ref) - 1e-12:
         basis += f", shortened to give {MIN_WINDOW_RESULTS} window results"
     return L, basis
 
@@ -138,7 +142,7 @@ def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto",
     if requested not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {requested!r}")
     L, basis = window_length(nm, duration_s, f_natural)
-    fits = duration_s >= L * MIN_WINDOW_RESULTS / STAGGER - 1e-12
+    fits = "shortened" not in basis and duration_s >= L * MIN_WINDOW_RESULTS / STAGGER - 1e-12
     is_clean = clean(nm)
     if requested != "auto":
         estimator, reason = requested, "requested (--estimator)"

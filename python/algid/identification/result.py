@@ -100,8 +100,9 @@ class Identification:
 
     @property
     def identified_any(self) -> bool:
-        """At least one parameter estimated and ``ok``."""
-        return any(v.status == "ok" for v in self.verdicts)
+        """At least one parameter the record determines (valid or not: an inadmissible or
+        misfitting estimate is determined, just not by eq. 1)."""
+        return any(v.status in ("ok", "negligible", "inadmissible", "model_misfit") for v in self.verdicts)
 
     @property
     def reasons(self) -> list[str]:

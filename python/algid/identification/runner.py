@@ -17,7 +17,6 @@ estimators do; n = 1 with walls: k1 holds k1 + k2, k2 is NaN; free end: k_{n+1} 
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +64,17 @@ def aggregate(results: np.ndarray) -> np.ndarray:
         return np.where(count > 0, (cum[hi, cols] - cum[lo, cols]) / (hi - lo), np.nan)
 
 
+def _column_median(W: np.ndarray) -> np.ndarray:
+    """Median of every column over its finite entries, NaN for a column without any
+    (numpy's nanmedian warns there, and warnings filters are not safe across threads)."""
+    out = np.full(W.shape[1], np.nan)
+    for j in range(W.shape[1]):
+        col = W[np.isfinite(W[:, j]), j]
+        if col.size:
+            out[j] = np.median(col)
+    return out
+
+
 def run_window(a: np.ndarray, u: np.ndarray, dt: float, boundary: str) -> Run:
     """The paper's single growing window over the whole record."""
     est = ChainEstimator(a.shape[1], dt, boundary=boundary)
@@ -101,9 +111,7 @@ def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan:
     rows = min(HISTORY_ROWS, W.shape[0]) if history else 1
     stops = np.unique(np.linspace(1, W.shape[0], rows).round().astype(int))
     history = np.array([aggregate(W[:s]) for s in stops])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: parameters not estimated
-        spread = 1.4826 * np.nanmedian(np.abs(W - np.nanmedian(W, axis=0)), axis=0)
+    spread = 1.4826 * _column_median(np.abs(W - _column_median(W)))
     return Run(theta=aggregate(W), time_s=at[stops - 1] * dt, history=history, windows=int(W.shape[0]),
                spread=spread)
 

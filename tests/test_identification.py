@@ -1,0 +1,209 @@
+"""algid.identify: the estimator chosen from the recording, uncertainties from surrogates,
+and verdicts that never call an impossible or undetermined estimate valid."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from signals import multisine, relative_errors, simulate_chain
+
+import algid
+from algid.chain import TABLE1, Chain
+from algid.identification.plan import make_plan, natural_frequencies_hz
+from algid.identification.surrogate import Motion, band_limited_motion, chain_forces, replicate_signals
+from algid.identification.verdicts import judge
+from algid.noise import analyse
+from algid.recording import Recording, second_derivative
+from algid.scenarios import displacement_driven, positioning_axis
+from algid.simulator import simulate
+
+DT = 1e-3
+
+
+# ---- surrogates ----------------------------------------------------------------------------
+
+def _sines(T, freqs, amps, dt=DT):
+    t = np.arange(T) * dt
+    w = 2 * np.pi * np.asarray(freqs)
+    x = (amps * np.sin(np.outer(t, w) + 0.3)).sum(axis=1)
+    v = (amps * w * np.cos(np.outer(t, w) + 0.3)).sum(axis=1)
+    a = -(amps * w**2 * np.sin(np.outer(t, w) + 0.3)).sum(axis=1)
+    return x, v, a
+
+
+def test_surrogate_motion_from_displacements_is_exactly_differentiated():
+    T = 4000
+    x, v, a = _sines(T, [1.5, 7.0, 19.0], [1e-2, 1e-3, 2e-4])
+    x = x + 0.02 + 0.003 * np.arange(T) * DT  # an offset and a drift: the line the FFT must not see
+    mo = band_limited_motion(x[:, None], "displacement", DT, 100.0)
+    inner = slice(200, T - 200)  # the periodic extension's seam touches the ends only
+    np.testing.assert_allclose(mo.a[inner, 0], a[inner], atol=2e-3 * np.abs(a).max())
+    np.testing.assert_allclose(mo.v[inner, 0], v[inner] + 0.003, atol=2e-3 * np.abs(v).max())
+    np.testing.assert_allclose(second_derivative(mo.x, DT, 7)[inner], mo.a[inner], rtol=0, atol=1e-6 * np.abs(a).max())
+
+
+def test_surrogate_motion_from_accelerations_integrates_consistently():
+    T = 5000
+    _, _, a = _sines(T, [3.0, 11.0], [1e-3, 1e-4])
+    mo = band_limited_motion(a[:, None], "acceleration", DT, 50.0)
+    inner = slice(300, T - 300)
+    np.testing.assert_allclose(mo.a[inner, 0], a[inner], atol=5e-3 * np.abs(a).max())
+    # x'' = a to the differentiation rule's accuracy, everywhere (the surrogate is periodic)
+    np.testing.assert_allclose(second_derivative(mo.x, DT, 7)[inner], mo.a[inner], atol=1e-6 * np.abs(a).max())
+
+
+def test_chain_forces_are_eq1_with_the_chain_matrices():
+    rng = np.random.default_rng(0)
+    mo = Motion(*(rng.standard_normal((50, 3)) for _ in range(3)))
+    for chain in (TABLE1, Chain.random(3, rng, boundary="free")):
+        M, C, K = chain.matrices()
+        u = chain_forces(chain.identifiable(), 3, chain.boundary, mo)
+        np.testing.assert_allclose(u, mo.a @ M + mo.v @ C + mo.x @ K.T, rtol=1e-12)
+    one = Chain([2.0], [3.0], [500.0, 300.0])
+    mo1 = Motion(mo.x[:, :1], mo.v[:, :1], mo.a[:, :1])
+    np.testing.assert_allclose(chain_forces(one.identifiable(), 1, "fixed", mo1)[:, 0],
+                               2.0 * mo1.a[:, 0] + 3.0 * mo1.v[:, 0] + 800.0 * mo1.x[:, 0])
+
+
+def test_replicates_carry_the_recordings_noise():
+    rng = np.random.default_rng(1)
+    T = 20000
+    x, v, a = _sines(T, [2.0, 9.0], [1e-2, 1e-3])
+    u = 3.0 * a + 50.0 * x
+    sig_a, sig_u = 0.05, 0.02
+    nm = analyse(u[:, None] + sig_u * rng.standard_normal((T, 1)), a[:, None] + sig_a * rng.standard_normal((T, 1)),
+                 DT, "acceleration")
+    mo = Motion(x[:, None], v[:, None], a[:, None])
+    a_b, u_b = replicate_signals(mo, u[:, None], nm, rng, 5)
+    assert np.std(a_b[:, 0] - a) == pytest.approx(sig_a, rel=0.1)
+    assert np.std(u_b[:, 0] - u) == pytest.approx(sig_u, rel=0.1)
+    q = 1e-6
+    nm_x = analyse(u[:, None], (q * np.round(x / q))[:, None], DT, "displacement")
+    a_q, _ = replicate_signals(mo, u[:, None], nm_x, rng, 5)
+    # the derived acceleration's noise is that of quantisation (white, q^2/12) through the 5-point rule
+    gain = np.sqrt(np.sum(np.array([-1, 16, -30, 16, -1]) ** 2)) / 12.0
+    assert np.std(a_q[100:-100, 0] - a[100:-100]) == pytest.approx(gain * q / np.sqrt(12) / DT**2, rel=0.15)
+
+
+# ---- plan and verdicts -----------------------------------------------------------------------
+
+def test_plan_single_window_for_short_clean_records_else_continuous():
+    t, a, u, _ = simulate_chain(TABLE1, multisine(3), 0.3)
+    clean = analyse(u, a, DT)
+    assert make_plan(clean, 0.3).estimator == "window"
+    rng = np.random.default_rng(2)
+    noisy = analyse(u, a + 0.01 * np.std(a) * rng.standard_normal(a.shape), DT)
+    assert "too short" in make_plan(noisy, 0.2).reason
+    plan = make_plan(noisy, 10.0, f_natural=TABLE1.natural_frequencies_hz())
+    assert plan.estimator == "continuous" and plan.window_s == pytest.approx(0.5 / 2.2, rel=0.02)
+    assert make_plan(noisy, 10.0, "window").estimator == "window"
+    with pytest.raises(ValueError, match="estimator"):
+        make_plan(noisy, 10.0, "kalman")
+    np.testing.assert_allclose(natural_frequencies_hz(TABLE1.identifiable(), 3, "fixed"),
+                               TABLE1.natural_frequencies_hz(), rtol=1e-9)
+    assert natural_frequencies_hz(np.r_[-1.0, TABLE1.identifiable()[1:]], 3, "fixed").size == 0
+
+
+def _judge(theta, sigma, u_scale=1.0, excess=None):
+    """Verdicts for one DOF between walls whose regressors all have unit spread."""
+    T = 1000
+    rng = np.random.default_rng(3)
+    mo = Motion(*(rng.standard_normal((T, 1)) for _ in range(3)))
+    u = u_scale * rng.standard_normal((T, 1))
+    nm = analyse(u, mo.a, DT)
+    ex = None if excess is None else np.array(excess, dtype=float)
+    return {v.name: v for v in judge(np.array(theta, float), np.array(sigma, float), 1, "fixed", mo, u,
+                                     np.array([True]), nm, ex)}
+
+
+def test_verdicts_of_impossible_undetermined_and_negligible_estimates():
+    v = _judge([-0.5, 0.1, 0.5, np.nan], [0.01, 0.01, 0.01, np.nan])
+    assert v["m1"].status == "inadmissible" and "algid diagnose" in v["m1"].reason
+    v = _judge([0.002, 0.1, 0.5, np.nan], [0.01, 0.01, 0.01, np.nan])
+    assert v["m1"].status == "not_identifiable" and "mass not identifiable" in v["m1"].reason
+    v = _judge([0.5, -0.2, 0.5, np.nan], [0.01, 0.01, 0.01, np.nan])
+    assert v["c1"].status == "inadmissible" and v["c1"].reason.startswith("negative damping")
+    v = _judge([0.5, 0.1, -0.003, np.nan], [0.01, 0.01, 0.002, np.nan])
+    assert v["k1"].status == "negligible" and v["k1"].valid
+    v = _judge([0.5, 0.1, 0.05, np.nan], [0.01, 0.01, 0.1, np.nan])
+    assert v["k1"].status == "not_identifiable"  # consistent with zero, but 3 sigma is 30 % of the force
+    v = _judge([0.5, 0.1, 0.5, np.nan], [0.01, 0.01, 0.01, np.nan])
+    assert all(v[k].status == "ok" for k in ("m1", "c1", "k1")) and v["k2"].status == "not_separable"
+    v = _judge([0.5, 0.1, 0.5, np.nan], [0.01, 0.01, 0.01, np.nan], excess=[1, 1, 12, 1])
+    assert v["k1"].status == "model_misfit" and not v["k1"].valid and v["m1"].status == "ok"
+
+
+# ---- whole records ---------------------------------------------------------------------------
+
+def test_noise_free_short_record_keeps_the_papers_accuracy():
+    t, a, u, _ = simulate_chain(TABLE1, multisine(3), 0.2)
+    res = algid.identify(Recording(t=t, u=u, a=a))
+    assert res.plan.estimator == "window" and res.valid
+    assert relative_errors(TABLE1, res.mass, res.damping, res.stiffness).max() < 1e-6
+    at = np.searchsorted(res.time_s, 0.1)
+    h = res.history[at]
+    assert relative_errors(TABLE1, h[:3], h[3:6], h[6:]).max() < 1e-6
+
+
+@pytest.fixture(scope="module")
+def table1_40db():
+    r = simulate(TABLE1, multisine(3, seed=1), 10.0, 1000.0, noise_db=40, noise_on=("accel", "force"), seed=1)
+    return Recording(t=r.t, u=r.u, a=r.a)
+
+
+def test_noisy_record_continuous_within_the_issue_targets_and_sigma(table1_40db):
+    res = algid.identify(table1_40db)
+    assert res.plan.estimator == "continuous" and res.valid
+    err = np.abs(res.theta / TABLE1.identifiable() - 1)
+    assert err[:3].max() < 0.005 and err[3:6].max() < 0.02 and err[6:].max() < 0.005
+    z = np.abs(res.theta - TABLE1.identifiable()) / res.sigma
+    assert z.max() < 4.0 and 0.1 < np.median(z) < 2.0
+    assert np.all(res.sigma > 0)
+
+
+def test_single_window_on_a_long_noisy_record_is_flagged_by_its_uncertainty(table1_40db):
+    res = algid.identify(table1_40db, estimator="window")
+    assert res.plan.estimator == "window"
+    # the growing window's error is large under noise; every parameter it gets wrong by more than
+    # 5 % carries an uncertainty that says so (or is not valid)
+    err = np.abs(res.theta / TABLE1.identifiable() - 1)
+    for p, v in enumerate(res.verdicts):
+        if err[p] > 0.05 and v.valid:
+            assert res.sigma[p] > 0.01 * abs(TABLE1.identifiable()[p])
+
+
+def test_slow_positioning_axis_from_encoder_counts():
+    sc = positioning_axis(seed=3, duration_s=20.0)
+    res = algid.identify(sc.recording)
+    assert res.motion == "displacement" and res.noise.quantised
+    assert res.mass[0] == pytest.approx(5.0, rel=0.05)
+    assert res.damping[0] == pytest.approx(25.0, rel=0.10)
+    for p, v in enumerate(res.verdicts):
+        assert not (v.valid and np.isfinite(res.theta[p]) and res.theta[p] < -3 * res.sigma[p])
+    assert res.verdict("k1").status == "negligible"  # no spring on the axis
+
+
+def test_axis_with_dry_friction_is_not_called_a_valid_chain():
+    sc = positioning_axis(seed=4, duration_s=20.0, coulomb_n=1.5, offset_n=3.0)
+    res = algid.identify(sc.recording)
+    assert not res.valid
+    assert any("algid diagnose" in r for r in res.reasons)
+
+
+def test_quasi_static_device_mass_not_identifiable():
+    res = algid.identify(displacement_driven(seed=0).recording)
+    v = res.verdict("m1")
+    assert v.status == "not_identifiable" and "quasi-static" in v.reason
+    assert res.stiffness[0] == pytest.approx(2e4, rel=0.01)
+    assert res.damping[0] == pytest.approx(200.0, rel=0.02)
+
+
+def test_result_json_carries_sigma_status_and_the_choice(table1_40db):
+    res = algid.identify(table1_40db, replicates=3)
+    doc = res.to_json()
+    assert doc["estimator"] == "continuous" and doc["estimator_reason"]
+    assert len(doc["sigma_mass"]) == 3 and len(doc["sigma_stiffness"]) == 4
+    assert [p["name"] for p in doc["parameters"]] == res.names
+    assert {p["status"] for p in doc["parameters"]} <= {"ok", "negligible"}
+    assert doc["noise_model"]["band_hz"][1] > 20.0
+    assert "Identification n=3" in repr(res)
