@@ -323,4 +323,6 @@ def test_cli_too_short_record_is_a_clean_error(tmp_path):
 def test_effect_names_are_the_simulators():
     from algid.simulator import EFFECT_NAMES
 
-    assert set(EFFECTS) == set(EFFECT_NAMES)
+    # a constant force on a mass is annihilated with the initial conditions by the windowed
+    # equations (as by the algebraic estimator): no gap to diagnose
+    assert set(EFFECTS) == set(EFFECT_NAMES) - {"force_offset"}

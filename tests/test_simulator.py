@@ -326,8 +326,54 @@ def test_effect_locations_are_checked_against_the_chain():
         with pytest.raises(ValueError):
             simulate(chain, None, 0.01, effects=[eff])
     assert set(EFFECT_NAMES) == {"coulomb_friction", "quadratic_damping", "cubic_stiffness", "clearance",
-                                 "input_delay", "sensor_bias", "sensor_lowpass", "parameter_drift"}
+                                 "input_delay", "sensor_bias", "sensor_lowpass", "parameter_drift", "force_offset"}
     with pytest.raises(ValueError):
         simulate(TABLE1, np.zeros((5, 3)), 0.01)  # too short
     with pytest.raises(ValueError):
         simulate(TABLE1, lambda t: np.zeros(2), 0.01)  # wrong width
+
+
+def test_force_offset_acts_like_an_unrecorded_constant_force():
+    rng = np.random.default_rng(11)
+    u = rng.standard_normal((500, 3))
+    off = np.array([0.0, 2.5, 0.0])
+    with_eff = simulate(TABLE1, u, 0.5, effects=[{"name": "force_offset", "location": {"dof": 2},
+                                                  "params": {"offset": 2.5}}])
+    shifted = simulate(TABLE1, u + off, 0.5)
+    np.testing.assert_allclose(with_eff.x, shifted.x, rtol=0, atol=1e-9 * np.abs(shifted.x).max())
+    np.testing.assert_allclose(with_eff.u, u, rtol=0, atol=1e-12)  # the force sensor does not see it
+
+
+def test_encoder_readings_are_whole_counts_in_open_and_closed_loop():
+    from algid.positioning import BangBangReference, PositioningController
+
+    q = 1e-5
+    res = simulate(TABLE1, np.random.default_rng(12).standard_normal((300, 3)), 0.3, encoder_resolution_m=q)
+    counts = res.x_meas / q
+    np.testing.assert_allclose(counts, np.round(counts), atol=1e-9)
+    assert np.max(np.abs(res.x_meas - res.x)) <= q / 2 + 1e-15
+    ref = BangBangReference([[0.01], [-0.01]], a_max=2.0, dwell_s=0.2)
+    ctl = PositioningController(ref, f_max=50.0, kp=2e4, kd=400.0, ki=1e5, m0=1.0)
+    loop = simulate(Chain([1.0], [5.0], [0.0, 0.0]), None, 0.8, controller=ctl, mode="sampled",
+                    encoder_resolution_m=q)
+    np.testing.assert_allclose(loop.x_meas / q, np.round(loop.x_meas / q), atol=1e-9)
+    assert np.max(np.abs(loop.x[-1] - (-0.01))) < 2e-4  # the move is done and held
+    with pytest.raises(ValueError, match="encoder_resolution_m"):
+        simulate(TABLE1, None, 0.01, encoder_resolution_m=-1.0)
+
+
+def test_bang_bang_reference_profile():
+    from algid.positioning import BangBangReference
+
+    ref = BangBangReference([[0.04], [0.0]], a_max=4.0, dwell_s=0.5, start_s=0.2)
+    dur = 2 * np.sqrt(0.04 / 4.0)  # 0.2 s per move
+    t = np.linspace(0, ref.end_s, 2001)
+    x, v, a = ref.evaluate(t)
+    assert np.max(np.abs(a)) == pytest.approx(4.0)
+    # the profile integrates: v = int a, x = int v (trapezoid, fine grid)
+    dt = t[1] - t[0]
+    np.testing.assert_allclose(np.cumsum((a[1:] + a[:-1]) / 2 * dt), v[1:, 0] - v[0, 0], atol=2e-2)
+    np.testing.assert_allclose(np.cumsum((v[1:] + v[:-1]) / 2 * dt), x[1:, 0] - x[0, 0], atol=1e-4)
+    assert x[np.searchsorted(t, 0.2 + dur + 0.1), 0] == pytest.approx(0.04)
+    assert x[-1, 0] == pytest.approx(0.0, abs=1e-12)
+    assert ref.evaluate(0.3)[0].shape == (1,)

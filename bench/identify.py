@@ -1,0 +1,248 @@
+"""Figures of ``algid identify`` / :func:`algid.identify` on noisy, slow and measured-like records.
+
+Sections (all through the Python entry point the command line calls):
+
+* ``accuracy``: Table 1, ``Chain.random(5, default_rng(5))`` and a free-end chain
+  ``Chain.random(3, default_rng(7), boundary="free")``, 10 s at 1 kHz under the tests'
+  multisine-plus-offset force (7 lines, 1.3-31 Hz), white noise at 40 dB on forces and
+  accelerations, seeds 0..S-1: worst relative error per family (m, c, k), median over the
+  seeds; the same records through the paper's single growing window for comparison.
+* ``short``: Table 1, 0.2 s, noise-free: the error at 0.1 s and at the end.
+* ``slow``: the positioning axis of :func:`algid.scenarios.positioning_axis` (5 kg, 25 N s/m,
+  no spring, bang-bang moves under a saturated PID, 1 um encoder only, 20 s), seeds 0..S-1:
+  mass and damping errors, the spring's verdict, valid negative parameters.
+* ``calibration``: the continuous benchmark's records (``bench/crlb.py``: Table 1 and the
+  random 5-DOF chain, 20 Hz band-limited white forcing on every DOF, exact simulation), 10 s
+  and 60 s, SNR 20-60 dB on the accelerations ("accel") or on both channels, seeds
+  0..S-1: the median of |error| / sigma per SNR (pooled over systems, channels, seeds and
+  parameters; 0.67 for a calibrated Gaussian sigma), and per family.
+* ``suites``: every record of the accuracy suite (``bench/accuracy.py``), of the calibration
+  section and of the blind diagnosis check (``bench/blind_diagnosis.py``, seeds given by
+  ``--blind-seeds``): how many produce a valid mass that is not positive, and a valid
+  damping or spring below zero by more than three sigma.
+
+    python bench/identify.py [--seeds 3] [--blind-seeds 0:150] [--json bench/results/identify.json]
+    python bench/identify.py --only accuracy,short,slow        # a subset of the sections
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent / "tests"))
+import crlb as C  # noqa: E402
+from signals import multisine, simulate_chain  # noqa: E402
+
+import algid  # noqa: E402
+from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.recording import Recording  # noqa: E402
+from algid.scenarios import positioning_axis  # noqa: E402
+from algid.simulator import simulate  # noqa: E402
+
+FS = 1000.0
+SNRS = (20, 30, 40, 50, 60)
+SECTIONS = ("accuracy", "short", "slow", "calibration", "suites")
+
+
+def accuracy_systems() -> dict[str, Chain]:
+    return {"table1": TABLE1, "random5": Chain.random(5, np.random.default_rng(5)),
+            "free3": Chain.random(3, np.random.default_rng(7), boundary="free")}
+
+
+def families(n: int) -> dict[str, slice]:
+    return {"m": slice(0, n), "c": slice(n, 2 * n), "k": slice(2 * n, 3 * n + 1)}
+
+
+def worst_per_family(chain: Chain, theta: np.ndarray) -> dict[str, float]:
+    truth = chain.identifiable()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        err = np.abs(theta / truth - 1.0)
+    keep = np.isfinite(truth) & (truth != 0)
+    return {f: float(np.max(np.where(keep[s], err[s], 0.0))) for f, s in families(chain.n).items()}
+
+
+def multisine_record(chain: Chain, seed: int, duration: float = 10.0, snr: float = 40.0) -> Recording:
+    r = simulate(chain, multisine(chain.n, seed=seed), duration, FS, noise_db=snr, noise_on=("accel", "force"),
+                 seed=seed)
+    return Recording(t=r.t, u=r.u, a=r.a)
+
+
+# ---------------------------------------------------------------------------------- sections
+
+def section_accuracy(seeds: int) -> dict:
+    out = {}
+    for name, chain in accuracy_systems().items():
+        rows = []
+        for seed in range(seeds):
+            rec = multisine_record(chain, seed)
+            t0 = time.perf_counter()
+            res = algid.identify(rec, boundary=chain.boundary)
+            wall = time.perf_counter() - t0
+            win = algid.identify(rec, boundary=chain.boundary, estimator="window", replicates=2)
+            rows.append({"seed": seed, "worst": worst_per_family(chain, res.theta),
+                         "worst_single_window": worst_per_family(chain, win.theta), "valid": res.valid,
+                         "window_s": res.plan.window_s, "prefilter_hz": res.plan.prefilter_hz, "wall_s": wall})
+        med = {f: float(np.median([r["worst"][f] for r in rows])) for f in "mck"}
+        med_w = {f: float(np.median([r["worst_single_window"][f] for r in rows])) for f in "mck"}
+        out[name] = {"median_worst": med, "median_worst_single_window": med_w, "runs": rows}
+        print(f"accuracy {name:8s} worst per family, median over {seeds} seeds: "
+              + " ".join(f"{f} {100 * v:.3f} %" for f, v in med.items())
+              + "   (single window: " + " ".join(f"{f} {100 * v:.3g} %" for f, v in med_w.items()) + ")", flush=True)
+    return out
+
+
+def section_short() -> dict:
+    t, a, u, _ = simulate_chain(TABLE1, multisine(3), 0.2)
+    res = algid.identify(Recording(t=t, u=u, a=a))
+    truth = TABLE1.identifiable()
+    at = int(np.searchsorted(res.time_s, 0.1))
+    out = {"estimator": res.plan.estimator, "max_rel_error_end": float(np.max(np.abs(res.theta / truth - 1))),
+           "max_rel_error_at_0.1s": float(np.max(np.abs(res.history[at] / truth - 1))), "valid": res.valid}
+    print(f"short    Table 1 0.2 s noise-free: {out['estimator']}, max error at 0.1 s "
+          f"{out['max_rel_error_at_0.1s']:.2e}, at the end {out['max_rel_error_end']:.2e}", flush=True)
+    return out
+
+
+def section_slow(seeds: int) -> dict:
+    rows = []
+    for seed in range(seeds):
+        sc = positioning_axis(seed=seed, duration_s=20.0)
+        res = algid.identify(sc.recording)
+        bad = [v.name for p, v in enumerate(res.verdicts)
+               if v.valid and np.isfinite(res.theta[p]) and res.theta[p] < -3 * res.sigma[p]]
+        rows.append({"seed": seed, "mass_rel_error": float(res.mass[0] / 5.0 - 1),
+                     "damping_rel_error": float(res.damping[0] / 25.0 - 1), "spring": float(res.stiffness[0]),
+                     "spring_sigma": float(res.sigma_stiffness[0]), "spring_status": res.verdict("k1").status,
+                     "valid": res.valid, "valid_negative": bad, "window_s": res.plan.window_s})
+        print(f"slow     axis seed {seed}: m {100 * rows[-1]['mass_rel_error']:+.3f} %, c "
+              f"{100 * rows[-1]['damping_rel_error']:+.3f} %, k {rows[-1]['spring']:.3g} +- "
+              f"{rows[-1]['spring_sigma']:.2g} N/m ({rows[-1]['spring_status']}), valid {res.valid}, "
+              f"valid negative: {bad or 'none'}", flush=True)
+    return {"runs": rows}
+
+
+def calibration_records(seeds: int, duration: float):
+    """(system, snr, channels, seed, chain, Recording) of the continuous benchmark."""
+    for name, chain in (("table1", TABLE1), ("random5", Chain.random(5, np.random.default_rng(5)))):
+        for seed in range(seeds):
+            rec = C.simulate(chain, duration, seed=seed)
+            for snr in SNRS:
+                for chans in (("accel",), ("accel", "force")):
+                    a, u = rec.noisy(snr, chans, seed * 100 + snr)
+                    yield name, snr, "+".join(chans), seed, chain, Recording(t=np.arange(a.shape[0]) / FS, u=u, a=a)
+
+
+def section_calibration(seeds: int, durations=(10.0, 60.0)) -> tuple[dict, list]:
+    out, masses = {}, []
+    for duration in durations:
+        rows = []
+        for name, snr, chans, seed, chain, rec in calibration_records(seeds, duration):
+            res = algid.identify(rec)
+            truth = C.params_of(chain)
+            z = np.abs(res.theta - truth) / res.sigma
+            rows.append({"system": name, "snr_db": snr, "channels": chans, "seed": seed, "z": z.tolist(),
+                         "rel_error": (res.theta / truth - 1).tolist(), "n": chain.n})
+            masses.append(_suite_row(f"continuous/{name}/{duration:g}s/{snr}dB/{chans}/{seed}", res))
+        table = {}
+        for snr in SNRS:
+            zs = np.concatenate([r["z"] for r in rows if r["snr_db"] == snr])
+            fam = {}
+            for f in "mck":
+                fam[f] = float(np.median(np.concatenate([np.asarray(r["z"])[families(r["n"])[f]]
+                                                         for r in rows if r["snr_db"] == snr])))
+            table[str(snr)] = {"median_abs_z": float(np.median(zs)), "per_family": fam, "values": int(zs.size)}
+            print(f"calib    {duration:4.0f} s {snr} dB: median |error|/sigma {table[str(snr)]['median_abs_z']:.2f} "
+                  f"(m {fam['m']:.2f}, c {fam['c']:.2f}, k {fam['k']:.2f}; {zs.size} values)", flush=True)
+        out[f"{duration:g}s"] = {"table": table, "runs": rows}
+    return out, masses
+
+
+def _suite_row(label: str, res) -> dict:
+    n = res.n
+    bad_mass = [v.name for p, v in enumerate(res.verdicts[:n]) if v.valid and not res.theta[p] > 0]
+    bad_neg = [v.name for p, v in enumerate(res.verdicts[n:], start=n)
+               if v.valid and np.isfinite(res.theta[p]) and res.theta[p] < -3 * res.sigma[p]]
+    return {"record": label, "valid_nonpositive_mass": bad_mass, "valid_negative": bad_neg}
+
+
+def section_suites(blind_seeds: list[int], calib_rows: list) -> dict:
+    import accuracy
+    import blind_diagnosis as B
+
+    rows = list(calib_rows)
+    rng = np.random.default_rng(1)
+    chains = [("table1", TABLE1)] + [(f"random_n{n}", Chain.random(n, rng)) for n in (1, 2, 5, 10)] + \
+             [(f"free_n{n}", Chain.random(n, rng, boundary="free")) for n in (1, 3, 5)]
+    for name, chain in chains:
+        forces = [("multisine", multisine(chain.n, 1), ())] + \
+                 [("step", *accuracy.step_force(chain.n, edge_s=0.002, seed=1))]
+        for fname, force, breaks in forces:
+            t, a, u, _ = simulate_chain(chain, force, 0.5, FS, breaks=breaks)
+            res = algid.identify(Recording(t=t, u=u, a=a), boundary=chain.boundary)
+            rows.append(_suite_row(f"accuracy/{name}/{fname}", res))
+    for seed in blind_seeds:
+        case = B.draw_case(seed, B.DURATION, B.FS)
+        lab = case["label"]
+        r = simulate(case["chain"], case["u"], lab["duration_s"], lab["fs_hz"], effects=case["effects"],
+                     noise_db=lab["snr_db"], noise_on=("accel",), seed=seed)
+        res = algid.identify(Recording(t=r.t, u=r.u, a=r.a), boundary=lab["boundary"])
+        rows.append(_suite_row(f"blind/{seed}/{lab['effect']}", res))
+    nonpos = [r for r in rows if r["valid_nonpositive_mass"]]
+    neg = [r for r in rows if r["valid_negative"]]
+    print(f"suites   {len(rows)} records: {len(nonpos)} with a valid mass <= 0, {len(neg)} with a valid damping or "
+          f"spring below -3 sigma", flush=True)
+    return {"records": len(rows), "valid_nonpositive_mass": nonpos, "valid_negative": neg, "rows": rows}
+
+
+def _seeds(text: str) -> list[int]:
+    out = []
+    for part in text.split(","):
+        if ":" in part:
+            a, b = part.split(":")
+            out.extend(range(int(a), int(b)))
+        elif part:
+            out.append(int(part))
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--seeds", type=int, default=3)
+    p.add_argument("--blind-seeds", default="0:150")
+    p.add_argument("--only", default=",".join(SECTIONS), help=f"comma-separated sections of {SECTIONS}")
+    p.add_argument("--json", type=Path, default=HERE / "results" / "identify.json")
+    args = p.parse_args(argv)
+    only = [s for s in args.only.split(",") if s]
+    unknown = set(only) - set(SECTIONS)
+    if unknown:
+        p.error(f"unknown sections {sorted(unknown)}")
+    t0 = time.perf_counter()
+    doc: dict = {"seeds": args.seeds, "fs_hz": FS}
+    if "accuracy" in only:
+        doc["accuracy"] = section_accuracy(args.seeds)
+    if "short" in only:
+        doc["short"] = section_short()
+    if "slow" in only:
+        doc["slow"] = section_slow(args.seeds)
+    calib_rows: list = []
+    if "calibration" in only:
+        doc["calibration"], calib_rows = section_calibration(args.seeds)
+    if "suites" in only:
+        doc["suites"] = section_suites(_seeds(args.blind_seeds), calib_rows)
+    doc["wall_s"] = time.perf_counter() - t0
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(doc, indent=1))
+    print(f"wrote {args.json} ({doc['wall_s']:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
