@@ -49,6 +49,8 @@ from algid.simulator import simulate  # noqa: E402
 
 FS = 1000.0
 SNRS = (20, 30, 40, 50, 60)
+#: Record length of the blind diagnosis check's cases [s] (its default).
+BLIND_DURATION_S = 10.0
 SECTIONS = ("accuracy", "short", "slow", "calibration", "suites")
 
 
@@ -189,7 +191,7 @@ def section_suites(blind_seeds: list[int], calib_rows: list) -> dict:
             res = algid.identify(Recording(t=t, u=u, a=a), boundary=chain.boundary)
             rows.append(_suite_row(f"accuracy/{name}/{fname}", res))
     for seed in blind_seeds:
-        case = B.draw_case(seed, B.DURATION, B.FS)
+        case = B.draw_case(seed, BLIND_DURATION_S, FS)
         lab = case["label"]
         r = simulate(case["chain"], case["u"], lab["duration_s"], lab["fs_hz"], effects=case["effects"],
                      noise_db=lab["snr_db"], noise_on=("accel",), seed=seed)

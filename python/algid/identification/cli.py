@@ -1,4 +1,4 @@
-"""``algid identify RECORDING [--json OUT] [--trace CSV] [--estimator auto|window|continuous]``.
+"""``algid identify RECORDING [--json OUT] [--trace CSV] [--plots DIR] [--estimator auto|window|continuous]``.
 
 Estimates every mass, damping and spring of the chain in a recording with one standard
 deviation each, and says of every estimate whether it is valid and, if not, why
@@ -33,6 +33,7 @@ def add_parser(sub) -> None:
     p.add_argument("recording", type=Path, help="CSV or .npz with t, u1..un, a1..an (or x1..xn)")
     p.add_argument("--json", type=Path, help="write the estimates, uncertainties and verdicts as JSON")
     p.add_argument("--trace", type=Path, help="write the estimate history (with sigma_ columns) as CSV")
+    p.add_argument("--plots", type=Path, metavar="DIR", help="write estimates.png (histories with one-sigma bands)")
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed",
                    help="right end: wall (k_{n+1} estimated) or free (k_{n+1} = 0)")
     p.add_argument("--estimator", choices=ESTIMATORS, default="auto",
@@ -72,6 +73,10 @@ def run(args) -> int:
             args.json.write_text(json.dumps(result.to_json(), indent=2) + "\n", encoding="utf-8")
         if args.trace is not None:
             result.write_trace(args.trace)
+        if args.plots is not None:
+            from ..plotting.identify import save_figures
+
+            save_figures(result, args.plots)
     except (RecordingError, IdentifyError) as err:
         print(f"algid identify: error: {' '.join(str(err).split())}", file=sys.stderr)
         return 2
