@@ -207,3 +207,22 @@ def test_result_json_carries_sigma_status_and_the_choice(table1_40db):
     assert {p["status"] for p in doc["parameters"]} <= {"ok", "negligible"}
     assert doc["noise_model"]["band_hz"][1] > 20.0
     assert "Identification n=3" in repr(res)
+
+
+def test_velocity_only_record_like_a_laser_vibrometer():
+    chain = Chain([2.0], [3.0], [800.0, 400.0])
+    r = simulate(chain, multisine(1, seed=2), 10.0, 1000.0, noise_db=40, noise_on=("force",), seed=2)
+    v = r.v + 0.01 * np.std(r.v) * np.random.default_rng(2).standard_normal(r.v.shape)  # 40 dB on the velocity
+    res = algid.identify(Recording(t=r.t, u=r.u, v=v))
+    assert res.motion == "velocity" and res.valid
+    truth = chain.identifiable()
+    assert np.all(np.abs(res.theta[:3] / truth[:3] - 1) < np.maximum(4 * res.sigma[:3] / truth[:3], 0.02))
+
+
+def test_surrogate_motion_from_velocities_is_exactly_integrated():
+    T = 4000
+    x, v, a = _sines(T, [2.0, 13.0], [1e-2, 1e-3])
+    mo = band_limited_motion((v + 0.05)[:, None], "velocity", DT, 100.0)
+    inner = slice(200, T - 200)
+    np.testing.assert_allclose(mo.a[inner, 0], a[inner], atol=2e-3 * np.abs(a).max())
+    np.testing.assert_allclose(second_derivative(mo.x, DT, 7)[inner], mo.a[inner], atol=1e-6 * np.abs(a).max())

@@ -211,3 +211,36 @@ def test_noise_gain_of_the_default_stencil():
     a = second_derivative(noise, dt)
     gain = math.sqrt(1 + 256 + 900 + 256 + 1) / 12
     assert a[10:-10].std() == pytest.approx(gain * 1e-6 / dt**2, rel=0.02)
+
+
+@pytest.mark.parametrize("points", [3, 5, 7])
+def test_first_derivative_exact_on_polynomials_and_of_order_points_minus_1(points):
+    from algid.recording import derivative
+
+    dt = 1e-3
+    t = 0.3 + dt * np.arange(40)
+    coef = np.random.default_rng(points).standard_normal(points)
+    v = np.polyval(coef, t - 0.31)
+    exact = np.polyval(np.polyder(coef, 1), t - 0.31)
+    np.testing.assert_allclose(derivative(v, dt, 1, points), exact, rtol=0, atol=1e-7 * np.abs(exact).max())
+    errs = []
+    for fs in (200.0, 400.0, 800.0):
+        tt = np.arange(int(fs)) / fs
+        d = derivative(np.sin(2 * np.pi * 7.0 * tt), 1 / fs, 1, points)
+        errs.append(np.abs(d - 2 * np.pi * 7.0 * np.cos(2 * np.pi * 7.0 * tt))[points:-points].max())
+    np.testing.assert_allclose(np.log2(np.array(errs[:-1]) / np.array(errs[1:])), points - 1, atol=0.1)
+
+
+def test_velocity_recording_csv_and_its_accelerations(tmp_path):
+    dt = 1e-3
+    t = dt * np.arange(500)
+    w = 2 * np.pi * 5.0
+    path = tmp_path / "vib.csv"
+    path.write_text("t,u1,v1\n" + "\n".join(f"{tk:.17g},{np.sin(w * tk):.17g},{np.cos(w * tk):.17g}" for tk in t) + "\n")
+    rec = load_recording(path)
+    assert rec.v is not None and rec.a is None and rec.x is None
+    a = accelerations(rec)
+    np.testing.assert_allclose(a[2:-2, 0], -w * np.sin(w * t[2:-2]), atol=(w * dt) ** 4 / 30 * w)
+    assert "v1" in rec.columns()
+    with pytest.raises(RecordingError, match="velocities"):
+        Recording(t=t, u=np.zeros((t.size, 1)))

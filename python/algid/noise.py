@@ -19,9 +19,9 @@ Per channel (every force, and every measured acceleration or displacement):
 
 The **signal band** of the record is ``[0, f_hi]`` with ``f_hi`` the largest ``f_hi`` of the
 forces and, where accelerations are measured, of the accelerations. Accelerations derived
-from encoder counts carry differentiated quantisation noise that grows like ``f^2``, which
-no band rule on their own spectrum could tell from signal, so then only the forces set the
-band. The characteristic frequency ``f_mid`` of the record is that of the forces.
+from velocities or encoder counts carry differentiated noise that grows like ``f`` or
+``f^2``, which no band rule on their own spectrum could tell from signal, so then only the
+forces set the band. The characteristic frequency ``f_mid`` of the record is that of the forces.
 """
 
 from __future__ import annotations
@@ -34,6 +34,8 @@ import numpy as np
 DETECT = 10.0
 #: ``f_hi`` holds this share of a channel's above-floor power.
 POWER = 0.99
+#: What the motion channels of a recording can measure.
+KINDS = ("acceleration", "velocity", "displacement")
 
 
 @dataclass(frozen=True)
@@ -73,7 +75,7 @@ class NoiseModel:
     Attributes
     ----------
     dt : sample period [s].
-    motion : "acceleration" (measured) or "displacement" (accelerations derived).
+    motion : "acceleration" (measured), "velocity" or "displacement" (accelerations derived).
     forces, motions : per DOF :class:`Channel` of ``u_i`` and of ``a_i`` or ``x_i``.
     f_hi : upper edge of the signal band [Hz] (Nyquist when nothing stands out).
     f_mid : median frequency of the force power [Hz] (nan when no force stands out).
@@ -172,12 +174,13 @@ def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False) -> Cha
 
 def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "acceleration") -> NoiseModel:
     """Noise model of a recording: forces ``u`` (T, n) and the measured motion (T, n),
-    accelerations (``kind="acceleration"``) or displacements (``"displacement"``)."""
-    if kind not in ("acceleration", "displacement"):
-        raise ValueError(f"kind must be 'acceleration' or 'displacement', got {kind!r}")
+    accelerations (``kind="acceleration"``), velocities (``"velocity"``) or displacements
+    (``"displacement"``)."""
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     u = np.asarray(u, dtype=float).reshape(u.shape[0], -1)
     motion = np.asarray(motion, dtype=float).reshape(motion.shape[0], -1)
-    sym = "a" if kind == "acceleration" else "x"
+    sym = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
     forces = [channel(f"u{i + 1}", u[:, i], dt) for i in range(u.shape[1])]
     motions = [channel(f"{sym}{i + 1}", motion[:, i], dt, quantised=kind == "displacement")
                for i in range(motion.shape[1])]

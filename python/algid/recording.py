@@ -1,13 +1,14 @@
 """Recordings: loading, validating and saving the measured signals of a chain.
 
 A recording holds, on a uniform time grid ``t`` [s], the forces ``u1..un`` [N] applied
-to the n masses and their accelerations ``a1..an`` [m/s^2], optionally their
-displacements ``x1..xn`` [m]. Rigs that record displacement only may omit ``a``: the
-acceleration the estimator needs is then derived by :func:`accelerations`.
+to the n masses and their accelerations ``a1..an`` [m/s^2], optionally their velocities
+``v1..vn`` [m/s] and displacements ``x1..xn`` [m]. Rigs that record velocity only (a laser
+vibrometer) or displacement only (an encoder, a displacement transducer) may omit ``a``:
+the acceleration the estimator needs is then derived by :func:`accelerations`.
 
 File formats (the same column / array names in both):
 
-* ``.csv`` — one header line ``t,u1,..,un,a1,..,an[,x1,..,xn]`` (any column order,
+* ``.csv`` — one header line ``t,u1,..,un,a1,..,an[,v1,..,vn][,x1,..,xn]`` (any column order,
   names exact), one sample per line, comma separated, SI units. Blank lines and lines
   starting with ``#`` are ignored.
 * ``.npz`` — one 1-D array per name (``numpy.savez``).
@@ -16,8 +17,8 @@ Validation (every failure raises :class:`RecordingError` with a one-line message
 the problem and, where it has one, the offending line / column):
 
 * extension ``.csv`` or ``.npz``; the file exists and is not empty;
-* columns ``t`` and ``u1..un`` present, plus ``a1..an`` and/or ``x1..xn`` for the
-  *same* n, numbered 1..n without holes; no other columns;
+* columns ``t`` and ``u1..un`` present, plus ``a1..an``, ``v1..vn`` and/or ``x1..xn`` for
+  the *same* n, numbered 1..n without holes; no other columns;
 * every row has as many fields as the header and every field parses as a number;
 * no NaN or inf anywhere;
 * at least :data:`MIN_SAMPLES` samples; time strictly increasing and uniform:
@@ -41,7 +42,9 @@ __all__ = [
     "Recording",
     "RecordingError",
     "accelerations",
+    "derivative",
     "derivative_weights",
+    "motion",
     "load_recording",
     "save_recording",
 ]
@@ -53,8 +56,10 @@ UNIFORM_RTOL = 1e-3
 #: Points of the interpolating polynomial :func:`accelerations` differentiates.
 DEFAULT_DIFF_POINTS = 5
 
-_NAME = re.compile(r"^([uax])([1-9][0-9]*)$")
-_KIND = {"u": "force", "a": "acceleration", "x": "displacement"}
+_NAME = re.compile(r"^([uavx])([1-9][0-9]*)$")
+_KIND = {"u": "force", "a": "acceleration", "v": "velocity", "x": "displacement"}
+#: Motion signals a recording may carry, in the order the estimator prefers them.
+MOTIONS = ("a", "v", "x")
 
 
 class RecordingError(ValueError):
@@ -73,7 +78,8 @@ class Recording:
     t : (T,) sample times [s], strictly increasing and uniform.
     u : (T, n) forces applied to each mass [N].
     a : (T, n) accelerations of each mass [m/s^2], or None.
-    x : (T, n) displacements of each mass [m], or None (at least one of a, x).
+    x : (T, n) displacements of each mass [m], or None.
+    v : (T, n) velocities of each mass [m/s], or None (at least one of a, v, x).
     dt : sampling interval [s]; computed from ``t`` when None.
     n : number of degrees of freedom; taken from ``u`` when None.
     path : file the recording was read from, if any.
@@ -89,6 +95,7 @@ class Recording:
     dt: float | None = None
     n: int | None = None
     path: Path | None = None
+    v: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -103,22 +110,23 @@ class Recording:
             raise RecordingError("no force columns u1..un")
         a = None if self.a is None else _as_2d("a", self.a, T)
         x = None if self.x is None else _as_2d("x", self.x, T)
-        if a is None and x is None:
-            raise RecordingError("need accelerations a1..an or displacements x1..xn")
-        for name, arr in (("a", a), ("x", x)):
+        v = None if self.v is None else _as_2d("v", self.v, T)
+        if a is None and x is None and v is None:
+            raise RecordingError("need accelerations a1..an, velocities v1..vn or displacements x1..xn")
+        for name, arr in (("a", a), ("v", v), ("x", x)):
             if arr is not None and arr.shape[1] != n:
                 raise RecordingError(
                     f"mismatched n: {n} force columns but {arr.shape[1]} {_KIND[name]} columns"
                 )
         if self.n is not None and int(self.n) != n:
             raise RecordingError(f"mismatched n: n = {self.n} given but u has {n} columns")
-        for name, arr in (("t", t[:, None]), ("u", u), ("a", a), ("x", x)):
+        for name, arr in (("t", t[:, None]), ("u", u), ("a", a), ("v", v), ("x", x)):
             if arr is not None:
                 _check_finite(name, arr, t)
         dt = _check_time(t)
         if self.dt is not None and not math.isclose(float(self.dt), dt, rel_tol=UNIFORM_RTOL):
             raise RecordingError(f"dt = {self.dt} given but the time column has dt = {dt:.9g} s")
-        self.t, self.u, self.a, self.x = t, u, a, x
+        self.t, self.u, self.a, self.v, self.x = t, u, a, v, x
         self.dt, self.n = dt, n
         self.path = None if self.path is None else Path(self.path)
 
@@ -135,7 +143,7 @@ class Recording:
     def columns(self) -> dict[str, np.ndarray]:
         """The recording as named 1-D columns ``t, u1..un[, a1..an][, x1..xn]``."""
         out: dict[str, np.ndarray] = {"t": self.t}
-        for key, arr in (("u", self.u), ("a", self.a), ("x", self.x)):
+        for key, arr in (("u", self.u), ("a", self.a), ("v", self.v), ("x", self.x)):
             if arr is not None:
                 for i in range(self.n):
                     out[f"{key}{i + 1}"] = arr[:, i]
@@ -184,7 +192,7 @@ def _check_time(t: np.ndarray, lines: np.ndarray | None = None) -> float:
 def _group_columns(names: list[str], source: str) -> tuple[int, dict[str, list[int]]]:
     """Map the column names to their position; return n and {'t': [pos], 'u': [...], ...}."""
     seen: set[str] = set()
-    groups: dict[str, dict[int, int]] = {"u": {}, "a": {}, "x": {}}
+    groups: dict[str, dict[int, int]] = {"u": {}, "a": {}, "v": {}, "x": {}}
     tpos = None
     for pos, raw in enumerate(names):
         name = raw.strip()
@@ -196,15 +204,16 @@ def _group_columns(names: list[str], source: str) -> tuple[int, dict[str, list[i
             continue
         m = _NAME.match(name)
         if not m:
-            raise RecordingError(f"{source}: unexpected column {name!r} (expected t, u1..un, a1..an, x1..xn)")
+            raise RecordingError(f"{source}: unexpected column {name!r} (expected t, u1..un, a1..an, v1..vn, x1..xn)")
         groups[m.group(1)][int(m.group(2))] = pos
     if tpos is None:
         raise RecordingError(f"{source}: missing column 't'")
     if not groups["u"]:
         raise RecordingError(f"{source}: missing force columns u1..un")
     n = max(groups["u"])
-    if not groups["a"] and not groups["x"]:
-        raise RecordingError(f"{source}: missing columns a1..a{n} (or displacements x1..x{n})")
+    if not groups["a"] and not groups["v"] and not groups["x"]:
+        raise RecordingError(f"{source}: missing columns a1..a{n} (or velocities v1..v{n}, or displacements "
+                             f"x1..x{n})")
     for key, cols in groups.items():
         if not cols:
             continue
@@ -279,7 +288,7 @@ def _from_table(path: Path, data: np.ndarray, groups: dict[str, list[int]], line
             raise RecordingError(f"{path.name}: {err}") from None
     try:
         _check_time(t, lines)
-        return Recording(t=t, u=parts["u"], a=parts.get("a"), x=parts.get("x"), path=path)
+        return Recording(t=t, u=parts["u"], a=parts.get("a"), v=parts.get("v"), x=parts.get("x"), path=path)
     except RecordingError as err:
         raise RecordingError(f"{path.name}: {err}") from None
 
@@ -376,60 +385,81 @@ def derivative_weights(points: int, order: int, at: int) -> np.ndarray:
     return np.linalg.solve(V, rhs)
 
 
-def second_derivative(x: np.ndarray, dt: float, points: int = DEFAULT_DIFF_POINTS) -> np.ndarray:
-    """Second time derivative of uniformly sampled columns by polynomial interpolation.
+def derivative(x: np.ndarray, dt: float, order: int = 2, points: int = DEFAULT_DIFF_POINTS) -> np.ndarray:
+    """Time derivative of order ``order`` of uniformly sampled columns by polynomial
+    interpolation.
 
     At every sample, the degree ``points-1`` polynomial through ``points`` consecutive
     samples (centred on the sample; shifted inwards at both ends) is differentiated
     exactly. For odd ``points`` the interior stencil is the symmetric central
-    difference, of accuracy ``O(dt^(points-1))``; the ``(points-1)/2`` samples at each
-    end use one-sided stencils of accuracy ``O(dt^(points-2))``.
+    difference, of accuracy ``O(dt^(points-1))`` for the second derivative and
+    ``O(dt^(points-1))`` for the first; the ``(points-1)/2`` samples at each end use
+    one-sided stencils, one order less accurate.
 
     Parameters
     ----------
     x : (T,) or (T, n) samples.
     dt : sampling interval [s].
-    points : stencil width (>= 3).
+    order : 1 or 2 (or higher, below ``points``).
+    points : stencil width (> order, >= 3).
     """
     x = np.asarray(x, dtype=float)
     one = x.ndim == 1
     X = x[:, None] if one else x
     T = X.shape[0]
-    if points < 3:
-        raise ValueError("points must be >= 3")
+    if points < 3 or points <= order:
+        raise ValueError("points must be >= 3 and > order")
     if T < points:
         raise RecordingError(f"too short to differentiate: {T} samples, need {points}")
     half = points // 2
     out = np.empty_like(X)
-    w = derivative_weights(points, 2, half)
+    w = derivative_weights(points, order, half)
     interior = slice(half, T - (points - 1 - half))
     acc = np.zeros((T - points + 1, X.shape[1]))
     for m in range(points):
         acc += w[m] * X[m : T - points + 1 + m]
     out[interior] = acc
     for k in range(half):  # left end: nodes 0..points-1, evaluated at k
-        out[k] = derivative_weights(points, 2, k) @ X[:points]
+        out[k] = derivative_weights(points, order, k) @ X[:points]
     for k in range(points - 1 - half):  # right end
         at = points - 1 - k
-        out[T - 1 - k] = derivative_weights(points, 2, at) @ X[T - points :]
-    out /= dt * dt
+        out[T - 1 - k] = derivative_weights(points, order, at) @ X[T - points :]
+    out /= dt**order
     return out[:, 0] if one else out
+
+
+def second_derivative(x: np.ndarray, dt: float, points: int = DEFAULT_DIFF_POINTS) -> np.ndarray:
+    """:func:`derivative` of order 2 (accelerations from displacements)."""
+    return derivative(x, dt, 2, points)
 
 
 def accelerations(rec: Recording, points: int = DEFAULT_DIFF_POINTS) -> np.ndarray:
     """Accelerations (T, n) [m/s^2] the estimator needs.
 
-    The measured ``a`` when the recording has it; otherwise the exact second derivative
-    of the ``points``-point interpolating polynomial of the displacements ``x`` (see
-    :func:`second_derivative`): with the default 5 points, the central difference
-    ``(-x[k-2] + 16 x[k-1] - 30 x[k] + 16 x[k+1] - x[k+2]) / (12 dt^2)``, error
-    ``dt^4 x^(6) / 90`` (relative error 1.1e-4 for a sine at 1/20 of the sampling rate,
-    1.7e-3 at 1/10).
+    The measured ``a`` when the recording has it; otherwise the exact first derivative of
+    the ``points``-point interpolating polynomial of the velocities ``v``, or its second
+    derivative of the displacements ``x`` (see :func:`derivative`): with the default 5
+    points, ``(v[k-2] - 8 v[k-1] + 8 v[k+1] - v[k+2]) / (12 dt)`` and
+    ``(-x[k-2] + 16 x[k-1] - 30 x[k] + 16 x[k+1] - x[k+2]) / (12 dt^2)``, error ``dt^4 x^(6) / 90``
+    for the second (relative error 1.1e-4 for a sine at 1/20 of the sampling rate, 1.7e-3
+    at 1/10).
     Differentiation amplifies measurement noise: white displacement noise of standard
-    deviation s becomes acceleration noise of ``3.1 s / dt^2`` (5 points) — at 1 kHz a
-    1 um displacement noise gives 3.1 m/s^2. Prefer measured accelerations, or low-pass
-    the displacements first if they are noisy.
+    deviation s becomes acceleration noise of ``3.1 s / dt^2`` (5 points), white velocity
+    noise ``0.95 s / dt`` — at 1 kHz a 1 um displacement noise gives 3.1 m/s^2. The
+    identification and the diagnosis take that noise into account (:mod:`algid.noise`).
     """
     if rec.a is not None:
         return rec.a
+    if rec.v is not None:
+        return derivative(rec.v, rec.dt, 1, points)
     return second_derivative(rec.x, rec.dt, points)
+
+
+def motion(rec: Recording) -> tuple[str, np.ndarray]:
+    """The measured motion the estimator's accelerations come from: ``("acceleration", a)``,
+    ``("velocity", v)`` or ``("displacement", x)``, in that order of preference."""
+    if rec.a is not None:
+        return "acceleration", rec.a
+    if rec.v is not None:
+        return "velocity", rec.v
+    return "displacement", rec.x

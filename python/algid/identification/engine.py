@@ -32,6 +32,7 @@ import numpy as np
 
 from ..noise import NoiseModel, analyse
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations
+from ..recording import motion as recording_motion
 from .plan import Plan, make_plan, natural_frequencies_hz, window_candidates, window_limits
 from .result import Identification
 from .runner import Run, run_plan
@@ -133,8 +134,7 @@ def identify(rec: Recording, boundary: str = "fixed", estimator: str = "auto", r
         raise ValueError(f"replicates must be >= 2, got {replicates}")
     n, dt = rec.n, float(rec.dt)
     a = accelerations(rec, DEFAULT_DIFF_POINTS)
-    kind = "acceleration" if rec.a is not None else "displacement"
-    motion = rec.a if rec.a is not None else rec.x
+    kind, motion = recording_motion(rec)
     nm = analyse(rec.u, motion, dt, kind)
     duration = rec.t.size * dt
     forced = np.any(rec.u != 0.0, axis=0)

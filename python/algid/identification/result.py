@@ -33,7 +33,8 @@ class Identification:
     verdicts : one :class:`~.verdicts.Verdict` per parameter.
     time_s, history, history_sigma : estimate history (R rows) and its standard deviation.
     windows : continuous window results aggregated (0 for the single window).
-    replicates : bootstrap replicates; motion : "acceleration" or "displacement" (derived).
+    replicates : bootstrap replicates; motion : "acceleration", or "velocity" or
+        "displacement" (accelerations derived from them).
     """
 
     n: int
@@ -142,8 +143,8 @@ class Identification:
         }
         if n == 1 and self.boundary == "fixed":
             doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
-        if self.motion == "displacement":
-            doc["note_accel"] = "accelerations derived from displacements by 5-point differentiation"
+        if self.motion != "acceleration":
+            doc["note_accel"] = f"accelerations derived from {self.motion}s by 5-point differentiation"
         return doc
 
     def write_trace(self, path: Path) -> None:

@@ -7,7 +7,8 @@ sensor noise, so that the estimator's error on it is known:
    and its exact derivatives or integrals there: ``x_s``, ``v_s = x_s'``, ``a_s = x_s''``,
    consistent with each other to rounding. From displacements: the line through the first
    and last sample is taken out before the FFT (so that the periodic extension has no
-   jump) and added back (it has no acceleration). From accelerations: the displacement is
+   jump) and added back (it has no acceleration); from velocities likewise, the line and
+   the rest's mean integrated exactly. From accelerations: the displacement is
    the double integral ``-A / w^2`` on the bins above ``2 / duration`` (below, the
    integral of noise would wander off).
 2. **Forces** of the identified chain along that motion, eq. 1 read from left to right:
@@ -15,9 +16,10 @@ sensor noise, so that the estimator's error on it is known:
    unstable or inadmissible estimate gives a surrogate all the same.
 3. **Sensors**, drawn afresh for every replicate from the recording's noise model
    (:mod:`algid.noise`): white noise of each channel's floor on forces and measured
-   accelerations; displacements quantised to the recording's encoder resolution (with a
-   random offset of the count grid) plus whatever white floor lies above the quantisation
-   noise, then differentiated like the recording's.
+   accelerations; white noise on velocities, then differentiated like the recording's;
+   displacements quantised to the recording's encoder resolution (with a random offset of
+   the count grid) plus whatever white floor lies above the quantisation noise, then
+   differentiated like the recording's.
 
 The same plan is run on ``B`` replicates and once on the noise-free surrogate. The
 replicates' spread is the estimate's standard deviation; their mean minus the noise-free
@@ -39,7 +41,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from ..noise import NoiseModel
-from ..recording import second_derivative
+from ..recording import derivative, second_derivative
 from .plan import Plan
 from .runner import run_plan
 
@@ -100,6 +102,17 @@ def band_limited_motion(y: np.ndarray, kind: str, dt: float, f_cut: float) -> Mo
         v = slope + np.fft.irfft(1j * w[:, None] * Y, T, axis=0)
         a = np.fft.irfft(-(w**2)[:, None] * Y, T, axis=0)
         return Motion(x, v, a)
+    if kind == "velocity":  # the line through the ends and the periodic rest's mean, integrated exactly
+        slope = (y[-1] - y[0]) / (t[-1] - t[0])
+        Y = np.fft.rfft(y - y[0] - t[:, None] * slope, axis=0) * g
+        v0 = y[0] + Y[0].real / T
+        Y[0] = 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            X = np.where(w[:, None] > 0, Y / (1j * w)[:, None], 0.0)
+        v = v0 + t[:, None] * slope + np.fft.irfft(Y, T, axis=0)
+        x = t[:, None] * v0 + 0.5 * t[:, None] ** 2 * slope + np.fft.irfft(X, T, axis=0)
+        a = slope + np.fft.irfft(1j * w[:, None] * Y, T, axis=0)
+        return Motion(x, v, a)
     A = np.fft.rfft(y - y.mean(axis=0), axis=0) * g
     keep = (f >= 2.0 / (T * dt))[:, None]
     A = np.where(keep, A, 0.0)
@@ -130,6 +143,9 @@ def replicate_signals(mo: Motion, u_s: np.ndarray, nm: NoiseModel, rng: np.rando
     if nm.motion == "acceleration":
         sa = np.array([c.sigma for c in nm.motions])
         return mo.a + sa * rng.standard_normal((T, n)), u
+    if nm.motion == "velocity":
+        sv = np.array([c.sigma for c in nm.motions])
+        return derivative(mo.v + sv * rng.standard_normal((T, n)), nm.dt, 1, diff_points), u
     x = mo.x.copy()
     for i, ch in enumerate(nm.motions):
         q = ch.quantum
@@ -172,7 +188,8 @@ def bootstrap(theta: np.ndarray, motion_rec: np.ndarray, nm: NoiseModel, plan: P
     n = motion_rec.shape[1]
     mo = band_limited_motion(motion_rec, nm.motion, nm.dt, f_cut)
     u_s = chain_forces(theta, n, boundary, mo) * forced
-    a0 = mo.a if nm.motion == "acceleration" else second_derivative(mo.x, nm.dt, diff_points)
+    a0 = {"acceleration": lambda: mo.a, "velocity": lambda: derivative(mo.v, nm.dt, 1, diff_points),
+          "displacement": lambda: second_derivative(mo.x, nm.dt, diff_points)}[nm.motion]()
     seeds = np.random.SeedSequence(seed).spawn(replicates)  # one stream per replicate: any order
 
     def one(b: int):

@@ -91,12 +91,13 @@ def _deformation(x: np.ndarray, j: int, n: int, boundary: str) -> np.ndarray:
 
 def accel_noise_in_band(nm: NoiseModel, i: int) -> float:
     """Standard deviation of the noise the estimator sees on acceleration i in the band
-    ``[0, f_hi]`` [m/s^2]: a white floor for a measured acceleration, the twice
-    differentiated floor (``(2 pi f)^4`` times the displacement floor) for a derived one."""
+    ``[0, f_hi]`` [m/s^2]: a white floor for a measured acceleration, the differentiated
+    floor (``(2 pi f)^2`` or ``(2 pi f)^4`` times the velocity or displacement floor) for a
+    derived one."""
     ch, f = nm.motions[i], nm.f_hi
-    if nm.motion == "acceleration":
-        return float(np.sqrt(ch.floor_psd * f))
-    return float(np.sqrt(ch.floor_psd * (2 * np.pi) ** 4 * f**5 / 5.0))
+    order = {"acceleration": 0, "velocity": 1, "displacement": 2}[nm.motion]
+    # int_0^f (2 pi g)^(2 order) floor dg
+    return float(np.sqrt(ch.floor_psd * (2 * np.pi) ** (2 * order) * f ** (2 * order + 1) / (2 * order + 1)))
 
 
 def _mass_reason(m: float, share: float, snr: float) -> str:
