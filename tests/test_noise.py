@@ -75,4 +75,4 @@ def test_band_of_a_record_from_forces_only_when_accelerations_are_derived():
     nm = analyse(u, a_noisy, DT, "acceleration")
     assert nm.band_source == "a1" and 110.0 < nm.f_hi < 130.0
     with pytest.raises(ValueError, match="kind"):
-        analyse(u, u, DT, "velocity")
+        analyse(u, u, DT, "jerk")

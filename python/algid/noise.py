@@ -50,6 +50,7 @@ class Channel:
     f_hi : frequency below which :data:`POWER` of the above-floor power lies [Hz] (nan if
         no bin is above the floor).
     f_mid : median frequency of the above-floor power [Hz] (nan if none).
+    f_low : frequency below which a tenth of the above-floor power lies [Hz] (nan if none).
     snr_db : above-floor power over the floor's power in ``[0, f_hi]`` [dB] (nan if none).
     quantum : encoder resolution of a displacement channel [unit] (0: not quantised).
     rms : RMS of the channel about its mean [unit].
@@ -63,6 +64,7 @@ class Channel:
     snr_db: float
     quantum: float = 0.0
     rms: float = 0.0
+    f_low: float = float("nan")
 
     def to_json(self) -> dict:
         return {k: _num(v) for k, v in self.__dict__.items()}
@@ -163,13 +165,14 @@ def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False) -> Cha
         c = np.cumsum(above) / total
         f_hi = float(f[min(int(np.searchsorted(c, POWER)), f.size - 1)])
         f_mid = float(f[min(int(np.searchsorted(c, 0.5)), f.size - 1)])
+        f_low = float(f[min(int(np.searchsorted(c, 0.1)), f.size - 1)])
         noise = floor * max(f_hi, f[1])
         snr = 10 * np.log10(total * (f[1] - f[0]) / noise) if noise > 0 else np.inf
     else:
-        f_hi = f_mid = snr = float("nan")
+        f_hi = f_mid = f_low = snr = float("nan")
     q = encoder_quantum(x) if quantised else 0.0
     return Channel(name=name, floor_psd=floor, sigma=float(np.sqrt(floor * 0.5 / dt)), f_hi=f_hi, f_mid=f_mid,
-                   snr_db=float(snr), quantum=q, rms=float(np.std(x)))
+                   snr_db=float(snr), quantum=q, rms=float(np.std(x)), f_low=f_low)
 
 
 def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "acceleration") -> NoiseModel:

@@ -7,7 +7,7 @@ The definitions are those of the simulator (the names are part of the interface)
 
 | effect | location | what it adds / changes | parameters (first = main) |
 |---|---|---|---|
-| coulomb_friction | dof i | ``+ force * sign(v_i)`` in eq. i | force [N] |
+| coulomb_friction | dof i | ``+ force * tanh(v_i / v_scale)`` in eq. i | force [N], v_scale [m/s] |
 | quadratic_damping | dof i | ``+ c2 * v_i |v_i|`` in eq. i | c2 [N s^2/m^2] |
 | cubic_stiffness | spring j | ``f = k3 d^3`` | k3 [N/m^3] |
 | clearance | spring j | ``f = stiffness * sign(d) max(|d| - gap, 0)`` | gap [m], stiffness [N/m] |
@@ -16,15 +16,17 @@ The definitions are those of the simulator (the names are part of the interface)
 | sensor_lowpass | dof i | measured ``a_i`` is the first-order low-pass of the true one | cutoff_hz [Hz] |
 | parameter_drift | spring j | ``k_j(t) = k_j (1 + rel_change (t - t_0) / duration)`` | rel_change [-] |
 
-How each enters the least-squares problem (everything else as in :mod:`.core`; the
-equations are in acceleration form, so an effect force ``g`` enters equation e as
-``-g / m_e`` with ``m_e`` from the linear fit, and its coefficient is the physical
-parameter):
+How each enters the least-squares problem (everything else as in :mod:`.core`): an
+effect force ``g`` (eq. 1 read as ``m a + c v + k x + g = u``) enters equation e as
+``-g / m_e`` in the acceleration form, with ``m_e`` from the linear fit, and as ``g`` in
+the force form (:func:`.core.effect_column`), so that its coefficient is the physical
+parameter either way:
 
-* linear in the effect parameter, from the reconstructed states ``x``, ``v``: Coulomb
-  (``sign(v)``), quadratic damping (``v|v|``), cubic spring (``d^3``), drift
-  (``(t - t_0)/duration * d``, coefficient ``k_j rel_change``);
+* linear in the effect parameter, from the reconstructed states ``x``, ``v``: quadratic
+  damping (``v|v|``), cubic spring (``d^3``), drift (``(t - t_0)/duration * d``,
+  coefficient ``k_j rel_change``);
 * one nonlinear parameter on a grid, linear coefficients solved at every grid value:
+  Coulomb friction (``v_scale``: a log grid below the RMS velocity, ``tanh(v / v_scale)``),
   clearance (``gap``: quantiles of ``|d_j|``), input delay (``delay``: log grid, the force
   shifted by cubic-spline interpolation), sensor low-pass (``cutoff``: log grid; equation
   i is filtered by the same low-pass — ``m a + c v + k (x_i - LP x_other) = LP u`` holds
@@ -51,9 +53,12 @@ from .core import (
     base_design,
     cross_validate,
     cross_validate_grid,
+    effect_column,
+    force_form,
     jackknife_std,
     spring_columns,
     springs,
+    target,
     to_physical,
     window_stats,
 )
@@ -81,6 +86,25 @@ MAIN_PARAM = {
     "sensor_lowpass": "cutoff_hz",
     "parameter_drift": "rel_change",
 }
+
+#: What a fitted effect must satisfy to be physical: friction and damping dissipate (a
+#: negative friction force or quadratic damping would feed energy in), a clearance has a
+#: positive gap and contact stiffness, a delay and a cut-off are positive. A candidate that
+#: fits only with the wrong sign is not an explanation, whatever its gap.
+PHYSICAL = {
+    "coulomb_friction": lambda p: p["force"] > 0,
+    "quadratic_damping": lambda p: p["c2"] > 0,
+    "clearance": lambda p: p["gap"] > 0 and p["stiffness"] > 0,
+    "input_delay": lambda p: p["delay"] > 0,
+    "sensor_lowpass": lambda p: p["cutoff_hz"] > 0,
+}
+
+
+def physical(fit: "CandidateFit") -> bool:
+    """True when the fitted parameters have physical signs (:data:`PHYSICAL`)."""
+    rule = PHYSICAL.get(fit.effect)
+    return True if rule is None else bool(rule(fit.params))
+
 
 #: Longest input delay searched [samples]; the analysis skips at least this many samples.
 MAX_DELAY_SAMPLES = 100
@@ -185,18 +209,22 @@ def lowpass(x: np.ndarray, cutoff_hz: float, dt: float) -> np.ndarray:
     return y if np.ndim(x) == 2 else y[:, 0]
 
 
-def _fit_linear_effect(ctx: Context, effect: str, location: dict, eq_cols: list[tuple[int, np.ndarray]],
+def _fit_linear_effect(ctx: Context, effect: str, location: dict, eq_forces: list[tuple[int, np.ndarray]],
                        names: list[str], transform=None, signals: tuple | None = None) -> CandidateFit:
-    """Linear model plus one shared effect column per equation; ``signals = (a, A1, A2)``
-    replaces the measured acceleration and its integrals (e.g. bias-corrected)."""
+    """Linear model plus one shared effect parameter: ``eq_forces`` gives, per equation,
+    the effect force per unit parameter ``g`` (eq. 1 read as ``m a + c v + k x + g = u``,
+    :func:`.core.effect_column`); ``signals = (a, A1, A2)`` replaces the measured
+    acceleration and its integrals (e.g. bias-corrected)."""
     P = ctx.P
     specs = []
-    for e, col in eq_cols:
+    for e, g in eq_forces:
+        col = effect_column(P, e, g, ctx.mass)
         if signals is None:
-            specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=P.a[:, e], E=col[:, None], key=("base", e)))
+            specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=col[:, None], key=("base", e)))
         else:
             a, A1, A2 = signals
-            specs.append(EqSpec(e=e, X=base_design(P, e, A1, A2), y=a[:, e], E=col[:, None]))
+            specs.append(EqSpec(e=e, X=base_design(P, e, A1, A2, a=a[:, e]), y=target(P, e, a=a[:, e]),
+                                E=col[:, None]))
     cv = cross_validate(P, window_stats(P, specs))
     thetas = [cv.theta[s] for s in cv.stats.slices]
     gam = cv.theta[cv.stats.shared]
@@ -216,11 +244,29 @@ def _fit_linear_effect(ctx: Context, effect: str, location: dict, eq_cols: list[
 
 
 def fit_dof_force(ctx: Context, effect: str, i: int) -> CandidateFit:
-    """Coulomb friction or quadratic damping at DOF i (0-based)."""
+    """Quadratic damping at DOF i (0-based)."""
     v = ctx.v[:, i]
-    col = np.sign(v) if effect == "coulomb_friction" else v * np.abs(v)
-    name = MAIN_PARAM[effect]
-    return _fit_linear_effect(ctx, effect, {"dof": i + 1}, [(i, -col / ctx.mass[i])], [name])
+    return _fit_linear_effect(ctx, effect, {"dof": i + 1}, [(i, v * np.abs(v))], [MAIN_PARAM[effect]])
+
+
+def fit_coulomb(ctx: Context, i: int) -> CandidateFit:
+    """Dry friction ``force tanh(v / v_scale)`` at DOF i (0-based), ``v_scale`` on a grid
+    from ``1e-4`` to ``0.3`` times the RMS velocity (the first is a sign; a larger scale is
+    friction that fades in around rest, as a drive's or a regularised model's does, and
+    keeps the velocity noise of a resting axis from flipping a sign)."""
+    P = ctx.P
+    v = ctx.v[:, i]
+    grid = np.log(np.sqrt(np.mean(v**2)) * np.geomspace(1e-4, 0.3, N_GRID))
+
+    def build(lg):
+        col = effect_column(P, i, np.tanh(v / np.exp(lg)), ctx.mass)
+        return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2), y=target(P, i), E=col[:, None], key=("base", i))]
+
+    fit = _fit_grid(ctx, "coulomb_friction", {"dof": i + 1}, build, grid, np.exp, ["v_scale"], ["force"])
+    order = ("force", "v_scale")
+    fit.params = {k: fit.params[k] for k in order}
+    fit.params_std = {k: fit.params_std[k] for k in order}
+    return fit
 
 
 def spring_k(P: Prepared, thetas: list[np.ndarray], eqs: list[int], j: int) -> float:
@@ -247,8 +293,8 @@ def fit_spring_linear(ctx: Context, effect: str, j: int) -> CandidateFit:
         def transform(gam, thetas):
             return np.atleast_1d(gam) / spring_k(P, thetas, sides, j)
 
-    cols = [(e, -s * f / ctx.mass[e]) for e, s in spring_sides(P, j)]
-    return _fit_linear_effect(ctx, effect, {"spring": j}, cols, [MAIN_PARAM[effect]], transform)
+    return _fit_linear_effect(ctx, effect, {"spring": j}, [(e, s * f) for e, s in spring_sides(P, j)],
+                              [MAIN_PARAM[effect]], transform)
 
 
 def _fit_grid(ctx: Context, effect: str, location: dict, build, grid: np.ndarray, to_param,
@@ -302,8 +348,8 @@ def fit_clearance(ctx: Context, j: int) -> CandidateFit:
 
     def build(g):
         f = np.sign(d) * np.maximum(ad - g, 0.0)
-        return [EqSpec(e=e, X=base[e], y=P.a[:, e], E=(-s * f / ctx.mass[e])[:, None], key=("base", e))
-                for e, s in sides]
+        return [EqSpec(e=e, X=base[e], y=target(P, e), E=effect_column(P, e, s * f, ctx.mass)[:, None],
+                       key=("base", e)) for e, s in sides]
 
     return _fit_grid(ctx, "clearance", {"spring": j}, build, grid, lambda g: g, ["gap"], ["stiffness"])
 
@@ -318,7 +364,8 @@ def fit_delay(ctx: Context, i: int) -> CandidateFit:
     grid = np.log(np.geomspace(0.02 * P.dt, hi, N_GRID))
 
     def build(lg):
-        return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2, u=spline(t - np.exp(lg))), y=P.a[:, i], E=None)]
+        u = spline(t - np.exp(lg))
+        return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2, u=u), y=target(P, i, u=u), E=None)]
 
     return _fit_grid(ctx, "input_delay", {"dof": i + 1}, build, grid, np.exp, ["delay"], [])
 
@@ -341,14 +388,15 @@ def fit_bias(ctx: Context, i: int, iterations: int = 4) -> CandidateFit:
         a[:, i] -= bias
         A1[:, i] -= bias * t
         A2[:, i] -= 0.5 * bias * t**2
-        # a_meas = ... + b (sum_j k_j / m_i) t^2/2 in eq. i, - b k_j / m_e t^2/2 in a
-        # neighbour e joined by spring j (constants and lines are per-window terms).
-        own = float(np.sum(thetas[i][2:])) / thetas[i][0]
-        cols = [(i, own * 0.5 * t**2)]
+        # the true x_i is A2_i - b t^2/2: a force -b (sum_j k_j) t^2/2 in eq. i and
+        # +b k_j t^2/2 in a neighbour e joined by spring j (constants and lines are
+        # per-window terms); per unit mass for an unforced equation.
+        m_i = thetas[i][0]
+        forces = [(i, -float(np.sum(thetas[i][2:])) * 0.5 * t**2 / (1.0 if P.forced[i] else m_i))]
         for e, j in coupled(P, i):
             kk = [k for (jj, _), k in zip(spring_columns(P.n, P.boundary)[e], thetas[e][2:]) if jj == j][0]
-            cols.append((e, -kk / thetas[e][0] * 0.5 * t**2))
-        fit = _fit_linear_effect(ctx, "sensor_bias", {"dof": i + 1}, cols, ["bias"], signals=(a, A1, A2))
+            forces.append((e, kk * 0.5 * t**2 / (1.0 if P.forced[e] else thetas[e][0])))
+        fit = _fit_linear_effect(ctx, "sensor_bias", {"dof": i + 1}, forces, ["bias"], signals=(a, A1, A2))
         step = fit.params["bias"]
         for e, th in zip(fit.eqs, fit.thetas):
             thetas[e] = to_physical(P, e, th)
@@ -375,17 +423,17 @@ def fit_lowpass(ctx: Context, i: int) -> CandidateFit:
         fc = np.exp(lg)
         tc = 1.0 / (2 * np.pi * fc)
         specs = []
-        cols = [lowpass(P.u_full[:, i], fc, P.dt)[sl]] if P.forced[i] else []
-        cols.append(-P.A1[:, i])
         need = [o for _, o in cols_i if o >= 0]
         filt = {o: lowpass(P.A2_full[:, o], fc, P.dt)[sl] for o in need}
-        for _, o in cols_i:
-            cols.append(-(P.A2[:, i] - (filt[o] if o >= 0 else 0.0)))
-        specs.append(EqSpec(e=i, X=np.stack(cols, axis=1), y=P.a[:, i], E=None))
+        u_lp = lowpass(P.u_full[:, i], fc, P.dt)[sl] if P.forced[i] else None
+        x = P.A2.copy()
+        for o in need:  # eq. i sees its neighbours through the same low-pass
+            x[:, o] = filt[o]
+        specs.append(EqSpec(e=i, X=base_design(P, i, P.A1, x, u=u_lp), y=target(P, i, u=u_lp), E=None))
         x = P.A2.copy()
         x[:, i] = P.A2[:, i] + tc * P.A1[:, i]
         for e, _ in others:
-            specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, x), y=P.a[:, e], E=None))
+            specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, x), y=target(P, e), E=None))
         return specs
 
     return _fit_grid(ctx, "sensor_lowpass", {"dof": i + 1}, build, grid, np.exp, ["cutoff_hz"], [])
@@ -407,7 +455,9 @@ def all_candidates(P: Prepared) -> list[tuple[str, int]]:
 
 def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
     """Fit one candidate; ``loc`` is a 0-based DOF or a 1-based spring."""
-    if effect in ("coulomb_friction", "quadratic_damping"):
+    if effect == "coulomb_friction":
+        return fit_coulomb(ctx, loc)
+    if effect == "quadratic_damping":
         return fit_dof_force(ctx, effect, loc)
     if effect in ("cubic_stiffness", "parameter_drift"):
         return fit_spring_linear(ctx, effect, loc)
@@ -423,10 +473,11 @@ def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
 
 
 def raw_residual(ctx: Context, fit: CandidateFit) -> np.ndarray:
-    """Undetrended acceleration errors (N, n) of the linear model with the candidate's
-    equations replaced by the candidate's (for state reconstruction and plots)."""
+    """Undetrended equation errors (N, n) of the linear model with the candidate's
+    equations replaced by the candidate's, in each equation's target units (for state
+    reconstruction and plots)."""
     P = ctx.P
-    out = np.stack([P.a[:, e] - base_design(P, e, P.A1, P.A2) @ th for e, th in enumerate(ctx.lin.theta_a)],
+    out = np.stack([target(P, e) - base_design(P, e, P.A1, P.A2) @ th for e, th in enumerate(ctx.lin.theta_a)],
                    axis=1)
     q = fit.cv.stats.shared
     gam = fit.cv.theta[q]

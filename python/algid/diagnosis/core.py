@@ -50,7 +50,8 @@ floor = median PSD over the upper third of the spectrum; the bins more than
 :data:`BAND_DETECT` times above it carry signal; the signal frequency ``f_exc`` is the
 frequency below which :data:`BAND_POWER` of that signal's above-floor power lies
 (maximum over the signals: the band is never narrower than where either the forces or
-the responses carry signal). ``f_hi = min(f_Nyquist, max(BAND_HARMONICS f_exc,
+the responses carry signal; accelerations derived from velocities or displacements are
+left out, their differentiated noise rising with frequency). ``f_hi = min(f_Nyquist, max(BAND_HARMONICS f_exc,
 BAND_MODES f_n,max))`` with ``f_n,max`` the highest natural frequency of the linear chain
 fitted first: the band keeps the harmonics up to the third that polynomial nonlinearities
 (cubic spring, clearance, Coulomb friction, quadratic damping) create from the
@@ -70,6 +71,8 @@ from ..reference import quadrature_weights
 
 #: Quadrature points of the integrals A1, A2 (as the estimator's default).
 QUAD_POINTS = 6
+#: Which signal the forced DOFs' equations are solved for (:func:`target`).
+FORMS = ("acceleration", "force")
 #: Number of interleaved cross-validation folds (fewer if there are fewer windows).
 N_FOLDS = 8
 #: Sub-blocks per window on which withheld errors are also reported (the unit of the
@@ -95,18 +98,28 @@ METRIC = (
 )
 
 
-def window_length(dt: float, f_low_hz: float, T: int) -> int:
-    """Samples per window: half a period of the lowest natural frequency, clipped to
-    [0.1 s, 1 s] and to at most an eighth of the record (at least 8 windows for
-    cross-validation), never fewer than 32 samples, a multiple of :data:`N_SUB`.
+METRIC_FORCE = (
+    "nrms_force_equation_error_in_band: the same withheld in-band equation errors in force units (each "
+    "acceleration-form error times its DOF's fitted mass), RMS over the forced DOFs divided by the RMS of their "
+    "recorded forces: the error measure of drive and friction studies"
+)
+
+
+def window_length(dt: float, f_low_hz: float, T: int, periods: float = 0.5, max_s: float = 1.0) -> int:
+    """Samples per window: ``periods`` (half a) period of the lowest natural frequency,
+    clipped to [0.1 s, ``max_s``] and to at most an eighth of the record (at least 8
+    windows for cross-validation), never fewer than 32 samples, a multiple of
+    :data:`N_SUB`. (A quasi-static record, analysed in the force form, takes one period of
+    its lowest forced frequency and no 1 s cap: nothing there integrates noise, and a
+    window shorter than the motion's period leaves little once its line is removed.)
 
     Short windows keep the random walk of the integrated sensor noise small (its
     displacement error grows like the window length to the power 1.5, and on a window
     of half the lowest period it stays below the white noise of the accelerometer in the
     equation error); a mode of period 2 W still bends visibly within a window, so the
     per-window line removes little of the signal."""
-    w_s = 0.5 / max(f_low_hz, 1e-6)
-    w_s = min(max(w_s, 0.1), 1.0)
+    w_s = periods / max(f_low_hz, 1e-6)
+    w_s = min(max(w_s, 0.1), max_s)
     L = int(round(w_s / dt))
     L = min(L, T // 8)
     L = max(L, 32)
@@ -119,6 +132,8 @@ class Band:
 
     f_hi : upper edge [Hz]; f_exc : signal frequency [Hz] (nan if no signal found);
     f_modes : highest natural frequency used [Hz] (nan if none); nyquist [Hz];
+    f_derived_noise : where derived accelerations sink into their differentiated noise
+    [Hz] (nan for measured accelerations);
     source : the signal that sets f_exc ("force 1", "acceleration 2", ...; "" if none);
     f_signals : f_exc of every signal used (nan: nothing above its floor);
     floors : noise-floor PSD of every signal used [unit^2/Hz].
@@ -131,6 +146,7 @@ class Band:
     source: str
     floors: list
     f_signals: dict = field(default_factory=dict)
+    f_derived_noise: float = float("nan")
 
     @property
     def full(self) -> bool:
@@ -139,6 +155,7 @@ class Band:
     def to_json(self) -> dict:
         return {"band_hz": [0.0, self.f_hi], "f_excitation_hz": self.f_exc,
                 "f_natural_max_hz": self.f_modes, "nyquist_hz": self.nyquist, "source": self.source,
+                "f_derived_noise_hz": self.f_derived_noise,
                 "f_signals_hz": self.f_signals, "noise_floor_psd": self.floors,
                 "rule": f"f_hi = min(Nyquist, max({BAND_HARMONICS:g} f_exc, {BAND_MODES:g} f_n,max)); f_exc: "
                         f"largest over the forces and accelerations of the frequency below which "
@@ -166,16 +183,40 @@ def excitation_frequency(x: np.ndarray, dt: float) -> tuple[float, float]:
     return float(f[min(int(np.searchsorted(c, BAND_POWER)), f.size - 1)]), floor
 
 
-def signal_band(a: np.ndarray, u: np.ndarray, dt: float, natural_hz=()) -> Band:
+def derived_noise_limit(a: np.ndarray, motion: np.ndarray, dt: float, order: int) -> float:
+    """Highest frequency [Hz] at which accelerations differentiated ``order`` times from
+    ``motion`` stand :data:`BAND_DETECT` times above their own noise: the motion's white
+    floor (median PSD of its upper third) times ``(2 pi f)^(2 order)``, the gain of
+    differentiation. Above it the derived accelerations are noise whatever the model."""
+    from scipy.signal import welch
+
+    nper = int(min(a.shape[0], max(256, min(a.shape[0] // 4, round(1.0 / dt)))))
+    f, Sa = welch(a, fs=1.0 / dt, nperseg=nper, axis=0)
+    _, Sm = welch(motion, fs=1.0 / dt, nperseg=nper, axis=0)
+    floor = np.median(Sm[f >= (2.0 / 3.0) * f[-1]], axis=0)
+    noise = floor[None, :] * (2 * np.pi * f[:, None]) ** (2 * order)
+    above = np.any(Sa > BAND_DETECT * noise, axis=1)
+    above[0] = False
+    return float(f[np.nonzero(above)[0].max()]) if above.any() else float(f[1])
+
+
+def signal_band(a: np.ndarray, u: np.ndarray, dt: float, natural_hz=(), derived: tuple | None = None) -> Band:
     """The band ``[0, f_hi]`` in which the recording carries signal (module docstring):
     from the forces of the forced DOFs, the accelerations and the natural frequencies of a
-    first linear fit. Never uses anything but the recording."""
+    first linear fit. Never uses anything but the recording.
+
+    ``derived = (motion, order)``: the accelerations were differentiated ``order`` times
+    from the recorded ``motion`` (velocities or displacements). Their noise then grows
+    like ``f^order``: no flat floor tells it from signal, so the forces (and the modes)
+    set the band, which is cut where the accelerations sink into their differentiated
+    noise (:func:`derived_noise_limit`)."""
     a = np.atleast_2d(np.asarray(a, dtype=float).T).T
     u = np.atleast_2d(np.asarray(u, dtype=float).T).T
     nyq = 0.5 / dt
     forced = np.any(u != 0.0, axis=0)
     cols = {f"force {i + 1}": u[:, i] for i in np.nonzero(forced)[0]}
-    cols.update({f"acceleration {i + 1}": a[:, i] for i in range(a.shape[1])})
+    if derived is None or not cols:
+        cols.update({f"acceleration {i + 1}": a[:, i] for i in range(a.shape[1])})
     res = {name: excitation_frequency(c, dt) for name, c in cols.items()}
     fe = {name: f for name, (f, _) in res.items() if np.isfinite(f)}
     source = max(fe, key=fe.get) if fe else ""
@@ -187,8 +228,13 @@ def signal_band(a: np.ndarray, u: np.ndarray, dt: float, natural_hz=()) -> Band:
         f_hi = nyq
     else:
         f_hi = min(nyq, max(BAND_HARMONICS * f_exc, BAND_MODES * f_modes if fn.size else 0.0))
+    f_noise = float("nan")
+    if derived is not None:
+        f_noise = derived_noise_limit(a, np.atleast_2d(np.asarray(derived[0], dtype=float).T).T, dt, derived[1])
+        f_hi = min(f_hi, max(f_noise, f_exc if np.isfinite(f_exc) else 0.0))
     return Band(f_hi=float(f_hi), f_exc=f_exc, f_modes=f_modes, nyquist=nyq, source=source,
-                floors=[fl for _, fl in res.values()], f_signals={k: f for k, (f, _) in res.items()})
+                floors=[fl for _, fl in res.values()], f_signals={k: f for k, (f, _) in res.items()},
+                f_derived_noise=f_noise)
 
 
 @dataclass
@@ -213,6 +259,11 @@ class Prepared:
         errors are scored on the DFT bins of every window at or below it
         (``band_mask``, (L//2+1,) bool; ``band_fraction``: share of a window's white
         noise power on those bins; ``full_band``: every bin kept).
+    form : "acceleration" or "force": which signal each forced DOF's equation is solved
+        for (:func:`target`); ``y`` (N, n) those targets.
+    fit_band : fit on the band-projected windows too, not only score on them (accelerations
+        differentiated from velocities or displacements carry noise that grows with
+        frequency; out of band it would bias every regressor it enters).
     """
 
     a_full: np.ndarray
@@ -226,6 +277,8 @@ class Prepared:
     boundary: str
     folds: np.ndarray
     band_hz: float | None = None
+    form: str = "acceleration"
+    fit_band: bool = False
     tau: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -239,6 +292,9 @@ class Prepared:
         self.t = self.dt * np.arange(sl.start, sl.stop)
         self.duration = self.dt * self.a_full.shape[0]
         self.forced = np.any(self.u_full != 0.0, axis=0)
+        if self.form not in FORMS:
+            raise ValueError(f"form must be one of {FORMS}, got {self.form!r}")
+        self.y = np.stack([target(self, e) for e in range(self.n)], axis=1)
         fk = np.fft.rfftfreq(self.L, self.dt)
         self.band_mask = np.ones(fk.size, dtype=bool) if self.band_hz is None else fk <= self.band_hz * (1 + 1e-12)
         self.band_mask[0] = True
@@ -306,10 +362,11 @@ def parseval_weights(L: int) -> np.ndarray:
 
 def prepare(a: np.ndarray, u: np.ndarray, dt: float, L: int, boundary: str = "fixed",
             skip: int = 0, nfolds: int = N_FOLDS, A: tuple[np.ndarray, np.ndarray] | None = None,
-            band_hz: float | None = None) -> Prepared:
+            band_hz: float | None = None, form: str = "acceleration", fit_band: bool = False) -> Prepared:
     """Integrate the accelerations (unless ``A = (A1, A2)`` is given) and cut the record
     into windows of ``L`` samples, starting ``skip`` samples in; withheld errors are
-    scored on ``[0, band_hz]`` (the whole band if None)."""
+    scored on ``[0, band_hz]`` (the whole band if None) and, with ``fit_band``, fitted
+    there too; the forced equations are solved for the acceleration or the force (``form``)."""
     a = np.ascontiguousarray(a, dtype=float)
     u = np.ascontiguousarray(u, dtype=float)
     T = a.shape[0]
@@ -320,7 +377,7 @@ def prepare(a: np.ndarray, u: np.ndarray, dt: float, L: int, boundary: str = "fi
     K = min(nfolds, nw)
     folds = np.arange(nw) % K
     return Prepared(a_full=a, u_full=u, A1_full=A1, A2_full=A2, skip=skip, dt=dt, L=L, nw=nw,
-                    boundary=boundary, folds=folds, band_hz=band_hz)
+                    boundary=boundary, folds=folds, band_hz=band_hz, form=form, fit_band=fit_band)
 
 
 def detrend(P: Prepared, x: np.ndarray) -> np.ndarray:
@@ -390,33 +447,74 @@ def param_names(n: int, boundary: str, e: int) -> list[str]:
     return ["m", "c"] + [f"k{j}" for j, _ in spring_columns(n, boundary)[e]]
 
 
+def force_form(P: Prepared, e: int) -> bool:
+    """Is equation ``e`` solved for the force (a forced DOF of a force-form analysis)?"""
+    return P.form == "force" and bool(P.forced[e])
+
+
+def target(P: Prepared, e: int, a: np.ndarray | None = None, u: np.ndarray | None = None) -> np.ndarray:
+    """The target of equation ``e``: the force ``u_e`` [N] in the force form, else the
+    acceleration ``a_e`` [m/s^2]; ``a``, ``u`` (N,) replace the recorded column."""
+    if force_form(P, e):
+        return P.u[:, e] if u is None else u
+    return P.a[:, e] if a is None else a
+
+
 def base_design(P: Prepared, e: int, v: np.ndarray, x: np.ndarray, u: np.ndarray | None = None,
-                ) -> np.ndarray:
-    """Columns of the acceleration equation of DOF ``e`` (target ``a_e``):
-    ``[u_e, -v_e, -(x_e - x_other) ...]`` (the force column only for a forced DOF),
-    parameters ``[1/m, c/m, k_j/m ...]``. ``u`` replaces the force column if given."""
-    cols = [P.u[:, e] if u is None else u] if P.forced[e] else []
-    cols.append(-v[:, e])
+                a: np.ndarray | None = None) -> np.ndarray:
+    """Columns of the linear equation of DOF ``e``.
+
+    Acceleration form (target ``a_e``): ``[u_e, -v_e, -(x_e - x_other) ...]`` (the force
+    column only for a forced DOF), parameters ``[1/m, c/m, k_j/m ...]``. Force form
+    (target ``u_e``, forced DOF): ``[a_e, v_e, x_e - x_other ...]``, parameters
+    ``[m, c, k_j ...]``. ``u``, ``a`` (N,) replace the recorded force or acceleration
+    column."""
+    if force_form(P, e):
+        cols = [P.a[:, e] if a is None else a, v[:, e]]
+        sign = 1.0
+    else:
+        cols = [P.u[:, e] if u is None else u] if P.forced[e] else []
+        cols.append(-v[:, e])
+        sign = -1.0
     for j, other in spring_columns(P.n, P.boundary)[e]:
-        cols.append(-(x[:, e] - (x[:, other] if other >= 0 else 0.0)))
+        cols.append(sign * (x[:, e] - (x[:, other] if other >= 0 else 0.0)))
     return np.stack(cols, axis=1)
 
 
+def effect_column(P: Prepared, e: int, g: np.ndarray, mass: np.ndarray) -> np.ndarray:
+    """Column of an effect force ``g`` [N per unit parameter] in equation ``e``
+    (eq. 1 read as ``m a + c v + k x + g = u``): ``g`` in the force form, ``-g / m_e`` in
+    the acceleration form (``m_e`` from the linear fit), so that its coefficient is the
+    effect's physical parameter either way."""
+    return g if force_form(P, e) else -g / mass[e]
+
+
 def to_physical(P: Prepared, e: int, th: np.ndarray) -> np.ndarray:
-    """``[m, c, k_j ...]`` from the acceleration-form parameters of equation ``e``
-    (``m = 1``, i.e. per unit mass, for an unforced DOF)."""
+    """``[m, c, k_j ...]`` from the parameters of equation ``e`` (``m = 1``, i.e. per
+    unit mass, for an unforced DOF)."""
     th = np.asarray(th, dtype=float)
+    if force_form(P, e):
+        return th.copy()
     if not P.forced[e]:
         return np.concatenate([[1.0], th])
     m = 1.0 / th[0]
     return np.concatenate([[m], th[1:] * m])
 
 
+def to_acceleration_form(P: Prepared, e: int, th: np.ndarray) -> np.ndarray:
+    """The acceleration-form parameters ``[1/m, c/m, k_j/m ...]`` of equation ``e`` (the
+    parameters as they are for an unforced DOF or an acceleration-form analysis)."""
+    th = np.asarray(th, dtype=float)
+    if not force_form(P, e):
+        return th
+    return np.concatenate([[1.0 / th[0]], th[1:] / th[0]])
+
+
 @dataclass
 class EqSpec:
     """One equation of a (possibly augmented) model.
 
-    X : (N, p) own columns; y : (N,) target (acceleration); E : (N, q) columns of the
+    X : (N, p) own columns; y : (N,) target (:func:`target`); E : (N, q) columns of the
     shared effect parameters (None if none); w : weight of the equation.
     """
 
@@ -497,7 +595,7 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
             Zrb = sub(band_filter(P, Zr_w))
             fill(per_sub_band[:, :, k], ix, ir, gxxb, np.matmul(Zxb.swapaxes(-1, -2), Zrb),
                  np.matmul(Zrb.swapaxes(-1, -2), Zrb))
-    return WindowStats(G=per_sub.sum(axis=(1, 2)), slices=slices, shared=shared,
+    return WindowStats(G=(per_sub_band if P.fit_band else per_sub).sum(axis=(1, 2)), slices=slices, shared=shared,
                        eqs=[s.e for s in specs], per_sub=per_sub, per_sub_band=per_sub_band)
 
 

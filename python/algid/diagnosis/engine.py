@@ -25,7 +25,9 @@ from typing import Callable
 import numpy as np
 
 from ..chain import Chain
-from ..recording import Recording, accelerations
+from ..noise import channel
+from ..recording import Recording, accelerations, derivative
+from ..recording import motion as recording_motion
 from .candidates import (
     EFFECTS,
     MAX_DELAY_SAMPLES,
@@ -33,6 +35,7 @@ from .candidates import (
     Context,
     all_candidates,
     fit_candidate,
+    physical,
     raw_residual,
 )
 from .core import (
@@ -44,11 +47,14 @@ from .core import (
     integrals,
     parseval_weights,
     prepare,
+    force_form,
     signal_band,
+    target,
     window_length,
 )
-from .linear import LinearFit, fit_linear, reconstruct_states
+from .linear import LinearFit, fit_linear, force_scale, reconstruct_states
 from .locate import locate, noise_floor
+from .model import ModelVerdict, inertia, model_verdict, physical_uncertainty
 
 #: Threshold on the noise-referenced z score of the withheld error reduction (see
 #: :func:`noise_z`).
@@ -67,6 +73,9 @@ MIN_EXPLAINED = 0.5
 #: A linear gap below this (0.01 % NRMS) is numerical resolution (quadrature, the
 #: integrator of a simulation): reported as ``none`` whatever the candidates say.
 GAP_RESOLUTION = 1e-4
+#: A forced DOF whose inertia force is below this share of its force in the band makes
+#: the analysis solve the forced equations for the force (:func:`_form`).
+QUASI_STATIC = 0.05
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift")
@@ -87,10 +96,12 @@ class Scored:
     rel_reduction: float
     z: float = float("nan")
     noise_param_ok: bool = True
+    physical: bool = True
 
     @property
     def significant(self) -> bool:
-        return bool(self.z >= Z_CRIT and self.rel_reduction >= MIN_REL_REDUCTION and self.noise_param_ok)
+        return bool(self.z >= Z_CRIT and self.rel_reduction >= MIN_REL_REDUCTION and self.noise_param_ok
+                    and self.physical)
 
 
 @dataclass
@@ -150,11 +161,12 @@ def score(P: Prepared, lin: LinearFit, fit: CandidateFit, denom: float) -> Score
 def _assess(P: Prepared, lin: LinearFit, fit: CandidateFit, denom: float, floor: np.ndarray) -> Scored:
     """Score a candidate and test it against noise."""
     s = score(P, lin, fit, denom)
+    s.physical = physical(fit)
     if s.rel_reduction >= MIN_REL_REDUCTION:
         s.z = noise_z(P, lin, fit)
     if fit.effect == "sensor_bias":
         i = fit.location["dof"] - 1
-        s.noise_param_ok = bool(abs(fit.params["bias"]) >= BIAS_NOISE_FACTOR * floor[i] / np.sqrt(P.a.shape[0]))
+        s.noise_param_ok = bool(abs(fit.params["bias"]) >= BIAS_NOISE_FACTOR * floor[i] / np.sqrt(P.y.shape[0]))
     return s
 
 
@@ -185,6 +197,7 @@ def noise_z(P: Prepared, lin: LinearFit, fit: CandidateFit) -> float:
         cols = [spec.X] + ([spec.E] if spec.E is not None and spec.E.shape[1] else [])
         Zc = detrend(P, np.concatenate(cols, axis=1))  # (nw, L, p+q)
         yd = detrend(P, spec.y[:, None])[..., 0]  # (nw, L)
+        yl = detrend(P, target(P, e)[:, None])[..., 0]  # the linear model's target (a delay moves a force target)
         Zl = detrend(P, base_design(P, e, P.A1, P.A2))
         rc = np.empty_like(yd)
         rl = np.empty_like(yd)
@@ -194,7 +207,7 @@ def noise_z(P: Prepared, lin: LinearFit, fit: CandidateFit) -> float:
             th = fit.cv.theta_folds[k]
             coef = np.concatenate([th[sl], th[st.shared]])
             rc[mask] = yd[mask] - Zc[mask] @ coef
-            rl[mask] = yd[mask] - Zl[mask] @ lin.cv.theta_folds[k][lsl]
+            rl[mask] = yl[mask] - Zl[mask] @ lin.cv.theta_folds[k][lsl]
         RC = np.fft.rfft(rc, axis=1)
         RL = np.fft.rfft(rl, axis=1)
         # Parseval weights of the one-sided spectrum (interior bins count twice), zero
@@ -215,6 +228,165 @@ def lowest_frequency_hz(lin: LinearFit, boundary: str) -> float:
     return float(f[f > 0].min()) if np.any(f > 0) else float("nan")
 
 
+@dataclass
+class Setup:
+    """The record prepared for the candidates: windows, band, equation form, linear fit,
+    per-DOF noise floors (target units, full band and in band) and the model verdict."""
+
+    P: Prepared
+    lin: LinearFit
+    band: Band
+    denom: float
+    floor: np.ndarray
+    floor_band: np.ndarray
+    model: ModelVerdict
+    timings: dict
+    measured: tuple | None = None  # (x, v) on the analysed samples when the record gives them
+
+
+def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
+    """The force form when some forced DOF is quasi-static: a first force-form fit puts its
+    inertia force below :data:`QUASI_STATIC` of the force in the band (its acceleration-form
+    equation, solved for an acceleration that carries no information, would be noise)."""
+    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form="force",
+                fit_band=True)
+    lin = fit_linear(P)
+    shares = [d["inertia_share"] for d in inertia(P, lin, physical_uncertainty(P, lin), band.f_hi).values()]
+    return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
+
+
+def _prepare(rec: Recording, boundary: str, progress) -> Setup:
+    """Windows, band and form (module docstring, steps 1-2), linear fit, noise, model."""
+    clock = time.perf_counter()
+    a, u, dt = accelerations(rec), rec.u, float(rec.dt)
+    T = a.shape[0]
+    skip = int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
+    _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: linear fit")
+    A = integrals(a, dt)
+    L0 = window_length(dt, 1.0, T - skip)
+    lin0 = fit_linear(prepare(a, u, dt, L0, boundary, skip, A=A))
+    kind, motion = recording_motion(rec)
+    order = {"acceleration": 0, "velocity": 1, "displacement": 2}[kind]
+    band = signal_band(a, u, dt, natural_frequencies(lin0, boundary), derived=(motion, order) if order else None)
+    form = _form(a, u, dt, L0, boundary, skip, A, band)
+    if form == "force":
+        lows = [channel("u", u[:, i], dt).f_low for i in np.nonzero(np.any(u != 0.0, axis=0))[0]]
+        f_low = min([f for f in lows if np.isfinite(f) and f > 0], default=1.0)
+        L = window_length(dt, f_low, T - skip, periods=1.0, max_s=np.inf)
+    else:
+        f_low = lowest_frequency_hz(lin0, boundary)
+        L = window_length(dt, f_low if np.isfinite(f_low) else 1.0, T - skip)
+    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form=form,
+                fit_band=order > 0)
+    lin = fit_linear(P)
+    floor, floor_band = noise_floors(P, lin, motion if order else None, order)
+    measured = None
+    if kind == "displacement":  # positions and their derivative, in band: no states to reconstruct
+        xb = band_limited(rec.x, dt, band.f_hi)
+        measured = (xb[P.sl], derivative(xb, dt, 1)[P.sl])
+    return Setup(P=P, lin=lin, band=band, denom=float(np.sum(P.y**2)), floor=floor, floor_band=floor_band,
+                 model=model_verdict(P, lin, band.f_hi), timings={"linear": time.perf_counter() - clock},
+                 measured=measured)
+
+
+def band_limited(x: np.ndarray, dt: float, f_hi: float) -> np.ndarray:
+    """Columns of ``x`` without their content above ``f_hi`` (FFT; the line through the
+    first and last samples is kept aside, so the periodic extension does not jump)."""
+    T = x.shape[0]
+    t = np.arange(T)[:, None] / (T - 1)
+    line = x[:1] + t * (x[-1:] - x[:1])
+    X = np.fft.rfft(x - line, axis=0)
+    X[np.fft.rfftfreq(T, dt) > f_hi] = 0.0
+    return line + np.fft.irfft(X, T, axis=0)
+
+
+def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per-DOF noise RMS of the equation errors in each equation's target units, over the
+    full band and in the signal band.
+
+    Measured accelerations: the white floor of the equation errors (:func:`.locate.noise_floor`),
+    its band share ``band_fraction`` in band. Derived accelerations: the motion's white floor
+    (median PSD of its upper third) differentiated ``order`` times, ``floor (2 pi f)^(2 order)``,
+    integrated over the band; a force-form equation adds the force sensor's white floor and
+    counts the acceleration noise times its mass."""
+    floor = noise_floor(P, lin.resid)
+    band = floor * np.sqrt(P.band_fraction)
+    if motion is None and P.form != "force":
+        return floor, band
+    from scipy.signal import welch
+
+    fs = 1.0 / P.dt
+    f_hi = P.band_hz if P.band_hz is not None else 0.5 * fs
+    f, S = welch(np.column_stack([P.u_full] + ([motion] if motion is not None else [])), fs=fs,
+                 nperseg=min(P.L, 1024), axis=0)
+    white = np.median(S[f >= (2.0 / 3.0) * f[-1]], axis=0)
+    n = P.n
+    acc_band = np.sqrt(white[n:] * (2 * np.pi) ** (2 * order) * f_hi ** (2 * order + 1) / (2 * order + 1)) \
+        if motion is not None else band
+    for e in range(n):
+        if motion is not None and not force_form(P, e):
+            band[e] = acc_band[e]
+        elif force_form(P, e):
+            m = float(lin.theta[e][0])
+            band[e] = np.sqrt(white[e] * f_hi + (m * acc_band[e]) ** 2)
+    return floor, band
+
+
+def _candidates(st: Setup, effects, progress) -> list[Scored]:
+    """Fit and score every candidate at every location (module docstring, step 3)."""
+    P, lin = st.P, st.lin
+    ctx = Context(P=P, lin=lin, x=lin.x, v=lin.v) if st.measured is None else \
+        Context(P=P, lin=lin, x=st.measured[0], v=st.measured[1])
+    todo = [(e, loc) for e, loc in all_candidates(P) if e in effects]
+    scored: list[Scored] = []
+    for k, (eff, loc) in enumerate(todo):
+        where = f"spring {loc}" if eff in SPRING_EFFECTS else f"DOF {loc + 1}"
+        _progress(progress, f"candidate {k + 1}/{len(todo)}: {eff} at {where}")
+        try:
+            fit = fit_candidate(ctx, eff, loc)
+        except (np.linalg.LinAlgError, ValueError, FloatingPointError):
+            continue
+        scored.append(_assess(P, lin, fit, st.denom, st.floor))
+    return sorted(_refit_leaders(st, ctx, sorted(scored, key=lambda s: s.gap_after)), key=lambda s: s.gap_after)
+
+
+def _refit_leaders(st: Setup, ctx: Context, scored: list[Scored]) -> list[Scored]:
+    """Refit the leading state-dependent candidates with states reconstructed under them
+    (a strong effect biases the states reconstructed by the linear model), repeated while
+    the withheld gap keeps shrinking."""
+    P, lin = st.P, st.lin
+    if st.measured is not None:  # the states are measured, not reconstructed
+        return scored
+    for idx in range(min(3, len(scored))):
+        s = scored[idx]
+        if s.fit.effect not in STATE_EFFECTS or not s.significant:
+            continue
+        loc = s.fit.location.get("dof", s.fit.location.get("spring"))
+        loc = loc - 1 if "dof" in s.fit.location else loc
+        for _ in range(STATE_REFITS):
+            thetas = list(lin.theta_a)
+            for e, th in zip(s.fit.eqs, s.fit.thetas):
+                thetas[e] = th
+            x, v = reconstruct_states(P, thetas, raw_residual(ctx, s.fit))
+            refit = _assess(P, lin, fit_candidate(Context(P=P, lin=lin, x=x, v=v), s.fit.effect, loc), st.denom,
+                            st.floor)
+            if refit.gap_after >= 0.999 * s.gap_after:
+                break
+            s = refit
+        scored[idx] = s
+    return scored
+
+
+def force_gap(P: Prepared, lin: LinearFit, test_sse_eq: np.ndarray) -> float:
+    """The force-domain gap: RMS of the withheld force-equation errors over the RMS of the
+    forces, from per-equation withheld squared errors in target units (forced DOFs)."""
+    scale = force_scale(P, lin.theta)
+    forced = P.forced
+    num = float(np.sum(test_sse_eq[..., forced] * scale[forced] ** 2))
+    den = float(np.sum(P.u[:, forced] ** 2))
+    return float(np.sqrt(num / den)) if den > 0 else float("nan")
+
+
 def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], None] | None = None,
              effects: tuple[str, ...] = EFFECTS) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
@@ -222,7 +394,7 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     Parameters
     ----------
     rec : Recording
-        Forces [N] and accelerations [m/s^2] (or displacements [m]) of every DOF.
+        Forces [N] and accelerations [m/s^2] (or velocities, or displacements) of every DOF.
     boundary : {"fixed", "free"}
         Right end of the chain.
     progress : callable or None
@@ -236,98 +408,67 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     clock = time.perf_counter()
-    timings = {}
-    a = accelerations(rec)
-    u = rec.u
-    dt = float(rec.dt)
-    T = a.shape[0]
-    skip = int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
-    _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: linear fit")
-    # Window length from the lowest natural frequency of a first fit on 0.5 s windows.
-    A = integrals(a, dt)
-    L0 = window_length(dt, 1.0, T - skip)
-    lin0 = fit_linear(prepare(a, u, dt, L0, boundary, skip, A=A))
-    f_low = lowest_frequency_hz(lin0, boundary)
-    L = window_length(dt, f_low if np.isfinite(f_low) else 1.0, T - skip)
-    band = signal_band(a, u, dt, natural_frequencies(lin0, boundary))
-    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi)
-    lin = fit_linear(P)
-    timings["linear"] = time.perf_counter() - clock
-    denom = float(np.sum(P.a**2))
+    st = _prepare(rec, boundary, progress)
+    P, lin, denom = st.P, st.lin, st.denom
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
     gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))
-
-    ctx = Context(P=P, lin=lin, x=lin.x, v=lin.v)
-    floor = noise_floor(P, lin.resid)  # (n,) white sensor-noise RMS per DOF [m/s^2], full band
-    todo = [(e, loc) for e, loc in all_candidates(P) if e in effects]
-    scored: list[Scored] = []
-    for k, (eff, loc) in enumerate(todo):
-        where = f"spring {loc}" if eff in SPRING_EFFECTS else f"DOF {loc + 1}"
-        _progress(progress, f"candidate {k + 1}/{len(todo)}: {eff} at {where}")
-        try:
-            fit = fit_candidate(ctx, eff, loc)
-        except (np.linalg.LinAlgError, ValueError, FloatingPointError):
-            continue
-        scored.append(_assess(P, lin, fit, denom, floor))
-    timings["candidates"] = time.perf_counter() - clock - timings["linear"]
-
-    # Refit the leading state-dependent candidates with states reconstructed under them
-    # (a strong effect biases the states reconstructed by the linear model), repeated
-    # while the withheld gap keeps shrinking.
-    scored.sort(key=lambda s: s.gap_after)
-    for idx in range(min(3, len(scored))):
-        s = scored[idx]
-        if s.fit.effect not in STATE_EFFECTS or not s.significant:
-            continue
-        loc = s.fit.location.get("dof", s.fit.location.get("spring"))
-        loc = loc - 1 if "dof" in s.fit.location else loc
-        for _ in range(STATE_REFITS):
-            raw = raw_residual(ctx, s.fit)
-            thetas = list(lin.theta_a)
-            for e, th in zip(s.fit.eqs, s.fit.thetas):
-                thetas[e] = th
-            x, v = reconstruct_states(P, thetas, raw)
-            refit = _assess(P, lin, fit_candidate(Context(P=P, lin=lin, x=x, v=v), s.fit.effect, loc), denom, floor)
-            if refit.gap_after >= 0.999 * s.gap_after:
-                break
-            s = refit
-        scored[idx] = s
-    scored.sort(key=lambda s: s.gap_after)
+    scored = _candidates(st, effects, progress)
+    st.timings["candidates"] = time.perf_counter() - clock - st.timings["linear"]
 
     _progress(progress, "locating the gap")
     natural = natural_frequencies(lin, boundary)
-    where = locate(P, lin, natural, floor)
-    # In-band floor: the white noise's share of the band bins (P.band_fraction).
-    floor_rel_full = float(np.sqrt(sum(p["noise_floor_fullband"] ** 2 * np.sum(P.a[:, p["dof"] - 1] ** 2)
-                                       for p in where["per_dof"]) / denom))
-    floor_rel = floor_rel_full * np.sqrt(P.band_fraction)
+    where = locate(P, lin, natural, st.floor)
+    N = P.y.shape[0]
+    floor_rel_full = float(np.sqrt(np.sum(st.floor**2) * N / denom))
+    floor_rel = float(np.sqrt(np.sum(st.floor_band**2) * N / denom))
     best = next((s for s in scored if s.significant), None)
     if gap_before < GAP_RESOLUTION:
         best = None
     floor_rel = max(floor_rel, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
-    excess = gap_before**2 - floor_rel**2
-    gap_after_full = gap_before_full
-    if best is None:
-        effect, location, params, std, gap_after = "none", None, {}, {}, gap_before
-        explained = 0.0
-        if gap_before > UNKNOWN_FLOOR_RATIO * floor_rel:
-            effect = "unknown"
-    else:
-        effect, location = best.fit.effect, best.fit.location
-        params, std, gap_after = best.fit.params, best.fit.params_std, best.gap_after
-        gap_after_full = best.gap_after_full
-        explained = float((gap_before**2 - gap_after**2) / excess) if excess > 0 else 1.0
-        if gap_after > UNKNOWN_FLOOR_RATIO * floor_rel and explained < MIN_EXPLAINED:
-            effect, location, params, std, gap_after = "unknown", None, {}, {}, gap_before
-            gap_after_full = gap_before_full
-            best = None
-    timings["total"] = time.perf_counter() - clock
-    return Diagnosis(effect=effect, location=location, params=params, params_std=std,
+    verdict = _verdict(gap_before, gap_before_full, floor_rel, best, st.model)
+    effect, best, explained = verdict["effect"], verdict["best"], verdict["explained"]
+    gap_after = best.gap_after if best is not None else gap_before
+    gap_after_full = best.gap_after_full if best is not None else gap_before_full
+    lin_sse = lin.cv.test_sse_eq.sum(axis=0)
+    force = {"gap_before": force_gap(P, lin, lin_sse)}
+    force["gap_after"] = force["gap_before"] if best is None else force_gap(
+        P, lin, _candidate_sse_eq(lin, best))
+    st.timings["total"] = time.perf_counter() - clock
+    return Diagnosis(effect=effect, location=best.fit.location if best else None,
+                     params=best.fit.params if best else {}, params_std=best.fit.params_std if best else {},
                      gap_before=gap_before, gap_after=gap_after, gap_before_full=gap_before_full,
-                     gap_after_full=gap_after_full, band=band, ranking=scored, P=P, lin=lin,
-                     best=best, timings=timings, where=where,
+                     gap_after_full=gap_after_full, band=st.band, ranking=scored, P=P, lin=lin,
+                     best=best, timings=st.timings, where=where,
                      extra={"natural_hz": natural.tolist(), "noise_floor": floor_rel,
-                            "noise_floor_full": floor_rel_full, "explained_excess": explained, "ctx": ctx})
+                            "noise_floor_full": floor_rel_full, "explained_excess": explained,
+                            "ctx": Context(P=P, lin=lin, x=lin.x, v=lin.v), "model": st.model, "force": force,
+                            "form": P.form})
+
+
+def _candidate_sse_eq(lin: LinearFit, s: Scored) -> np.ndarray:
+    """(n,) withheld in-band squared error per equation with the candidate's equations."""
+    out = lin.cv.test_sse_eq.sum(axis=0).copy()
+    cand = s.fit.cv.test_sub.sum(axis=(0, 1))  # (E,) over the candidate's equations
+    for k, e in enumerate(s.fit.eqs):
+        out[e] = cand[k]
+    return out
+
+
+def _verdict(gap_before: float, gap_before_full: float, floor_rel: float, best: Scored | None,
+             model: ModelVerdict) -> dict:
+    """Effect verdict (module docstring, step 4): the best significant candidate unless it
+    leaves most of a large gap unexplained (``unknown``); ``none`` only when nothing is
+    beyond noise, the gap is at the noise floor, the linear fit is admissible and the record
+    has no more modes than the chain (:mod:`.model`); else ``unknown``."""
+    excess = gap_before**2 - floor_rel**2
+    if best is None:
+        at_floor = gap_before <= UNKNOWN_FLOOR_RATIO * floor_rel
+        fits = model.admissible and model.verdict != "more_modes_than_dof"
+        return {"effect": "none" if at_floor and fits else "unknown", "best": None, "explained": 0.0}
+    explained = float((gap_before**2 - best.gap_after**2) / excess) if excess > 0 else 1.0
+    if best.gap_after > UNKNOWN_FLOOR_RATIO * floor_rel and explained < MIN_EXPLAINED:
+        return {"effect": "unknown", "best": None, "explained": explained}
+    return {"effect": best.fit.effect, "best": best, "explained": explained}
 
 
 def natural_frequencies(lin: LinearFit, boundary: str) -> np.ndarray:

@@ -12,10 +12,12 @@ from .core import (
     Prepared,
     base_design,
     cross_validate,
+    force_form,
     detrend,
     param_names,
     solve_gram,
     spring_columns,
+    target,
     to_physical,
     window_lines,
     window_stats,
@@ -28,14 +30,17 @@ class LinearFit:
 
     Attributes
     ----------
-    theta_a : list of (p_e,) acceleration-form parameters ``[1/m, c/m, k_j/m ...]``.
+    theta_a : list of (p_e,) parameters of each equation as fitted (acceleration form
+        ``[1/m, c/m, k_j/m ...]``, or ``[m, c, k_j ...]`` for a force-form equation).
     theta : list of physical ``[m, c, k_j ...]`` per DOF equation (per unit mass,
         ``m = 1``, for an unforced DOF).
     names : parameter names per equation (``m, c, k<j>``).
     forced : (n,) which DOFs carry a force.
     cv : cross-validated stacked fit (all equations, acceleration units).
     x, v : (N, n) reconstructed displacements [m] and velocities [m/s].
-    resid : (N, n) in-sample detrended equation errors [m/s^2].
+    resid : (N, n) in-sample detrended equation errors in the units of each equation's
+        target (:func:`.core.target`: m/s^2, or N for a force-form equation).
+    resid_force : the same in force units [N] (per unit mass for an unforced DOF).
     """
 
     theta_a: list[np.ndarray]
@@ -46,6 +51,7 @@ class LinearFit:
     x: np.ndarray
     v: np.ndarray
     resid: np.ndarray
+    resid_force: np.ndarray = None
 
     @property
     def mass(self) -> np.ndarray:
@@ -74,12 +80,14 @@ class LinearFit:
 
 def linear_specs(P: Prepared) -> list[EqSpec]:
     """One :class:`EqSpec` per DOF: the acceleration equation on the raw integrals."""
-    return [EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=P.a[:, e], E=None, key=("base", e))
+    return [EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=None, key=("base", e))
             for e in range(P.n)]
 
 
 def stiffness_rows(P: Prepared, theta_a: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Row-wise ``M^-1 K`` and ``M^-1 C`` (each row from its own equation)."""
+    """Row-wise ``K`` and ``C`` in each equation's own units (``M^-1 K``, ``M^-1 C`` for an
+    acceleration-form equation, ``K``, ``C`` for a force-form one), each row from its own
+    equation: the parameters after the first (1/m or m) of a forced equation."""
     n = P.n
     K = np.zeros((n, n))
     C = np.zeros((n, n))
@@ -96,7 +104,8 @@ def stiffness_rows(P: Prepared, theta_a: list[np.ndarray]) -> tuple[np.ndarray, 
 def reconstruct_states(P: Prepared, theta_a: list[np.ndarray], raw_resid: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray]:
     """Velocities and displacements from the integrals and the per-window lines of the
-    raw equation errors.
+    raw equation errors (in each equation's target units, like the rows of
+    :func:`stiffness_rows`).
 
     On window w, ``v = A1 + p`` and ``x = A2 + q + p tau``; substituted in eq. 1 the
     unknown constants leave ``-(C p + K q + K p tau)`` (row-scaled by ``M^-1``) in the raw
@@ -104,7 +113,9 @@ def reconstruct_states(P: Prepared, theta_a: list[np.ndarray], raw_resid: np.nda
     ``p = -K^-1 beta`` and ``q = -K^-1 (alpha + C p)``.
     """
     K, C = stiffness_rows(P, theta_a)
-    alpha, beta = window_lines(P, raw_resid)  # (nw, n)
+    # a force-form error is u - (m a + c v + k x): the constants enter with the other sign
+    sign = np.array([1.0 if force_form(P, e) else -1.0 for e in range(P.n)])
+    alpha, beta = window_lines(P, -sign[None, :] * raw_resid)  # (nw, n)
     try:
         p = -np.linalg.solve(K, beta.T).T
         q = -np.linalg.solve(K, (alpha + p @ C.T).T).T
@@ -124,9 +135,18 @@ def fit_linear(P: Prepared) -> LinearFit:
     theta_a = [cv.theta[s] for s in cv.stats.slices]
     raw = np.stack([s.y - s.X @ th for s, th in zip(specs, theta_a)], axis=1)
     x, v = reconstruct_states(P, theta_a, raw)
-    return LinearFit(theta_a=theta_a, theta=[to_physical(P, e, th) for e, th in enumerate(theta_a)],
-                     names=[param_names(P.n, P.boundary, e) for e in range(P.n)], forced=P.forced.copy(),
-                     cv=cv, x=x, v=v, resid=detrend(P, raw).reshape(raw.shape))
+    theta = [to_physical(P, e, th) for e, th in enumerate(theta_a)]
+    resid = detrend(P, raw).reshape(raw.shape)
+    return LinearFit(theta_a=theta_a, theta=theta, names=[param_names(P.n, P.boundary, e) for e in range(P.n)],
+                     forced=P.forced.copy(), cv=cv, x=x, v=v, resid=resid,
+                     resid_force=resid * force_scale(P, theta)[None, :])
+
+
+def force_scale(P: Prepared, theta: list[np.ndarray]) -> np.ndarray:
+    """(n,) factor from each equation's target units to force units: its mass for an
+    acceleration-form forced equation, 1 for a force-form one (and for an unforced DOF,
+    whose equation is per unit mass)."""
+    return np.array([th[0] if P.forced[e] and P.form != "force" else 1.0 for e, th in enumerate(theta)])
 
 
 def per_window_fits(P: Prepared, fit: LinearFit) -> list[np.ndarray]:

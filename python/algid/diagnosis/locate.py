@@ -46,8 +46,8 @@ def binned_r2(z: np.ndarray, r: np.ndarray, bins: int = N_BINS) -> float:
 def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarray | None = None) -> dict:
     """Location indicators (JSON-ready) of the linear model's gap."""
     n = P.n
-    resid = lin.resid  # (N, n) acceleration units
-    a_rms = np.sqrt(np.mean(P.a**2, axis=0))
+    resid = lin.resid  # (N, n) each equation's target units
+    a_rms = np.sqrt(np.mean(P.y**2, axis=0))
     eq_sse = lin.cv.test_sse_eq.sum(axis=0)  # withheld, in-band, acceleration units^2
     eq_full = lin.cv.test_sse_eq_full.sum(axis=0)  # withheld, full band
     floor = noise_floor(P, resid) if floor is None else floor
@@ -63,7 +63,7 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
             "noise_floor_fullband": float(floor[i] / a_rms[i]),
         })
     # Time: withheld gap per window.
-    a_w = (P.windows(P.a) ** 2).sum(axis=(1, 2))
+    a_w = (P.windows(P.y) ** 2).sum(axis=(1, 2))
     gap_w = np.sqrt(lin.cv.test_sse / a_w)
     t_mid = P.t[0] + P.dt * P.L * (np.arange(P.nw) + 0.5)
     slope = np.polyfit(t_mid - t_mid.mean(), gap_w, 1)[0] if P.nw > 2 else 0.0
@@ -91,7 +91,7 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
     freq_info["excess_share"] = float(excess.sum() / max(Ssum.sum(), 1e-300))
     freq_info["natural_frequencies_hz"] = [float(x) for x in natural_hz]
     # Amplitude: restoring-force curves per spring, damping-force curves per mass.
-    force_resid = resid * lin.mass[None, :]
+    force_resid = lin.resid_force
     amp_springs = []
     for j in springs(n, P.boundary):
         d = deformation(P, lin.x, j)

@@ -7,9 +7,9 @@ import math
 import numpy as np
 
 from .candidates import MAIN_PARAM
-from .core import METRIC
+from .core import METRIC, METRIC_FORCE
 
-UNITS = {"force": "N", "c2": "N s^2/m^2", "k3": "N/m^3", "gap": "m", "stiffness": "N/m", "delay": "s",
+UNITS = {"force": "N", "v_scale": "m/s", "c2": "N s^2/m^2", "k3": "N/m^3", "gap": "m", "stiffness": "N/m", "delay": "s",
          "bias": "m/s^2", "cutoff_hz": "Hz", "rel_change": "-"}
 
 
@@ -39,7 +39,7 @@ def to_json(d) -> dict:
                         "gap_after": s.gap_after, "gap_after_fullband": s.gap_after_full,
                         "params_std": s.fit.params_std,
                         "z_noise": s.z, "t_stat": s.t_stat, "rel_reduction": s.rel_reduction,
-                        "significant": s.significant})
+                        "physical": s.physical, "significant": s.significant})
     lin = d.lin
     out = {
         "effect": d.effect,
@@ -50,6 +50,11 @@ def to_json(d) -> dict:
         "metric": METRIC,
         "gap_before_fullband": d.gap_before_full,
         "gap_after_fullband": d.gap_after_full,
+        "gap_before_force": d.extra.get("force", {}).get("gap_before"),
+        "gap_after_force": d.extra.get("force", {}).get("gap_after"),
+        "metric_force": METRIC_FORCE,
+        "model": d.extra["model"].to_json() if "model" in d.extra else None,
+        "equation_form": d.extra.get("form", "acceleration"),
         "band": d.band.to_json() | {"window_bins_kept": int(d.P.band_mask.sum()),
                                     "window_bins": int(d.P.band_mask.size),
                                     "white_noise_fraction": d.P.band_fraction},
@@ -108,6 +113,12 @@ def to_text(d, source: str = "") -> str:
     nat = d.extra.get("natural_hz", [])
     if nat:
         L.append("  natural frequencies [Hz]: " + ", ".join(f"{f:.3g}" for f in nat))
+    model = d.extra.get("model")
+    if model is not None:
+        L.append(f"  model: {model.verdict}" + (" (the linear chain is a model of the record)"
+                                               if model.verdict == "chain" else ""))
+        for r in model.reasons:
+            L.append(f"    {r}")
     L.append("")
     shrink = d.gap_before / d.gap_after if d.gap_after > 0 else float("inf")
     b = d.band
@@ -118,6 +129,10 @@ def to_text(d, source: str = "") -> str:
     L.append(f"  band: signal up to {exc} ({b.source}){modes}; "
              f"{P.band_fraction:.0%} of the white sensor noise")
     L.append(f"  linear model        {d.gap_before:.4g}  [{d.gap_before_full:.4g}]")
+    fg = d.extra.get("force", {})
+    if fg.get("gap_before") is not None and np.isfinite(fg["gap_before"]):
+        L.append(f"  force-domain gap    {fg['gap_before']:.4g} -> {fg['gap_after']:.4g} "
+                 "(RMS force-equation error / RMS force, withheld, in band)")
     nf = d.extra.get("noise_floor")
     if nf is not None:
         L.append(f"  sensor-noise floor  {nf:.4g}  [{d.extra.get('noise_floor_full', float('nan')):.4g}]")

@@ -81,18 +81,19 @@ def fig_residuals_spectrum(d):
     P = d.P
     before, after = d.residuals()
     fs = 1.0 / P.dt
-    nper = min(4 * P.L, 4096, P.a.shape[0])
-    f, Sa = welch(P.a, fs=fs, nperseg=nper, axis=0)
+    nper = min(4 * P.L, 4096, P.y.shape[0])
+    f, Sa = welch(P.y, fs=fs, nperseg=nper, axis=0)
     _, Sb = welch(before, fs=fs, nperseg=nper, axis=0)
     _, Sf = welch(after, fs=fs, nperseg=nper, axis=0)
     n = P.n
     fig, axes = plt.subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
     for i, ax in enumerate(axes[:, 0]):
-        ax.loglog(f[1:], Sa[1:, i], color=C_MEAS, lw=0.8, label="measured acceleration")
+        ax.loglog(f[1:], Sa[1:, i], color=C_MEAS, lw=0.8,
+                  label="measured force" if P.form == "force" and P.forced[i] else "measured acceleration")
         ax.loglog(f[1:], Sb[1:, i], color=C_BEFORE, lw=0.8, label="error, linear model")
         if d.best is not None:
             ax.loglog(f[1:], Sf[1:, i], color=C_AFTER, lw=0.8, label="error, " + _label(d))
-        floor = d.where["per_dof"][i]["noise_floor_fullband"] * np.sqrt(np.mean(P.a[:, i] ** 2))
+        floor = d.where["per_dof"][i]["noise_floor_fullband"] * np.sqrt(np.mean(P.y[:, i] ** 2))
         ax.axhline(floor**2 / (fs / 2), color="k", ls="--", lw=0.8, label="sensor-noise floor")
         ax.axvspan(f[1], d.band.f_hi, color="#f4d03f", alpha=0.18, lw=0,
                    label=f"signal band 0-{d.band.f_hi:.3g} Hz (gap scored here)" if i == 0 else None)
@@ -149,7 +150,7 @@ def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: s
 
 def fig_restoring_force(d):
     P, lin = d.P, d.lin
-    force_resid = lin.resid * lin.mass[None, :]
+    force_resid = lin.resid_force
     expl = {s["spring"]: s["explained"] for s in d.where["amplitude"]["springs"]}
     kfit = lin.stiffness()
     items = []
@@ -166,7 +167,7 @@ def fig_restoring_force(d):
 
 def fig_damping_force(d):
     P, lin = d.P, d.lin
-    force_resid = lin.resid * lin.mass[None, :]
+    force_resid = lin.resid_force
     expl = {s["dof"]: s["explained"] for s in d.where["amplitude"]["masses"]}
     c = lin.damping()
     items = []

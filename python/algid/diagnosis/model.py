@@ -1,0 +1,150 @@
+"""Is the linear chain a model of the record at all? The ``model`` verdict of ``algid diagnose``.
+
+An effect ranking only means something when eq. 1 is the right skeleton: before asking
+which unmodelled effect closes the gap, the diagnosis asks three questions of the
+recording and of the linear fit, and reports the first that fails with its evidence:
+
+1. ``inertia_not_identifiable``: a forced DOF whose inertia the record does not determine:
+   the inertia force ``|m| rms(a)`` is below :data:`INERTIA_SHARE` of the force in the
+   signal band (a quasi-static, displacement-driven device), or the mass is not above zero
+   by three jackknife sigma.
+2. ``more_modes_than_dof``: a drive-point frequency response (force to acceleration,
+   Welch H1) with more resonances in the signal band than the chain has DOF: peaks of
+   ``|H|`` standing :data:`PEAK_PROMINENCE` times above their surroundings, with coherence
+   above :data:`PEAK_COHERENCE` (a structure measured at fewer points than it has modes).
+3. ``not_a_chain``: the linear fit is not physical: a mass, a damping or a spring below
+   zero by more than three jackknife sigma (a mass that is not positive within that is
+   question 1's).
+
+Otherwise ``chain``. ``admissible`` (question 3 alone) is reported too; the diagnosis
+never says ``none`` (nothing to explain) unless the fit is admissible and the record has
+no more modes than the chain.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .core import Prepared, jackknife_std, to_physical
+from .linear import LinearFit
+
+MODEL_VERDICTS = ("chain", "inertia_not_identifiable", "more_modes_than_dof", "not_a_chain")
+#: Inertia force over force, in the band, below which a DOF's mass is not determined.
+INERTIA_SHARE = 0.02
+#: A resonance peak stands this many times above the lower of its two flanking minima.
+PEAK_PROMINENCE = 3.0
+#: Coherence of force and acceleration at a resonance peak that is counted.
+PEAK_COHERENCE = 0.8
+
+
+@dataclass
+class ModelVerdict:
+    """``verdict`` (one of :data:`MODEL_VERDICTS`), one line per finding in ``reasons``,
+    and the ``evidence`` behind each question."""
+
+    verdict: str
+    reasons: list = field(default_factory=list)
+    admissible: bool = True
+    evidence: dict = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        return {"verdict": self.verdict, "admissible": self.admissible, "reasons": self.reasons,
+                "evidence": self.evidence}
+
+
+def physical_uncertainty(P: Prepared, lin: LinearFit) -> list[np.ndarray]:
+    """Jackknife standard deviation of every equation's physical ``[m, c, k_j ...]`` over
+    the cross-validation folds."""
+    out = []
+    for e, sl in enumerate(lin.cv.stats.slices):
+        folds = np.array([to_physical(P, e, th[sl]) for th in lin.cv.theta_folds])
+        out.append(jackknife_std(folds))
+    return out
+
+
+def band_rms(x: np.ndarray, dt: float, f_hi: float) -> np.ndarray:
+    """RMS of the columns of ``x`` in ``(0, f_hi]`` (FFT, the mean removed)."""
+    X = np.fft.rfft(x - x.mean(axis=0), axis=0)
+    f = np.fft.rfftfreq(x.shape[0], dt)
+    X[f > f_hi] = 0.0
+    return np.sqrt(np.mean(np.fft.irfft(X, x.shape[0], axis=0) ** 2, axis=0))
+
+
+def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> dict:
+    """Inertia share and mass significance of every forced DOF (question 1)."""
+    a_rms = band_rms(P.a, P.dt, f_hi)
+    u_rms = band_rms(P.u, P.dt, f_hi)
+    out = {}
+    for e in np.nonzero(P.forced)[0]:
+        m, s = float(lin.theta[e][0]), float(sd[e][0])
+        share = abs(m) * a_rms[e] / u_rms[e] if u_rms[e] > 0 else float("inf")
+        out[int(e) + 1] = {"mass": m, "mass_sigma": s, "inertia_share": float(share),
+                           "determined": bool(share >= INERTIA_SHARE and m > 3 * s)}
+    return out
+
+
+def resonances(P: Prepared, f_hi: float) -> dict:
+    """Resonance peaks of every forced DOF's drive-point H1 in the band (question 2)."""
+    from scipy.signal import csd, find_peaks, welch
+
+    fs = 1.0 / P.dt
+    nper = int(min(P.a.shape[0] // 4, max(256, 4 * P.L)))
+    out = {}
+    for e in np.nonzero(P.forced)[0]:
+        f, Puu = welch(P.u[:, e], fs=fs, nperseg=nper)
+        _, Paa = welch(P.a[:, e], fs=fs, nperseg=nper)
+        _, Pua = csd(P.u[:, e], P.a[:, e], fs=fs, nperseg=nper)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            H = np.abs(Pua) / Puu
+            coh = np.abs(Pua) ** 2 / (Puu * Paa)
+        keep = (f > 2 * f[1]) & (f <= f_hi) & np.isfinite(H) & (H > 0)
+        logH = np.where(keep, np.log(np.where(H > 0, H, 1.0)), -np.inf)
+        idx, props = find_peaks(logH, prominence=np.log(PEAK_PROMINENCE))
+        peaks = [float(f[i]) for i in idx if keep[i] and coh[i] >= PEAK_COHERENCE]
+        out[int(e) + 1] = {"peaks_hz": peaks, "count": len(peaks)}
+    return out
+
+
+def admissibility(P: Prepared, lin: LinearFit, sd: list[np.ndarray]) -> list[str]:
+    """Physically impossible parameters of the linear fit (question 3), one line each."""
+    bad = []
+    for e in range(P.n):
+        th, s = lin.theta[e], sd[e]
+        if P.forced[e] and th[0] < -3 * s[0]:
+            bad.append(f"DOF {e + 1}: mass {th[0]:.4g} +- {s[0]:.2g} is negative")
+        for name, val, sg in zip(lin.names[e][1:], th[1:], s[1:]):
+            if val < -3 * sg:
+                what = "damping" if name == "c" else f"spring {name[1:]}"
+                bad.append(f"DOF {e + 1}: {what} {val:.4g} +- {sg:.2g} is negative")
+    return bad
+
+
+def model_verdict(P: Prepared, lin: LinearFit, f_hi: float) -> ModelVerdict:
+    """The three questions of the module docstring, in order."""
+    sd = physical_uncertainty(P, lin)
+    ine = inertia(P, lin, sd, f_hi)
+    res = resonances(P, f_hi)
+    bad = admissibility(P, lin, sd)
+    reasons = []
+    for dof, d in ine.items():
+        if not d["determined"]:
+            reasons.append(f"DOF {dof}: inertia not identifiable (inertia force {100 * d['inertia_share']:.2g} % of "
+                           f"the force in the band, mass {d['mass']:.4g} +- {d['mass_sigma']:.2g})")
+    many = {dof: r for dof, r in res.items() if r["count"] > P.n}
+    for dof, r in many.items():
+        reasons.append(f"DOF {dof}: {r['count']} resonances in the band ("
+                       + ", ".join(f"{f:.3g}" for f in r["peaks_hz"]) + f" Hz) for a chain of {P.n} DOF")
+    reasons += bad
+    if any(not d["determined"] for d in ine.values()):
+        verdict = "inertia_not_identifiable"
+    elif many:
+        verdict = "more_modes_than_dof"
+    elif bad:
+        verdict = "not_a_chain"
+    else:
+        verdict = "chain"
+    evidence = {"inertia": ine, "resonances": res, "inadmissible": bad,
+                "parameters_sigma": [s.tolist() for s in sd]}
+    return ModelVerdict(verdict=verdict, reasons=reasons, admissible=not bad, evidence=evidence)
