@@ -41,13 +41,21 @@ def rhs_reference(chain: Chain, force, effects=(), v_eps=None, duration=1.0):
             if e.name == "coulomb_friction":
                 i = e.location["dof"] - 1
                 f[i] -= e.params["force"] * np.tanh(v[i] / v_eps[i + 1])
+            elif e.name == "stribeck_friction":
+                i = e.location["dof"] - 1
+                p = e.params
+                level = p["force"] + (p["static"] - p["force"]) * np.exp(-((v[i] / p["v_stribeck"]) ** 2))
+                f[i] -= level * np.tanh(v[i] / v_eps[i + 1])
             elif e.name == "quadratic_damping":
                 i = e.location["dof"] - 1
                 f[i] -= e.params["c2"] * v[i] * abs(v[i])
-            elif e.name in ("cubic_stiffness", "clearance", "parameter_drift"):
+            elif e.name in ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping"):
                 j = e.location["spring"]  # joins DOF j-1 (xe[j-1]) and DOF j (xe[j])
                 d = xe[j] - xe[j - 1]
-                if e.name == "cubic_stiffness":
+                ve = np.concatenate([[0.0], v, [0.0]])
+                if e.name == "amplitude_damping":
+                    s = e.params["c_amp"] * abs(d) * (ve[j] - ve[j - 1])
+                elif e.name == "cubic_stiffness":
                     s = e.params["k3"] * d**3
                 elif e.name == "clearance":
                     s = e.params["stiffness"] * max(abs(d) - e.params["gap"], 0.0) * np.sign(d)
@@ -167,7 +175,10 @@ def test_steep_effects_match_solve_ivp_and_converge_with_substeps():
     the switches, the error is still small and shrinks with sub-steps."""
     clearance = [Effect("clearance", {"spring": 4}, {"gap": 5e-4, "stiffness": 3000.0})]
     friction = [Effect("coulomb_friction", {"dof": 1}, {"force": 0.3, "v_eps": 2e-4})]
-    for effects, tol in ((clearance, 1e-6), (friction, 5e-5)):
+    stribeck = [Effect("stribeck_friction", {"dof": 2}, {"force": 0.2, "static": 0.5, "v_stribeck": 2e-3,
+                                                         "v_eps": 2e-4})]
+    joint = [Effect("amplitude_damping", {"spring": 3}, {"c_amp": 2e4})]  # |d| kinks at d = 0
+    for effects, tol in ((clearance, 1e-6), (friction, 5e-5), (stribeck, 5e-5), (joint, 5e-5)):
         _, _, _, ex1, ea1 = _effects_error(effects)
         _, _, _, ex4, _ = _effects_error(effects, substeps=4)
         assert ex1 < tol and ea1 < 10 * tol
@@ -326,7 +337,10 @@ def test_effect_locations_are_checked_against_the_chain():
         with pytest.raises(ValueError):
             simulate(chain, None, 0.01, effects=[eff])
     assert set(EFFECT_NAMES) == {"coulomb_friction", "quadratic_damping", "cubic_stiffness", "clearance",
-                                 "input_delay", "sensor_bias", "sensor_lowpass", "parameter_drift", "force_offset"}
+                                 "input_delay", "sensor_bias", "sensor_lowpass", "parameter_drift", "force_offset",
+                                 "stribeck_friction", "amplitude_damping"}
+    with pytest.raises(ValueError, match="static"):
+        Effect("stribeck_friction", {"dof": 1}, {"force": 2.0, "static": 1.0, "v_stribeck": 1e-3})
     with pytest.raises(ValueError):
         simulate(TABLE1, np.zeros((5, 3)), 0.01)  # too short
     with pytest.raises(ValueError):

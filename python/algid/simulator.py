@@ -134,6 +134,8 @@ _EFFECT_SPECS: dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]] = {
     "sensor_lowpass": ("dof", ("cutoff_hz",), ()),
     "parameter_drift": ("spring", ("rel_change",), ()),
     "force_offset": ("dof", ("offset",), ()),
+    "stribeck_friction": ("dof", ("force", "static", "v_stribeck"), ("v_eps",)),
+    "amplitude_damping": ("spring", ("c_amp",), ()),
 }
 
 #: The effect names the simulator knows (part of the public interface).
@@ -172,6 +174,13 @@ class Effect:
         ``force_offset``  ``{"dof": i}``, ``{"offset": [N]}``: a constant force on mass i
             that the force sensor does not see (gravity on an inclined axis, a preload,
             a drive's current-sensor offset).
+        ``stribeck_friction``  ``{"dof": i}``, ``{"force": F_c [N], "static": F_s [N],
+            "v_stribeck": v_s [m/s]}`` (optional ``"v_eps"``): dry friction that breaks
+            away at ``F_s`` and falls to ``F_c`` with speed,
+            ``-(F_c + (F_s - F_c) exp(-(v_i / v_s)^2)) tanh(v_i / v_eps)``.
+        ``amplitude_damping``  ``{"spring": j}``, ``{"c_amp": [N s/m^2]}``: micro-slip in
+            the joint of spring j, a damping force ``c_amp |d_j| d_j'`` whose equivalent
+            viscous damping grows with the deformation amplitude.
     location : dict
         ``{"dof": i}`` with ``1 <= i <= n`` or ``{"spring": j}`` with ``1 <= j <= n+1``
         (``j <= n`` for a free right end); 1-based as in the paper.
@@ -243,13 +252,15 @@ class Effect:
 
 
 def _check_param_ranges(name: str, p: dict) -> None:
-    positive = {"cutoff_hz", "v_eps"}
-    nonneg = {"force", "c2", "gap", "stiffness", "delay"}
+    positive = {"cutoff_hz", "v_eps", "v_stribeck"}
+    nonneg = {"force", "c2", "gap", "stiffness", "delay", "static", "c_amp"}
     for key, val in p.items():
         if key in positive and not val > 0:
             raise ValueError(f"effect {name!r}: {key} must be > 0, got {val}")
         if key in nonneg and val < 0:
             raise ValueError(f"effect {name!r}: {key} must be >= 0, got {val}")
+    if name == "stribeck_friction" and p["static"] < p["force"]:
+        raise ValueError(f"effect 'stribeck_friction': static ({p['static']}) must be >= force ({p['force']})")
     if name == "parameter_drift" and not p["rel_change"] > -1.0:
         raise ValueError(f"effect 'parameter_drift': rel_change must be > -1, got {p['rel_change']}")
 
@@ -477,12 +488,15 @@ class _Plant:
         xs = vals[:n]
         vs = vals[n:2 * n]
         f = [0.0] * n
-        for kind, i, a, eps in self.dof_terms:
+        for kind, i, a, fs, vs_, eps in self.dof_terms:
             vi = vs[i]
             if kind == "fo":
                 f[i] += a
+            elif kind == "cf":
+                level = a if fs == a else a + (fs - a) * math.exp(-(vi / vs_) ** 2)
+                f[i] -= level * math.tanh(vi / eps)
             else:
-                f[i] -= a * math.tanh(vi / eps) if kind == "cf" else a * vi * abs(vi)
+                f[i] -= a * vi * abs(vi)
         for kind, j, a, b in self.spring_terms:  # spring j (0-based) joins DOF j-1 and DOF j
             d = (xs[j] if j < n else 0.0) - (xs[j - 1] if j >= 1 else 0.0)
             if kind == "cs":
@@ -490,6 +504,9 @@ class _Plant:
             elif kind == "cl":
                 ad = abs(d) - a
                 s = b * ad * (1.0 if d > 0 else -1.0) if ad > 0 else 0.0
+            elif kind == "ad":
+                dd = (vs[j] if j < n else 0.0) - (vs[j - 1] if j >= 1 else 0.0)
+                s = a * abs(d) * dd
             else:
                 s = a * t * d
             if j < n:
@@ -513,14 +530,18 @@ class _Plant:
             if j >= 1:
                 D[j, j - 1] = -1.0
         self.D = D
-        self.dof_terms: list[tuple[str, int, float, float]] = []
+        # (kind, dof, level, static level, Stribeck velocity, regularisation velocity)
+        self.dof_terms: list[tuple[str, int, float, float, float, float]] = []
         for q, e in enumerate(effects):
+            p = e.params
             if e.name == "coulomb_friction":
-                self.dof_terms.append(("cf", e.dof, e.params["force"], v_eps[q]))
+                self.dof_terms.append(("cf", e.dof, p["force"], p["force"], 1.0, v_eps[q]))
+            elif e.name == "stribeck_friction":
+                self.dof_terms.append(("cf", e.dof, p["force"], p["static"], p["v_stribeck"], v_eps[q]))
             elif e.name == "quadratic_damping":
-                self.dof_terms.append(("qd", e.dof, e.params["c2"], 0.0))
+                self.dof_terms.append(("qd", e.dof, p["c2"], 0.0, 0.0, 0.0))
             elif e.name == "force_offset":
-                self.dof_terms.append(("fo", e.dof, e.params["offset"], 0.0))
+                self.dof_terms.append(("fo", e.dof, p["offset"], 0.0, 0.0, 0.0))
 
         def rows(kind: str) -> tuple[Optional[np.ndarray], list[Effect]]:
             sel = [e for e in effects if e.name == kind]
@@ -534,11 +555,14 @@ class _Plant:
         self.dr_D, dr = rows("parameter_drift")
         self.dr_rate = np.array([chain.stiffness[e.spring - 1] * e.params["rel_change"] / duration_s
                                  for e in dr])
+        self.ad_D, ad = rows("amplitude_damping")
+        self.ad_c = np.array([e.params["c_amp"] for e in ad])
         self.spring_terms: list[tuple[str, int, float, float]] = (
             [("cs", e.spring - 1, e.params["k3"], 0.0) for e in cs]
             + [("cl", e.spring - 1, e.params["gap"], e.params["stiffness"]) for e in cl]
-            + [("dr", e.spring - 1, r, 0.0) for e, r in zip(dr, self.dr_rate)])
-        self.nonlinear = bool(self.dof_terms or cs or cl or dr)
+            + [("dr", e.spring - 1, r, 0.0) for e, r in zip(dr, self.dr_rate)]
+            + [("ad", e.spring - 1, e.params["c_amp"], 0.0) for e in ad])
+        self.nonlinear = bool(self.dof_terms or cs or cl or dr or ad)
         self.has_switches = bool(cl) or any(kind == "cf" for kind, *_ in self.dof_terms)
 
     def switch_state(self, state: np.ndarray) -> tuple:
@@ -547,7 +571,7 @@ class _Plant:
         makes the integrator redo that step with finer sub-steps)."""
         n = self.n
         vals = state.tolist()
-        out = [vals[n + i] > 0.0 for kind, i, _, _ in self.dof_terms if kind == "cf"]
+        out = [vals[n + i] > 0.0 for kind, i, *_ in self.dof_terms if kind == "cf"]
         for kind, j, gap, _ in self.spring_terms:
             if kind == "cl":
                 d = (vals[j] if j < n else 0.0) - (vals[j - 1] if j >= 1 else 0.0)
@@ -560,12 +584,12 @@ class _Plant:
         if np.ndim(x) == 1:
             return self._effect_force_1(t, x, v)
         f = np.zeros(np.shape(x))
-        for kind, i, a, eps in self.dof_terms:
+        for kind, i, a, fs, vs_, eps in self.dof_terms:
             vi = v[..., i]
             if kind == "fo":
                 f[..., i] += a
             elif kind == "cf":
-                f[..., i] -= a * np.tanh(vi / eps)
+                f[..., i] -= (a + (fs - a) * np.exp(-(vi / vs_) ** 2)) * np.tanh(vi / eps)
             else:
                 f[..., i] -= a * vi * np.abs(vi)
         if self.cs_D is not None:
@@ -578,6 +602,9 @@ class _Plant:
             d = x @ self.dr_D.T
             tt = np.asarray(t)[..., None] if np.ndim(t) else t
             f -= (self.dr_rate * tt * d) @ self.dr_D
+        if self.ad_D is not None:
+            d, dd = x @ self.ad_D.T, v @ self.ad_D.T
+            f -= (self.ad_c * np.abs(d) * dd) @ self.ad_D
         return f
 
 
@@ -753,16 +780,18 @@ def simulate(
             w = math.sqrt(e.params["stiffness"] / min(adj))
             ns = max(ns, int(math.ceil(h * w / 0.25)))
     v_eps: dict[int, float] = {}
+    dry = ("coulomb_friction", "stribeck_friction")
+    peak = {q: e.params.get("static", e.params.get("force")) for q, e in enumerate(effs) if e.name in dry}
     for q, e in enumerate(effs):
-        if e.name == "coulomb_friction":
+        if e.name in dry:
             mi = chain.mass[e.dof]
             if "v_eps" in e.params:
                 v_eps[q] = e.params["v_eps"]
                 if substeps is None:
-                    ns = max(ns, int(math.ceil(e.params["force"] * h / (mi * v_eps[q]))))
+                    ns = max(ns, int(math.ceil(peak[q] * h / (mi * v_eps[q]))))
     for q, e in enumerate(effs):
-        if e.name == "coulomb_friction" and q not in v_eps:
-            v_eps[q] = max(COULOMB_V_EPS, e.params["force"] * h / ns / chain.mass[e.dof])
+        if e.name in dry and q not in v_eps:
+            v_eps[q] = max(COULOMB_V_EPS, peak[q] * h / ns / chain.mass[e.dof])
     cuts = {round(q / ns, 12) for q in range(1, ns)}
     if has_delay:
         cuts |= {round((d * fs_hz) % 1.0, 12) for d in delays if d > 0}

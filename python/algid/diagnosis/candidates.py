@@ -8,6 +8,8 @@ The definitions are those of the simulator (the names are part of the interface)
 | effect | location | what it adds / changes | parameters (first = main) |
 |---|---|---|---|
 | coulomb_friction | dof i | ``+ force * tanh(v_i / v_scale)`` in eq. i | force [N], v_scale [m/s] |
+| stribeck_friction | dof i | ``+ (force + (static - force) exp(-(v_i/v_stribeck)^2)) sign(v_i)`` | force [N], static [N], v_stribeck [m/s] |
+| amplitude_damping | spring j | ``f = c_amp * |d| d'`` (micro-slip: damping growing with amplitude) | c_amp [N s/m^2] |
 | quadratic_damping | dof i | ``+ c2 * v_i |v_i|`` in eq. i | c2 [N s^2/m^2] |
 | cubic_stiffness | spring j | ``f = k3 d^3`` | k3 [N/m^3] |
 | clearance | spring j | ``f = stiffness * sign(d) max(|d| - gap, 0)`` | gap [m], stiffness [N/m] |
@@ -25,8 +27,13 @@ parameter either way:
 * linear in the effect parameter, from the reconstructed states ``x``, ``v``: quadratic
   damping (``v|v|``), cubic spring (``d^3``), drift (``(t - t_0)/duration * d``,
   coefficient ``k_j rel_change``);
+* amplitude damping, linear in ``c_amp``: ``|d| d'`` from the states;
 * one nonlinear parameter on a grid, linear coefficients solved at every grid value:
   Coulomb friction (``v_scale``: a log grid below the RMS velocity, ``tanh(v / v_scale)``),
+  Stribeck friction (``v_stribeck``: a log grid below the RMS velocity; two coefficients,
+  the Coulomb level on ``sign(v)`` and the static excess on ``exp(-(v/v_s)^2) sign(v)``; it
+  is reported only when the excess is beyond :data:`STRIBECK_Z` of its jackknife sigma,
+  else it is Coulomb friction with extra freedom),
   clearance (``gap``: quantiles of ``|d_j|``), input delay (``delay``: log grid, the force
   shifted by cubic-spline interpolation), sensor low-pass (``cutoff``: log grid; equation
   i is filtered by the same low-pass — ``m a + c v + k (x_i - LP x_other) = LP u`` holds
@@ -66,7 +73,9 @@ from .linear import LinearFit
 
 EFFECTS = (
     "coulomb_friction",
+    "stribeck_friction",
     "quadratic_damping",
+    "amplitude_damping",
     "cubic_stiffness",
     "clearance",
     "input_delay",
@@ -78,6 +87,8 @@ EFFECTS = (
 #: Main parameter of every effect (the first of its parameters).
 MAIN_PARAM = {
     "coulomb_friction": "force",
+    "stribeck_friction": "force",
+    "amplitude_damping": "c_amp",
     "quadratic_damping": "c2",
     "cubic_stiffness": "k3",
     "clearance": "gap",
@@ -93,6 +104,8 @@ MAIN_PARAM = {
 #: fits only with the wrong sign is not an explanation, whatever its gap.
 PHYSICAL = {
     "coulomb_friction": lambda p: p["force"] > 0,
+    "stribeck_friction": lambda p: p["force"] > 0 and p["static"] > p["force"],
+    "amplitude_damping": lambda p: p["c_amp"] > 0,
     "quadratic_damping": lambda p: p["c2"] > 0,
     "clearance": lambda p: p["gap"] > 0 and p["stiffness"] > 0,
     "input_delay": lambda p: p["delay"] > 0,
@@ -106,6 +119,9 @@ def physical(fit: "CandidateFit") -> bool:
     return True if rule is None else bool(rule(fit.params))
 
 
+#: A Stribeck peak counts only beyond this many jackknife sigma of its excess over the
+#: Coulomb level (the nested Coulomb model otherwise explains as much).
+STRIBECK_Z = 4.0
 #: Longest input delay searched [samples]; the analysis skips at least this many samples.
 MAX_DELAY_SAMPLES = 100
 N_GRID = 24
@@ -267,6 +283,40 @@ def fit_coulomb(ctx: Context, i: int) -> CandidateFit:
     fit.params = {k: fit.params[k] for k in order}
     fit.params_std = {k: fit.params_std[k] for k in order}
     return fit
+
+
+def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
+    """Stribeck friction at DOF i (0-based), see the module docstring."""
+    P = ctx.P
+    v = ctx.v[:, i]
+    rms = np.sqrt(np.mean(v**2))
+    grid = np.log(rms * np.geomspace(1e-3, 1.0, N_GRID))
+    sgn = np.tanh(v / (1e-4 * rms))
+
+    def build(lg):
+        cols = np.stack([effect_column(P, i, sgn, ctx.mass),
+                         effect_column(P, i, np.exp(-((v / np.exp(lg)) ** 2)) * sgn, ctx.mass)], axis=1)
+        return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2), y=target(P, i), E=cols, key=("base", i))]
+
+    fit = _fit_grid(ctx, "stribeck_friction", {"dof": i + 1}, build, grid, np.exp, ["v_stribeck"],
+                    ["force", "excess"])
+    p, sd = fit.params, fit.params_std
+    fit.params = {"force": p["force"], "static": p["force"] + p["excess"], "v_stribeck": p["v_stribeck"]}
+    fit.params_std = {"force": sd["force"], "static": float(np.hypot(sd["force"], sd["excess"])),
+                      "v_stribeck": sd["v_stribeck"], "excess": sd["excess"]}
+    if not abs(p["excess"]) > STRIBECK_Z * sd["excess"]:
+        fit.params["static"] = float("nan")  # no peak beyond noise: not Stribeck (PHYSICAL fails)
+    return fit
+
+
+def fit_amplitude_damping(ctx: Context, j: int) -> CandidateFit:
+    """Amplitude-dependent (micro-slip) damping in the joint of spring j (1-based)."""
+    P = ctx.P
+    d = deformation(P, ctx.x, j)
+    dd = deformation(P, ctx.v, j)
+    g = np.abs(d) * dd
+    return _fit_linear_effect(ctx, "amplitude_damping", {"spring": j}, [(e, s * g) for e, s in spring_sides(P, j)],
+                              ["c_amp"])
 
 
 def spring_k(P: Prepared, thetas: list[np.ndarray], eqs: list[int], j: int) -> float:
@@ -444,7 +494,7 @@ def all_candidates(P: Prepared) -> list[tuple[str, int]]:
     every spring that exists and can be told apart."""
     out = []
     for eff in EFFECTS:
-        if eff in ("cubic_stiffness", "clearance", "parameter_drift"):
+        if eff in ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping"):
             out += [(eff, j) for j in springs(P.n, P.boundary)]
         elif eff == "input_delay":  # a force delay needs a force
             out += [(eff, i) for i in range(P.n) if P.forced[i]]
@@ -457,6 +507,10 @@ def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
     """Fit one candidate; ``loc`` is a 0-based DOF or a 1-based spring."""
     if effect == "coulomb_friction":
         return fit_coulomb(ctx, loc)
+    if effect == "stribeck_friction":
+        return fit_stribeck(ctx, loc)
+    if effect == "amplitude_damping":
+        return fit_amplitude_damping(ctx, loc)
     if effect == "quadratic_damping":
         return fit_dof_force(ctx, effect, loc)
     if effect in ("cubic_stiffness", "parameter_drift"):

@@ -78,10 +78,11 @@ GAP_RESOLUTION = 1e-4
 QUASI_STATIC = 0.05
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
-SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift")
+SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
 #: Most refits of a state-dependent candidate with states reconstructed under it.
 STATE_REFITS = 4
-STATE_EFFECTS = ("coulomb_friction", "quadratic_damping", "cubic_stiffness", "clearance", "parameter_drift")
+STATE_EFFECTS = ("coulomb_friction", "stribeck_friction", "quadratic_damping", "amplitude_damping",
+                 "cubic_stiffness", "clearance", "parameter_drift")
 
 
 @dataclass

@@ -9,7 +9,7 @@ import numpy as np
 from .candidates import MAIN_PARAM
 from .core import METRIC, METRIC_FORCE
 
-UNITS = {"force": "N", "v_scale": "m/s", "c2": "N s^2/m^2", "k3": "N/m^3", "gap": "m", "stiffness": "N/m", "delay": "s",
+UNITS = {"force": "N", "v_scale": "m/s", "static": "N", "v_stribeck": "m/s", "c_amp": "N s/m^2", "c2": "N s^2/m^2", "k3": "N/m^3", "gap": "m", "stiffness": "N/m", "delay": "s",
          "bias": "m/s^2", "cutoff_hz": "Hz", "rel_change": "-"}
 
 
