@@ -34,7 +34,7 @@ MODEL_VERDICTS = ("chain", "inertia_not_identifiable", "more_modes_than_dof", "n
 #: Inertia force over force, in the band, below which a DOF's mass is not determined.
 INERTIA_SHARE = 0.02
 #: A resonance peak stands this many times above the lower of its two flanking minima.
-PEAK_PROMINENCE = 3.0
+PEAK_PROMINENCE = 2.0
 #: Coherence of force and acceleration at a resonance peak that is counted.
 PEAK_COHERENCE = 0.8
 
@@ -86,24 +86,31 @@ def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> d
 
 
 def resonances(P: Prepared, f_hi: float) -> dict:
-    """Resonance peaks of every forced DOF's drive-point H1 in the band (question 2)."""
+    """Resonance peaks of every forced DOF's drive-point H1 (question 2), where its force
+    carries power (up to the force's own band edge, :func:`algid.noise.channel`) and in
+    the signal band; segments of an eighth of the record (fine resolution, 8 averages)."""
     from scipy.signal import csd, find_peaks, welch
 
+    from ..noise import channel
+
     fs = 1.0 / P.dt
-    nper = int(min(P.a.shape[0] // 4, max(256, 4 * P.L)))
+    T = P.u_full.shape[0]
+    nper = int(2 ** np.floor(np.log2(max(T // 8, 64))))
     out = {}
     for e in np.nonzero(P.forced)[0]:
-        f, Puu = welch(P.u[:, e], fs=fs, nperseg=nper)
-        _, Paa = welch(P.a[:, e], fs=fs, nperseg=nper)
-        _, Pua = csd(P.u[:, e], P.a[:, e], fs=fs, nperseg=nper)
+        u, a = P.u_full[:, e], P.a_full[:, e]
+        f_top = min(f_hi, channel("u", u, P.dt).f_hi)
+        f, Puu = welch(u, fs=fs, nperseg=nper)
+        _, Paa = welch(a, fs=fs, nperseg=nper)
+        _, Pua = csd(u, a, fs=fs, nperseg=nper)
         with np.errstate(divide="ignore", invalid="ignore"):
             H = np.abs(Pua) / Puu
             coh = np.abs(Pua) ** 2 / (Puu * Paa)
-        keep = (f > 2 * f[1]) & (f <= f_hi) & np.isfinite(H) & (H > 0)
+        keep = (f > 2 * f[1]) & (f <= f_top) & np.isfinite(H) & (H > 0)
         logH = np.where(keep, np.log(np.where(H > 0, H, 1.0)), -np.inf)
-        idx, props = find_peaks(logH, prominence=np.log(PEAK_PROMINENCE))
+        idx, _ = find_peaks(logH, prominence=np.log(PEAK_PROMINENCE))
         peaks = [float(f[i]) for i in idx if keep[i] and coh[i] >= PEAK_COHERENCE]
-        out[int(e) + 1] = {"peaks_hz": peaks, "count": len(peaks)}
+        out[int(e) + 1] = {"peaks_hz": peaks, "count": len(peaks), "searched_hz": [float(2 * f[1]), float(f_top)]}
     return out
 
 
