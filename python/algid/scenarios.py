@@ -7,8 +7,8 @@ the realistic blind check.
   friction and a constant force the drive's sensor does not see.
 * :func:`displacement_driven`: a device whose motion is imposed (a testing machine, a
   shaker in displacement control) at 0.5-2 Hz, so that its inertia is negligible against
-  its spring, damping and friction; force and displacement measured. Optional dry friction
-  and backlash (a dead zone of the spring).
+  its spring, damping and friction; force and displacement measured. Any simulator effect
+  of its one DOF or spring (dry friction, a clearance or backlash, micro-slip ...).
 
 Each returns a :class:`Scenario`: the :class:`~algid.recording.Recording` as a data logger
 would write it (only the signals the rig measures), the true chain, and what else acts.
@@ -17,13 +17,14 @@ would write it (only the signals the rig measures), the true chain, and what els
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Sequence
 
 import numpy as np
 
 from .chain import Chain
 from .positioning import BangBangReference, PositioningController
 from .recording import Recording
-from .simulator import simulate
+from .simulator import effect_forces, simulate
 
 
 @dataclass
@@ -65,32 +66,27 @@ def positioning_axis(seed: int = 0, duration_s: float = 20.0, mass_kg: float = 5
 
 
 def displacement_driven(seed: int = 0, duration_s: float = 20.0, mass_kg: float = 0.05,
-                        damping_ns_m: float = 200.0, stiffness_n_m: float = 2e4, coulomb_n: float = 0.0,
-                        backlash_m: float = 0.0, amplitude_m: float = 2e-3, noise_db: float = 50.0,
-                        fs_hz: float = 1000.0) -> Scenario:
+                        damping_ns_m: float = 200.0, stiffness_n_m: float = 2e4, effects: Sequence = (),
+                        amplitude_m: float = 2e-3, noise_db: float = 50.0, fs_hz: float = 1000.0) -> Scenario:
     """Imposed displacement: three sines at 0.5, 1.1 and 1.9 Hz (random phases) of total
-    amplitude about ``amplitude_m``; the force is what the device returns,
-    ``m x'' + c x' + k s(x) + F tanh(x' / 1e-4)`` with ``s`` the spring's dead zone of half
-    width ``backlash_m``; white noise of ``noise_db`` SNR on force and displacement."""
+    amplitude about ``amplitude_m``; the force is what the device needs for that motion,
+    ``m x'' + c x' + k x`` minus the forces of ``effects`` (simulator effects of DOF 1 and
+    spring 1, :func:`algid.simulator.effect_forces`: dry friction, a clearance, micro-slip
+    ...); white noise of ``noise_db`` SNR on force and displacement. A backlash (a spring
+    that only bites beyond a gap) is ``stiffness_n_m=0`` with a ``clearance`` effect."""
     rng = np.random.default_rng(seed)
     t = np.arange(int(round(duration_s * fs_hz))) / fs_hz
     f = np.array([0.5, 1.1, 1.9])
     ph = rng.uniform(0, 2 * np.pi, f.size)
     w = 2 * np.pi * f
     amp = amplitude_m / np.sqrt(f.size)
-    x = amp * np.sin(np.outer(t, w) + ph).sum(axis=1)
-    v = amp * (w * np.cos(np.outer(t, w) + ph)).sum(axis=1)
-    a = -amp * (w**2 * np.sin(np.outer(t, w) + ph)).sum(axis=1)
-    spring = np.sign(x) * np.maximum(np.abs(x) - backlash_m, 0.0)
-    u = mass_kg * a + damping_ns_m * v + stiffness_n_m * spring + coulomb_n * np.tanh(v / 1e-4)
-    ratio = 10.0 ** (-noise_db / 20.0)
-    u_meas = u + ratio * np.std(u) * rng.standard_normal(t.size)
-    x_meas = x + ratio * np.std(x) * rng.standard_normal(t.size)
+    x = amp * np.sin(np.outer(t, w) + ph).sum(axis=1)[:, None]
+    v = amp * (w * np.cos(np.outer(t, w) + ph)).sum(axis=1)[:, None]
+    a = -amp * (w**2 * np.sin(np.outer(t, w) + ph)).sum(axis=1)[:, None]
     chain = Chain([mass_kg], [damping_ns_m], [stiffness_n_m, 0.0])
-    effects = []
-    if coulomb_n > 0:
-        effects.append({"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": coulomb_n}})
-    if backlash_m > 0:
-        effects.append({"name": "backlash", "location": {"spring": 1}, "params": {"gap": backlash_m}})
-    return Scenario(Recording(t=t, u=u_meas[:, None], x=x_meas[:, None]), chain, effects,
+    u = mass_kg * a + damping_ns_m * v + stiffness_n_m * x - effect_forces(chain, effects, t, x, v, duration_s)
+    ratio = 10.0 ** (-noise_db / 20.0)
+    u_meas = u + ratio * np.std(u) * rng.standard_normal(u.shape)
+    x_meas = x + ratio * np.std(x) * rng.standard_normal(x.shape)
+    return Scenario(Recording(t=t, u=u_meas, x=x_meas), chain, list(effects),
                     {"frequencies_hz": f.tolist(), "noise_db": noise_db, "fs_hz": fs_hz})

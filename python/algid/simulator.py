@@ -116,6 +116,7 @@ __all__ = [
     "Effect",
     "SensorNoise",
     "SimulationResult",
+    "effect_forces",
     "simulate",
 ]
 
@@ -1162,6 +1163,22 @@ def simulate(
     res.stats = {"substeps_per_sample": J, "refined_steps": n_refined[0], "v_eps": {effs[q].dof + 1: v for q, v in v_eps.items()},
                  "integrator": "etdrk4" if rk else "exact", "wall_s": time.perf_counter() - wall0}
     return res
+
+
+def effect_forces(chain: Chain, effects: Sequence[Union[Effect, Mapping[str, Any]]], t: np.ndarray,
+                  x: np.ndarray, v: np.ndarray, duration_s: Optional[float] = None) -> np.ndarray:
+    """The forces [N] (T, n) the effects put on the masses along a prescribed motion
+    ``x`` [m], ``v`` [m/s] (T, n) at times ``t`` [s] (T,): what the simulator adds to eq. 1.
+    A device driven in displacement needs ``M a + C v + K x - effect_forces(...)`` from its
+    actuator. Dry friction uses ``v_eps`` if given, else ``COULOMB_V_EPS``."""
+    effs = tuple(_as_effect(e) for e in effects)
+    for e in effs:
+        e.check(chain)
+    duration = float(t[-1] - t[0]) if duration_s is None else float(duration_s)
+    v_eps = {q: e.params.get("v_eps", COULOMB_V_EPS) for q, e in enumerate(effs)
+             if e.name in ("coulomb_friction", "stribeck_friction")}
+    return _Plant(chain, effs, duration, v_eps).effect_force(np.asarray(t, dtype=float), np.asarray(x, dtype=float),
+                                                             np.asarray(v, dtype=float))
 
 
 def _rms(a: np.ndarray) -> np.ndarray:

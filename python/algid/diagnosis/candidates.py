@@ -114,7 +114,10 @@ PHYSICAL = {
 
 
 def physical(fit: "CandidateFit") -> bool:
-    """True when the fitted parameters have physical signs (:data:`PHYSICAL`)."""
+    """True when the fitted parameters have physical signs (:data:`PHYSICAL`); for a
+    combination, every part's."""
+    if "+" in fit.effect:
+        return all(PHYSICAL.get(eff, lambda p: True)(fit.params[eff]) for eff in fit.effect.split("+"))
     rule = PHYSICAL.get(fit.effect)
     return True if rule is None else bool(rule(fit.params))
 
@@ -524,6 +527,52 @@ def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
     if effect == "sensor_lowpass":
         return fit_lowpass(ctx, loc)
     raise ValueError(f"unknown effect {effect!r}")
+
+
+#: Effects that only add a force column to the linear equations (their fits combine).
+ADDITIVE = ("coulomb_friction", "stribeck_friction", "quadratic_damping", "amplitude_damping", "cubic_stiffness",
+            "clearance")
+
+
+def fit_combination(ctx: Context, fits: list[CandidateFit]) -> CandidateFit:
+    """Two or more additive candidates fitted together: every equation any of them enters
+    gets all their force columns (their grid parameters, a Coulomb velocity scale or a
+    clearance gap, kept at their own fits' values); the shared coefficients are refitted
+    jointly. ``effect`` joins the names with ``+``, ``location`` and ``params`` keep each
+    part's (``params`` as ``{effect: {...}}``)."""
+    P = ctx.P
+    eqs = sorted({e for f in fits for e in f.eqs})
+    widths = [f.specs[0].E.shape[1] for f in fits]
+    specs = []
+    for e in eqs:
+        cols = []
+        for f, wdt in zip(fits, widths):
+            spec = next((sp for sp in f.specs if sp.e == e), None)
+            cols.append(spec.E if spec is not None else np.zeros((P.y.shape[0], wdt)))
+        specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=np.concatenate(cols, axis=1),
+                            key=("base", e)))
+    cv = cross_validate(P, window_stats(P, specs))
+    gam, sd = cv.theta[cv.stats.shared], jackknife_std(cv.theta_folds[:, cv.stats.shared])
+    params, stds, off = {}, {}, 0
+    for f, wdt in zip(fits, widths):
+        own = dict(f.params)
+        own_sd = dict(f.params_std)
+        coef_names = _coefficient_names(f)
+        for k, nm in enumerate(coef_names):
+            own[nm], own_sd[nm] = float(gam[off + k]), float(sd[off + k])
+        if f.effect == "stribeck_friction":
+            own["static"] = own["force"] + own.pop("excess")
+        params[f.effect], stds[f.effect] = own, own_sd
+        off += wdt
+    return CandidateFit(effect="+".join(f.effect for f in fits), location={"parts": [f.location for f in fits]},
+                        eqs=eqs, cv=cv, params=params, params_std=stds, thetas=[cv.theta[sl] for sl in cv.stats.slices],
+                        specs=specs)
+
+
+def _coefficient_names(fit: CandidateFit) -> list[str]:
+    """Names of a candidate's shared (linear) coefficients, in column order."""
+    return {"coulomb_friction": ["force"], "stribeck_friction": ["force", "excess"],
+            "clearance": ["stiffness"]}.get(fit.effect, [MAIN_PARAM[fit.effect]])
 
 
 def raw_residual(ctx: Context, fit: CandidateFit) -> np.ndarray:

@@ -29,12 +29,14 @@ from ..noise import channel
 from ..recording import Recording, accelerations, derivative
 from ..recording import motion as recording_motion
 from .candidates import (
+    ADDITIVE,
     EFFECTS,
     MAX_DELAY_SAMPLES,
     CandidateFit,
     Context,
     all_candidates,
     fit_candidate,
+    fit_combination,
     physical,
     raw_residual,
 )
@@ -76,6 +78,10 @@ GAP_RESOLUTION = 1e-4
 #: A forced DOF whose inertia force is below this share of its force in the band makes
 #: the analysis solve the forced equations for the force (:func:`_form`).
 QUASI_STATIC = 0.05
+#: Candidates tried with the best one, and the share of the best single candidate's
+#: remaining withheld error a pair must remove to be reported.
+COMBINATION_LEADERS = 4
+COMBINATION_GAIN = 0.2
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
@@ -333,11 +339,18 @@ def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: 
     return floor, band
 
 
+def _context(st: Setup) -> Context:
+    """The states the candidates are built from: measured when the record has positions,
+    else reconstructed by the linear fit."""
+    if st.measured is None:
+        return Context(P=st.P, lin=st.lin, x=st.lin.x, v=st.lin.v)
+    return Context(P=st.P, lin=st.lin, x=st.measured[0], v=st.measured[1])
+
+
 def _candidates(st: Setup, effects, progress) -> list[Scored]:
     """Fit and score every candidate at every location (module docstring, step 3)."""
     P, lin = st.P, st.lin
-    ctx = Context(P=P, lin=lin, x=lin.x, v=lin.v) if st.measured is None else \
-        Context(P=P, lin=lin, x=st.measured[0], v=st.measured[1])
+    ctx = _context(st)
     todo = [(e, loc) for e, loc in all_candidates(P) if e in effects]
     scored: list[Scored] = []
     for k, (eff, loc) in enumerate(todo):
@@ -378,6 +391,36 @@ def _refit_leaders(st: Setup, ctx: Context, scored: list[Scored]) -> list[Scored
     return scored
 
 
+def _combination(st: Setup, ctx: Context, scored: list[Scored]) -> Scored | None:
+    """The best single candidate (when additive) fitted together with one of the next
+    :data:`COMBINATION_LEADERS` physical additive candidates of another effect or place
+    (an effect masked by a stronger one rarely stands out alone), kept when the pair
+    beats the single candidate beyond noise: its per-sub-block withheld error reduction
+    over the single one's has a t statistic of at least :data:`Z_CRIT` and removes at least
+    :data:`COMBINATION_GAIN` of the single one's remaining withheld error; both parts
+    physical. Dry friction twice (Coulomb and Stribeck) is one effect, not a pair."""
+    best = next((s for s in scored if s.significant), None)
+    if best is None or best.fit.effect not in ADDITIVE:
+        return None
+    others = [s for s in scored if s.fit.effect in ADDITIVE and s is not best and s.physical
+              and not (s.fit.effect == best.fit.effect and s.fit.location == best.fit.location)
+              and not {s.fit.effect, best.fit.effect} <= {"coulomb_friction", "stribeck_friction"}]
+    left = best.gap_after**2 * st.denom
+    found = None
+    for other in others[:COMBINATION_LEADERS]:
+        try:
+            pair = _assess(st.P, st.lin, fit_combination(ctx, [best.fit, other.fit]), st.denom, st.floor)
+        except (np.linalg.LinAlgError, ValueError, FloatingPointError):
+            continue
+        diff = pair.reduction - best.reduction
+        sd = diff.std(ddof=1)
+        t = diff.mean() / (sd / np.sqrt(diff.size)) if sd > 0 else 0.0
+        if (pair.physical and t >= Z_CRIT and diff.sum() >= COMBINATION_GAIN * left
+                and (found is None or pair.gap_after < found.gap_after)):
+            found = pair
+    return found
+
+
 def force_gap(P: Prepared, lin: LinearFit, test_sse_eq: np.ndarray) -> float:
     """The force-domain gap: RMS of the withheld force-equation errors over the RMS of the
     forces, from per-equation withheld squared errors in target units (forced DOFs)."""
@@ -414,6 +457,8 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
     gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))
     scored = _candidates(st, effects, progress)
+    ctx = _context(st)
+    combo = _combination(st, ctx, scored)
     st.timings["candidates"] = time.perf_counter() - clock - st.timings["linear"]
 
     _progress(progress, "locating the gap")
@@ -442,8 +487,8 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
                      best=best, timings=st.timings, where=where,
                      extra={"natural_hz": natural.tolist(), "noise_floor": floor_rel,
                             "noise_floor_full": floor_rel_full, "explained_excess": explained,
-                            "ctx": Context(P=P, lin=lin, x=lin.x, v=lin.v), "model": st.model, "force": force,
-                            "form": P.form})
+                            "ctx": ctx, "model": st.model, "force": force, "form": P.form,
+                            "combination": combo if best is not None else None})
 
 
 def _candidate_sse_eq(lin: LinearFit, s: Scored) -> np.ndarray:

@@ -54,6 +54,7 @@ def to_json(d) -> dict:
         "gap_after_force": d.extra.get("force", {}).get("gap_after"),
         "metric_force": METRIC_FORCE,
         "model": d.extra["model"].to_json() if "model" in d.extra else None,
+        "combination": _combination_json(d.extra.get("combination")),
         "equation_form": d.extra.get("form", "acceleration"),
         "band": d.band.to_json() | {"window_bins_kept": int(d.P.band_mask.sum()),
                                     "window_bins": int(d.P.band_mask.size),
@@ -74,6 +75,15 @@ def to_json(d) -> dict:
         "timings_s": d.timings,
     }
     return _clean(out)
+
+
+def _combination_json(s) -> dict | None:
+    """The reported combination of effects (``None`` if none beats the best single one)."""
+    if s is None:
+        return None
+    parts = [{"effect": eff, "location": loc, "params": s.fit.params[eff], "params_std": s.fit.params_std[eff]}
+             for eff, loc in zip(s.fit.effect.split("+"), s.fit.location["parts"])]
+    return {"effects": parts, "gap_after": s.gap_after, "gap_after_fullband": s.gap_after_full, "z_noise": s.z}
 
 
 def _fmt_params(params: dict, std: dict | None = None) -> str:
@@ -145,6 +155,12 @@ def to_text(d, source: str = "") -> str:
         L.append(f"  with {d.effect} at {_fmt_loc(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)  "
                  f"[{d.gap_after_full:.4g}, {shrink_f:.3g}x]")
         L.append(f"  fitted: {_fmt_params(d.params, d.params_std)}")
+        combo = d.extra.get("combination")
+        if combo is not None:
+            parts = " + ".join(f"{eff} at {_fmt_loc(loc)} ({_fmt_params(combo.fit.params[eff])})"
+                               for eff, loc in zip(combo.fit.effect.split("+"), combo.fit.location["parts"]))
+            sh = d.gap_before / combo.gap_after if combo.gap_after > 0 else float("inf")
+            L.append(f"  together: {parts}: {combo.gap_after:.4g} ({sh:.3g}x smaller)")
     L.append("")
     w = d.where
     if w:
