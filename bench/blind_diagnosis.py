@@ -63,11 +63,13 @@ from algid.recording import Recording, save_recording  # noqa: E402
 
 EFFECTS = ("coulomb_friction", "quadratic_damping", "cubic_stiffness", "clearance", "input_delay",
            "sensor_bias", "sensor_lowpass", "parameter_drift")
-SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift")
+#: Effects the generator can also draw (the realistic check, bench/realistic_blind.py).
+MORE_EFFECTS = ("stribeck_friction", "amplitude_damping")
+SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
 MAIN = {"coulomb_friction": "force", "quadratic_damping": "c2", "cubic_stiffness": "k3", "clearance": "gap",
         "input_delay": "delay", "sensor_bias": "bias", "sensor_lowpass": "cutoff_hz",
-        "parameter_drift": "rel_change"}
-CLASSES = ("none",) + EFFECTS + ("unknown",)
+        "parameter_drift": "rel_change", "stribeck_friction": "force", "amplitude_damping": "c_amp"}
+CLASSES = ("none",) + EFFECTS + MORE_EFFECTS + ("unknown",)
 P_NONE = 0.2
 #: Visibility range of the hidden effect ("barely visible" to "strong"), see draw_case.
 RHO_MIN = 0.5
@@ -174,7 +176,7 @@ def _sides(n: int, j: int) -> list[tuple[int, float]]:
     return [(i, sgn) for i, sgn in ((j - 1, -1.0), (j - 2, 1.0)) if 0 <= i < n]
 
 
-def draw_case(seed: int, duration: float, fs: float) -> dict:
+def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -> dict:
     """Everything about one case: chain, forcing, effect, SNR (deterministic in seed).
 
     Effect size: a visibility ``rho`` drawn log-uniformly in [RHO_MIN, RHO_MAX] is the
@@ -191,7 +193,7 @@ def draw_case(seed: int, duration: float, fs: float) -> dict:
     u = multisine(n, duration, fs, rng)
     snr_db = float(rng.uniform(40.0, 60.0))
     resp = linear_response(chain, u, fs)
-    effect = "none" if rng.uniform() < P_NONE else EFFECTS[int(rng.integers(len(EFFECTS)))]
+    effect = "none" if rng.uniform() < P_NONE else effects[int(rng.integers(len(effects)))]
     noise_rel = 10 ** (-snr_db / 20)
     rho = float(math.exp(rng.uniform(math.log(RHO_MIN), math.log(RHO_MAX))))
     label: dict = {"seed": seed, "n": n, "boundary": boundary, "snr_db": snr_db, "visibility": rho,
@@ -237,8 +239,10 @@ def draw_case(seed: int, duration: float, fs: float) -> dict:
         gap = float(rng.uniform(0.3, 1.5) * _rms(d))
         shape = {"cubic_stiffness": d**3,
                  "clearance": np.sign(d) * np.maximum(np.abs(d) - gap, 0.0),
-                 "parameter_drift": (np.arange(len(u)) / fs / duration) * chain.stiffness[j - 1] * d}[effect]
-        key = {"cubic_stiffness": "k3", "clearance": "stiffness", "parameter_drift": "rel_change"}[effect]
+                 "parameter_drift": (np.arange(len(u)) / fs / duration) * chain.stiffness[j - 1] * d,
+                 "amplitude_damping": np.abs(d) * _deformation(v, j)}[effect]
+        key = {"cubic_stiffness": "k3", "clearance": "stiffness", "parameter_drift": "rel_change",
+               "amplitude_damping": "c_amp"}[effect]
 
         def errors(p):
             return {i: sgn * p[key] * shape / m[i] for i, sgn in sides}
@@ -251,6 +255,8 @@ def draw_case(seed: int, duration: float, fs: float) -> dict:
             params = {"k3": float(k3)}
         elif effect == "clearance":
             params = {"gap": gap, "stiffness": float(scale)}
+        elif effect == "amplitude_damping":
+            params = {"c_amp": float(scale)}
         else:
             params = {"rel_change": float(np.clip(sign * scale, -0.5, 0.5))}
     else:
@@ -262,6 +268,15 @@ def draw_case(seed: int, duration: float, fs: float) -> dict:
             def errors(p):
                 return {i: -p["force"] * np.sign(v[:, i]) / m[i]}
             params = {"force": solve_linear(errors({"force": 1.0}), dofs)}
+        elif effect == "stribeck_friction":
+            peak = float(rng.uniform(1.5, 3.0))
+            vs = float(rng.uniform(0.1, 0.5) * _rms(v[:, i]))
+
+            def errors(p):
+                level = p["force"] * (1.0 + (peak - 1.0) * np.exp(-((v[:, i] / vs) ** 2)))
+                return {i: -level * np.sign(v[:, i]) / m[i]}
+            fc = solve_linear(errors({"force": 1.0}), dofs)
+            params = {"force": fc, "static": peak * fc, "v_stribeck": vs}
         elif effect == "quadratic_damping":
             def errors(p):
                 return {i: -p["c2"] * v[:, i] * np.abs(v[:, i]) / m[i]}
@@ -442,7 +457,7 @@ def summarize(rows: list[dict]) -> dict:
 def confusion_table(conf: dict) -> str:
     short = {"none": "none", "coulomb_friction": "coul", "quadratic_damping": "quad", "cubic_stiffness": "cubic",
              "clearance": "clear", "input_delay": "delay", "sensor_bias": "bias", "sensor_lowpass": "lowp",
-             "parameter_drift": "drift", "unknown": "unkn"}
+             "parameter_drift": "drift", "stribeck_friction": "strib", "amplitude_damping": "ampd", "unknown": "unkn"}
     head = "true \\ pred        " + " ".join(f"{short[c]:>6s}" for c in CLASSES)
     lines = [head]
     for t, row in conf.items():

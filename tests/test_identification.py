@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from signals import multisine, relative_errors, simulate_chain
+from signals import FRICTION_AND_OFFSET, multisine, relative_errors, simulate_chain
 
 import algid
 from algid.chain import TABLE1, Chain
@@ -18,8 +18,6 @@ from algid.scenarios import displacement_driven, positioning_axis
 from algid.simulator import simulate
 
 DT = 1e-3
-
-
 # ---- surrogates ----------------------------------------------------------------------------
 
 def _sines(T, freqs, amps, dt=DT):
@@ -184,7 +182,7 @@ def test_slow_positioning_axis_from_encoder_counts():
 
 
 def test_axis_with_dry_friction_is_not_called_a_valid_chain():
-    sc = positioning_axis(seed=4, duration_s=20.0, coulomb_n=1.5, offset_n=3.0)
+    sc = positioning_axis(seed=4, duration_s=20.0, effects=FRICTION_AND_OFFSET)
     res = algid.identify(sc.recording)
     assert not res.valid
     assert any("algid diagnose" in r for r in res.reasons)

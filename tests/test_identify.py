@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 import pytest
-from signals import multisine, simulate_chain
+from signals import FRICTION_AND_OFFSET, multisine, simulate_chain
 
 from algid.chain import TABLE1, Chain
 from algid.recording import Recording, save_recording
@@ -82,7 +82,7 @@ def test_identify_free_end(tmp_path):
 def test_invalid_estimates_carry_reasons_on_stderr_and_in_json(tmp_path):
     from algid.scenarios import positioning_axis
 
-    sc = positioning_axis(seed=5, duration_s=12.0, coulomb_n=1.5, offset_n=3.0)
+    sc = positioning_axis(seed=5, duration_s=12.0, effects=FRICTION_AND_OFFSET)
     out = tmp_path / "axis.json"
     proc = _identify(save_recording(tmp_path / "axis.npz", sc.recording), "--json", out, "--replicates", "4")
     assert proc.returncode == 0, proc.stderr

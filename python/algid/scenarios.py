@@ -3,8 +3,8 @@ the realistic blind check.
 
 * :func:`positioning_axis`: a slow machine axis (mass and viscous friction, no spring:
   natural frequency zero) under closed-loop bang-bang moves, position from an incremental
-  encoder only, force as the drive commands it (held between samples). Optional dry
-  friction and a constant force the drive's sensor does not see.
+  encoder only, force as the drive commands it (held between samples). Any simulator
+  effect of its DOF (dry friction, a constant force the drive's sensor does not see ...).
 * :func:`displacement_driven`: a device whose motion is imposed (a testing machine, a
   shaker in displacement control) at 0.5-2 Hz, so that its inertia is negligible against
   its spring, damping and friction; force and displacement measured. Any simulator effect
@@ -42,27 +42,25 @@ class Scenario:
 
 
 def positioning_axis(seed: int = 0, duration_s: float = 20.0, mass_kg: float = 5.0, viscous_ns_m: float = 25.0,
-                     encoder_m: float = 1e-6, coulomb_n: float = 0.0, offset_n: float = 0.0, stroke_m: float = 0.05,
-                     a_max: float = 4.0, fs_hz: float = 1000.0) -> Scenario:
+                     encoder_m: float = 1e-6, effects: Sequence = (), stroke_m: float = 0.05, a_max: float = 4.0,
+                     fs_hz: float = 1000.0) -> Scenario:
     """A ball-screw axis moving between random targets within ``+-stroke_m`` (module
-    docstring). The drive's feedforward assumes 80 % of the mass and half the friction,
-    its PID (``kp`` 4e4 N/m, ``kd`` 800 N s/m, ``ki`` 2e5 N/(m s), force limit 60 N)
-    closes the loop on the encoder."""
+    docstring), with any simulator ``effects`` of its DOF (dry friction, an unrecorded
+    constant force, a drive delay ...). The drive's feedforward assumes 80 % of the mass
+    and half the friction; its PID (``kp`` 8e3 N/m, ``kd`` 160 N s/m, ``ki`` 4e4 N/(m s)
+    and a force limit of 12 N, each per kg of mass) closes the loop on the encoder."""
     rng = np.random.default_rng(seed)
     moves = max(2, int(np.ceil(duration_s / 0.5)))
     ref = BangBangReference(rng.uniform(-stroke_m, stroke_m, (moves, 1)), a_max=a_max,
                             dwell_s=float(rng.uniform(0.3, 0.6)))
-    ctl = PositioningController(ref, f_max=60.0, kp=4e4, kd=800.0, ki=2e5, m0=0.8 * mass_kg, c0=0.5 * viscous_ns_m)
+    m = mass_kg
+    ctl = PositioningController(ref, f_max=12.0 * m, kp=8e3 * m, kd=160.0 * m, ki=4e4 * m, m0=0.8 * m,
+                                c0=0.5 * viscous_ns_m)
     chain = Chain([mass_kg], [viscous_ns_m], [0.0, 0.0])
-    effects = []
-    if coulomb_n > 0:
-        effects.append({"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": coulomb_n}})
-    if offset_n != 0:
-        effects.append({"name": "force_offset", "location": {"dof": 1}, "params": {"offset": offset_n}})
-    sim = simulate(chain, None, duration_s, fs_hz, controller=ctl, mode="sampled", effects=effects,
+    sim = simulate(chain, None, duration_s, fs_hz, controller=ctl, mode="sampled", effects=list(effects),
                    encoder_resolution_m=encoder_m)
     rec = Recording(t=sim.t, u=sim.u, x=sim.x_meas)
-    return Scenario(rec, chain, effects, {"encoder_m": encoder_m, "moves": moves, "fs_hz": fs_hz})
+    return Scenario(rec, chain, list(effects), {"encoder_m": encoder_m, "moves": moves, "fs_hz": fs_hz})
 
 
 def displacement_driven(seed: int = 0, duration_s: float = 20.0, mass_kg: float = 0.05,
