@@ -8,8 +8,9 @@ Per channel (every force, and every measured acceleration or displacement):
 
 * **PSD** by Welch's method (Hann, segments of :func:`segment_length` samples: about 4 s,
   so that the slow motions of a positioning axis are resolved, and at least 8 segments).
-* **Noise floor**: the median PSD over the upper third of the spectrum [unit^2/Hz]; the
-  white-noise standard deviation it stands for is ``sqrt(floor fs / 2)``.
+* **Noise floor** (:func:`white_floor`): the median PSD over the upper third of the
+  spectrum [unit^2/Hz], or, below an anti-alias roll-off, over the top of the flat part;
+  the white-noise standard deviation it stands for is ``sqrt(floor fs / 2)``.
 * **Signal**: the PSD bins more than :data:`DETECT` times above the floor; ``f_hi`` is the
   frequency below which :data:`POWER` of their power above the floor lies, ``f_mid`` the
   median frequency of that power (half below, half above).
@@ -154,11 +155,36 @@ def encoder_quantum(x: np.ndarray) -> float:
     return q
 
 
+#: A tenth of the spectrum this many times below the tenth under it is an anti-alias roll-off.
+ROLL_OFF = 2.0
+
+
+def white_floor(f: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """The white noise floor of one-sided PSDs ``S`` (F,) or (F, c) [unit^2/Hz]: the median
+    over the upper third of the spectrum; where the spectrum falls off towards Nyquist
+    (an anti-alias filter: the top tenth :data:`ROLL_OFF` times below the tenth under it),
+    the median of the highest tenth of the upper half below the roll-off (each tenth
+    walked past is more than :data:`ROLL_OFF` times below the one under it)."""
+    S = np.asarray(S, dtype=float)
+    one = S.ndim == 1
+    S2 = S[:, None] if one else S
+    nyq = f[-1]
+    tenth = [np.median(S2[(f >= k * nyq / 10) & (f <= (k + 1) * nyq / 10)], axis=0) for k in range(5, 10)]
+    out = np.median(S2[f >= (2.0 / 3.0) * nyq], axis=0)
+    for c in range(S2.shape[1]):
+        k = 4
+        while k > 0 and tenth[k - 1][c] > ROLL_OFF * tenth[k][c]:
+            k -= 1
+        if k < 4:
+            out[c] = tenth[k][c]
+    return out[0] if one else out
+
+
 def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False) -> Channel:
     """Spectral summary of one signal (module docstring)."""
     x = np.asarray(x, dtype=float)
     f, S = psd(x, dt)
-    floor = float(np.median(S[f >= (2.0 / 3.0) * f[-1]]))
+    floor = float(white_floor(f, S))
     above = np.where(S > DETECT * floor, S - floor, 0.0)
     total = float(above.sum())
     if total > 0:
@@ -200,3 +226,47 @@ def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "accelerat
     f_mid = float(np.median(mids)) if mids else float("nan")
     return NoiseModel(dt=float(dt), motion=kind, forces=forces, motions=motions, f_hi=float(f_hi), f_mid=f_mid,
                       band_source=source)
+
+
+#: Mains frequencies [Hz] whose lines (and harmonics) are looked for.
+MAINS_HZ = (50.0, 60.0)
+#: A spectral line stands this many times above the median PSD of its neighbourhood.
+LINE_RATIO = 20.0
+
+
+def mains_lines(signals: np.ndarray, dt: float, harmonics: int = 6) -> list[float]:
+    """Mains hum in a recording: the harmonics ``k f0`` (``f0`` 50 or 60 Hz, k up to
+    ``harmonics``, below Nyquist) at which some channel's PSD (segments of about 4 s) has a
+    narrow line, :data:`LINE_RATIO` times above the median of the bins within 5 Hz but
+    more than 1 Hz away. A mains frequency counts when its fundamental or two harmonics
+    show; then all its harmonics that show are returned."""
+    f, S = psd(np.asarray(signals, dtype=float).reshape(len(signals), -1), dt)
+    df = f[1] - f[0]
+    out: list[float] = []
+    for f0 in MAINS_HZ:
+        found = []
+        for k in range(1, harmonics + 1):
+            fk = k * f0
+            if fk >= f[-1] - 5.0:
+                break
+            i = int(round(fk / df))
+            near = (np.abs(f - fk) <= 5.0) & (np.abs(f - fk) > 1.0)
+            peak = S[max(i - 1, 0): i + 2].max(axis=0)
+            if np.any(peak > LINE_RATIO * np.median(S[near], axis=0)):
+                found.append(fk)
+        if f0 in found or len(found) >= 2:
+            out += found
+    return out
+
+
+def notch(x: np.ndarray, dt: float, lines_hz: list[float], width_hz: float = 0.5) -> np.ndarray:
+    """The columns of ``x`` without the bins within ``width_hz`` of each line (one FFT of the
+    whole record: the same linear filter on every channel, so eq. 1 still holds)."""
+    if not lines_hz:
+        return x
+    T = x.shape[0]
+    X = np.fft.rfft(x, axis=0)
+    f = np.fft.rfftfreq(T, dt)
+    for fl in lines_hz:
+        X[np.abs(f - fl) <= width_hz] = 0.0
+    return np.fft.irfft(X, T, axis=0)

@@ -125,6 +125,8 @@ def physical(fit: "CandidateFit") -> bool:
 #: A Stribeck peak counts only beyond this many jackknife sigma of its excess over the
 #: Coulomb level (the nested Coulomb model otherwise explains as much).
 STRIBECK_Z = 4.0
+#: Velocity scale of the Stribeck candidate's sign, a share of its Stribeck velocity.
+STRIBECK_SIGN = 0.05
 #: Longest input delay searched [samples]; the analysis skips at least this many samples.
 MAX_DELAY_SAMPLES = 100
 N_GRID = 24
@@ -294,11 +296,12 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
     v = ctx.v[:, i]
     rms = np.sqrt(np.mean(v**2))
     grid = np.log(rms * np.geomspace(1e-3, 1.0, N_GRID))
-    sgn = np.tanh(v / (1e-4 * rms))
 
     def build(lg):
+        vs = np.exp(lg)
+        sgn = np.tanh(v / (STRIBECK_SIGN * vs))  # the friction's sign fades in well inside the Stribeck zone
         cols = np.stack([effect_column(P, i, sgn, ctx.mass),
-                         effect_column(P, i, np.exp(-((v / np.exp(lg)) ** 2)) * sgn, ctx.mass)], axis=1)
+                         effect_column(P, i, np.exp(-((v / vs) ** 2)) * sgn, ctx.mass)], axis=1)
         return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2), y=target(P, i), E=cols, key=("base", i))]
 
     fit = _fit_grid(ctx, "stribeck_friction", {"dof": i + 1}, build, grid, np.exp, ["v_stribeck"],

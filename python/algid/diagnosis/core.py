@@ -67,6 +67,7 @@ import numpy as np
 
 from functools import lru_cache
 
+from ..noise import white_floor
 from ..reference import quadrature_weights
 
 #: Quadrature points of the integrals A1, A2 (as the estimator's default).
@@ -174,7 +175,7 @@ def excitation_frequency(x: np.ndarray, dt: float) -> tuple[float, float]:
     T = x.size
     nper = int(min(T, max(256, min(T // 4, round(1.0 / dt)))))
     f, S = welch(x, fs=1.0 / dt, nperseg=nper)
-    floor = float(np.median(S[f >= (2.0 / 3.0) * f[-1]]))
+    floor = float(white_floor(f, S))
     exc = np.where(S > BAND_DETECT * floor, S - floor, 0.0)
     tot = exc.sum()
     if not tot > 0:
@@ -193,7 +194,7 @@ def derived_noise_limit(a: np.ndarray, motion: np.ndarray, dt: float, order: int
     nper = int(min(a.shape[0], max(256, min(a.shape[0] // 4, round(1.0 / dt)))))
     f, Sa = welch(a, fs=1.0 / dt, nperseg=nper, axis=0)
     _, Sm = welch(motion, fs=1.0 / dt, nperseg=nper, axis=0)
-    floor = np.median(Sm[f >= (2.0 / 3.0) * f[-1]], axis=0)
+    floor = white_floor(f, Sm)
     noise = floor[None, :] * (2 * np.pi * f[:, None]) ** (2 * order)
     above = np.any(Sa > BAND_DETECT * noise, axis=1)
     above[0] = False

@@ -25,7 +25,7 @@ from typing import Callable
 import numpy as np
 
 from ..chain import Chain
-from ..noise import channel
+from ..noise import channel, mains_lines, notch, white_floor
 from ..recording import Recording, accelerations, derivative
 from ..recording import motion as recording_motion
 from .candidates import (
@@ -249,6 +249,7 @@ class Setup:
     model: ModelVerdict
     timings: dict
     measured: tuple | None = None  # (x, v) on the analysed samples when the record gives them
+    hum: list = field(default_factory=list)  # mains lines notched out [Hz]
 
 
 def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
@@ -262,9 +263,22 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
 
 
+def without_hum(rec: Recording) -> tuple[Recording, list[float]]:
+    """The recording with mains hum notched out of every channel alike
+    (:func:`algid.noise.mains_lines`, :func:`algid.noise.notch`), and the lines removed."""
+    kind, motion = recording_motion(rec)
+    lines = mains_lines(np.column_stack([rec.u, motion]), rec.dt)
+    if not lines:
+        return rec, []
+    key = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
+    clean = {"t": rec.t, "u": notch(rec.u, rec.dt, lines), key: notch(motion, rec.dt, lines)}
+    return Recording(**clean, path=rec.path), lines
+
+
 def _prepare(rec: Recording, boundary: str, progress) -> Setup:
     """Windows, band and form (module docstring, steps 1-2), linear fit, noise, model."""
     clock = time.perf_counter()
+    rec, hum = without_hum(rec)
     a, u, dt = accelerations(rec), rec.u, float(rec.dt)
     T = a.shape[0]
     skip = int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
@@ -291,9 +305,10 @@ def _prepare(rec: Recording, boundary: str, progress) -> Setup:
     if kind == "displacement":  # positions and their derivative, in band: no states to reconstruct
         xb = band_limited(rec.x, dt, band.f_hi)
         measured = (xb[P.sl], derivative(xb, dt, 1)[P.sl])
+    states = measured if measured is not None else (lin.x, lin.v)
     return Setup(P=P, lin=lin, band=band, denom=float(np.sum(P.y**2)), floor=floor, floor_band=floor_band,
-                 model=model_verdict(P, lin, band.f_hi), timings={"linear": time.perf_counter() - clock},
-                 measured=measured)
+                 model=model_verdict(P, lin, band.f_hi, states), timings={"linear": time.perf_counter() - clock},
+                 measured=measured, hum=hum)
 
 
 def band_limited(x: np.ndarray, dt: float, f_hi: float) -> np.ndarray:
@@ -326,7 +341,7 @@ def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: 
     f_hi = P.band_hz if P.band_hz is not None else 0.5 * fs
     f, S = welch(np.column_stack([P.u_full] + ([motion] if motion is not None else [])), fs=fs,
                  nperseg=min(P.L, 1024), axis=0)
-    white = np.median(S[f >= (2.0 / 3.0) * f[-1]], axis=0)
+    white = white_floor(f, S)
     n = P.n
     acc_band = np.sqrt(white[n:] * (2 * np.pi) ** (2 * order) * f_hi ** (2 * order + 1) / (2 * order + 1)) \
         if motion is not None else band
@@ -488,7 +503,7 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
                      extra={"natural_hz": natural.tolist(), "noise_floor": floor_rel,
                             "noise_floor_full": floor_rel_full, "explained_excess": explained,
                             "ctx": ctx, "model": st.model, "force": force, "form": P.form,
-                            "combination": combo if best is not None else None})
+                            "combination": combo if best is not None else None, "mains_hz": st.hum})
 
 
 def _candidate_sse_eq(lin: LinearFit, s: Scored) -> np.ndarray:

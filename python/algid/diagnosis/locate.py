@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import welch
 
+from ..noise import white_floor
+
 from .candidates import deformation, spring_sides
 from .core import Prepared, springs
 from .linear import LinearFit, per_window_fits
@@ -20,12 +22,12 @@ N_BINS = 24
 
 
 def noise_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
-    """Per-DOF RMS [m/s^2] of the white part of the equation error, estimated from the
-    median power spectral density over the upper third of the band (above the forcing
-    and the modes in a well-sampled record) times the bandwidth."""
+    """Per-DOF RMS of the white part of the equation error (its target units), from its
+    white PSD floor (:func:`algid.noise.white_floor`: the upper third of the band, above the
+    forcing and the modes in a well-sampled record, or below an anti-alias roll-off) times
+    the bandwidth."""
     f, S = welch(resid, fs=1.0 / P.dt, nperseg=min(P.L, 1024), axis=0)
-    upper = f >= (2.0 / 3.0) * f[-1]
-    return np.sqrt(np.median(S[upper], axis=0) * f[-1])
+    return np.sqrt(white_floor(f, S) * f[-1])
 
 
 def binned_r2(z: np.ndarray, r: np.ndarray, bins: int = N_BINS) -> float:
@@ -77,8 +79,7 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
     # Frequency: where the residual exceeds its white floor.
     f, S = welch(resid, fs=1.0 / P.dt, nperseg=min(4 * P.L, 4096, P.nw * P.L), axis=0)
     Ssum = S.sum(axis=1)
-    upper = f >= (2.0 / 3.0) * f[-1]
-    excess = np.clip(Ssum - np.median(Ssum[upper]), 0.0, None)
+    excess = np.clip(Ssum - white_floor(f, Ssum), 0.0, None)
     if excess.max() > 0:
         k = int(np.argmax(excess))
         half = np.nonzero(excess >= 0.5 * excess[k])[0]

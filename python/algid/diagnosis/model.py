@@ -14,7 +14,7 @@ recording and of the linear fit, and reports the first that fails with its evide
    above :data:`PEAK_COHERENCE` (a structure measured at fewer points than it has modes).
 3. ``not_a_chain``: the linear fit is not physical: a mass, a damping or a spring below
    zero by more than three jackknife sigma (a mass that is not positive within that is
-   question 1's).
+   question 1's), unless its force is negligible (:data:`NEGLIGIBLE` of the force).
 
 Otherwise ``chain``. ``admissible`` (question 3 alone) is reported too; the diagnosis
 never says ``none`` (nothing to explain) unless the fit is admissible and the record has
@@ -35,6 +35,9 @@ MODEL_VERDICTS = ("chain", "inertia_not_identifiable", "more_modes_than_dof", "n
 INERTIA_SHARE = 0.02
 #: A resonance peak stands this many times above the lower of its two flanking minima.
 PEAK_PROMINENCE = 2.0
+#: A negative damping or spring whose force is below this share of the force in the band
+#: does not make the fit inadmissible.
+NEGLIGIBLE = 0.01
 #: Coherence of force and acceleration at a resonance peak that is counted.
 PEAK_COHERENCE = 0.8
 
@@ -114,26 +117,46 @@ def resonances(P: Prepared, f_hi: float) -> dict:
     return out
 
 
-def admissibility(P: Prepared, lin: LinearFit, sd: list[np.ndarray]) -> list[str]:
-    """Physically impossible parameters of the linear fit (question 3), one line each."""
+def admissibility(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float,
+                  states: tuple[np.ndarray, np.ndarray]) -> list[str]:
+    """Physically impossible parameters of the linear fit (question 3), one line each: below
+    zero by three sigma and standing for at least :data:`NEGLIGIBLE` of the force in the
+    band (a spring of -0.4 N/m on an axis that moves 50 mm under tens of newtons is no
+    evidence against the chain); ``states = (x, v)`` on the analysed samples."""
+    from .core import spring_columns
+
+    u_rms = band_rms(P.u, P.dt, f_hi)
+    x, v = states
+    v_rms = band_rms(v, P.dt, f_hi)
     bad = []
     for e in range(P.n):
         th, s = lin.theta[e], sd[e]
         if P.forced[e] and th[0] < -3 * s[0]:
             bad.append(f"DOF {e + 1}: mass {th[0]:.4g} +- {s[0]:.2g} is negative")
-        for name, val, sg in zip(lin.names[e][1:], th[1:], s[1:]):
-            if val < -3 * sg:
-                what = "damping" if name == "c" else f"spring {name[1:]}"
-                bad.append(f"DOF {e + 1}: {what} {val:.4g} +- {sg:.2g} is negative")
+        force = u_rms[e] if P.forced[e] else np.nan
+        for q, (name, val, sg) in enumerate(zip(lin.names[e][1:], th[1:], s[1:])):
+            if not val < -3 * sg:
+                continue
+            if name == "c":
+                reg = v_rms[e]
+            else:
+                j, other = spring_columns(P.n, P.boundary)[e][q - 1]
+                d = x[:, e] - (x[:, other] if other >= 0 else 0.0)
+                reg = band_rms(d[:, None], P.dt, f_hi)[0]
+            if np.isfinite(force) and abs(val) * reg < NEGLIGIBLE * force:
+                continue
+            what = "damping" if name == "c" else f"spring {name[1:]}"
+            bad.append(f"DOF {e + 1}: {what} {val:.4g} +- {sg:.2g} is negative")
     return bad
 
 
-def model_verdict(P: Prepared, lin: LinearFit, f_hi: float) -> ModelVerdict:
-    """The three questions of the module docstring, in order."""
+def model_verdict(P: Prepared, lin: LinearFit, f_hi: float, states: tuple | None = None) -> ModelVerdict:
+    """The three questions of the module docstring, in order; ``states = (x, v)`` measured
+    or reconstructed on the analysed samples (default: the linear fit's reconstruction)."""
     sd = physical_uncertainty(P, lin)
     ine = inertia(P, lin, sd, f_hi)
     res = resonances(P, f_hi)
-    bad = admissibility(P, lin, sd)
+    bad = admissibility(P, lin, sd, f_hi, states if states is not None else (lin.x, lin.v))
     reasons = []
     for dof, d in ine.items():
         if not d["determined"]:

@@ -56,6 +56,7 @@ def to_json(d) -> dict:
         "model": d.extra["model"].to_json() if "model" in d.extra else None,
         "combination": _combination_json(d.extra.get("combination")),
         "equation_form": d.extra.get("form", "acceleration"),
+        "mains_hum_removed_hz": d.extra.get("mains_hz", []),
         "band": d.band.to_json() | {"window_bins_kept": int(d.P.band_mask.sum()),
                                     "window_bins": int(d.P.band_mask.size),
                                     "white_noise_fraction": d.P.band_fraction},
