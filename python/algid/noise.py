@@ -169,8 +169,11 @@ def white_floor(f: np.ndarray, S: np.ndarray) -> np.ndarray:
     one = S.ndim == 1
     S2 = S[:, None] if one else S
     nyq = f[-1]
-    tenth = [np.median(S2[(f >= k * nyq / 10) & (f <= (k + 1) * nyq / 10)], axis=0) for k in range(5, 10)]
     out = np.median(S2[f >= (2.0 / 3.0) * nyq], axis=0)
+    masks = [(f >= k * nyq / 10) & (f <= (k + 1) * nyq / 10) for k in range(5, 10)]
+    if min(int(m.sum()) for m in masks) < 2:  # too few bins to see a roll-off
+        return out[0] if one else out
+    tenth = [np.median(S2[m], axis=0) for m in masks]
     for c in range(S2.shape[1]):
         k = 4
         while k > 0 and tenth[k - 1][c] > ROLL_OFF * tenth[k][c]:
