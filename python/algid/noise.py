@@ -246,6 +246,8 @@ def mains_lines(signals: np.ndarray, dt: float, harmonics: int = 6) -> list[floa
     f, S = psd(np.asarray(signals, dtype=float).reshape(len(signals), -1), dt)
     df = f[1] - f[0]
     out: list[float] = []
+    if df > 0.5:  # segments under 2 s cannot tell a line from its neighbourhood
+        return out
     for f0 in MAINS_HZ:
         found = []
         for k in range(1, harmonics + 1):
