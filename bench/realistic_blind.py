@@ -18,8 +18,8 @@ Rigs (probabilities 0.5 / 0.25 / 0.25):
   (0.3); the same anti-alias filter on every channel (0.5; 4th-order Butterworth at
   0.25-0.45 fs, causal); sample jitter (0.3; 1-5 % of the sample period); an extra
   structural mode above the chain's (0.3; a flexible right support or a light appendage
-  at 2-4 times the highest natural frequency and 1.5-3 times the top of the forcing
-  band, not recorded).
+  at 2-4 times the highest natural frequency and 4-8 times the top of the forcing band,
+  at most 0.45 fs, not recorded).
 * ``axis``: the positioning axis of :func:`algid.scenarios.positioning_axis` (mass
   2-10 kg, viscous 10-50 N s/m, no spring, closed-loop bang-bang moves, 20 s, encoder of
   0.5-5 um, position only), the force as the drive commands it with 40-60 dB of current
@@ -128,17 +128,20 @@ def sensor_chain(t, u, y, rng, snr_db: float, info: dict) -> tuple[np.ndarray, n
 def with_extra_mode(chain: Chain, rng, info: dict) -> Chain:
     """An (n+1)-DOF plant: the chain plus a light mass at its right end, on a flexible
     support (fixed end) or as an appendage (free end), its mode 2-4 x the chain's top and
-    1.5-3 x the top of the forcing band (a higher mode of the structure, above the test)."""
+    4-8 x the top of the forcing band, at most 0.45 fs (a higher mode of the structure,
+    above the test)."""
     n = chain.n
     fmax = float(chain.natural_frequencies_hz().max())
     me = 0.1 * float(chain.mass.min())
-    fe = max(fmax * float(rng.uniform(2.0, 4.0)), B.F_BAND_HZ[1] * float(rng.uniform(1.5, 3.0)))
+    fe = min(max(fmax * float(rng.uniform(2.0, 4.0)), B.F_BAND_HZ[1] * float(rng.uniform(4.0, 8.0))), 0.45 * FS)
     ke = me * (2 * np.pi * fe) ** 2
     m = np.r_[chain.mass, me]
     c = np.r_[chain.damping, 0.01 * chain.damping.mean()]
-    if chain.boundary == "fixed":  # k_{n+1} in series with a stiff support: the same at low frequency
-        kw = chain.stiffness[n]
-        ka = kb = 2 * kw if kw > 0 else ke
+    if chain.boundary == "fixed":  # k_{n+1} split in two springs in series around the light mass:
+        kw = chain.stiffness[n]    # the same wall spring at low frequency, a mode ka + kb = me we^2
+        S = max(ke, 4.0 * kw)
+        root = np.sqrt(max(S * S - 4.0 * S * kw, 0.0))
+        ka, kb = 0.5 * (S + root), 0.5 * (S - root)
         k = np.r_[chain.stiffness[:n], ka, kb]
         plant = Chain(m, c, k, "fixed")
     else:

@@ -486,6 +486,10 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     if gap_before < GAP_RESOLUTION:
         best = None
     floor_rel = max(floor_rel, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
+    # the noise of the final residual may be coloured (1/f sensor noise): its in-band floor
+    # with a 1/f part fitted robustly to that residual (:func:`coloured_floor`)
+    final = lin.resid if best is None else detrend(P, raw_residual(ctx, best.fit)).reshape(lin.resid.shape)
+    floor_rel = max(floor_rel, float(np.sqrt(coloured_floor(P, final).sum() / denom)))
     verdict = _verdict(gap_before, gap_before_full, floor_rel, best, st.model)
     effect, best, explained = verdict["effect"], verdict["best"], verdict["explained"]
     gap_after = best.gap_after if best is not None else gap_before
@@ -504,6 +508,25 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
                             "noise_floor_full": floor_rel_full, "explained_excess": explained,
                             "ctx": ctx, "model": st.model, "force": force, "form": P.form,
                             "combination": combo if best is not None else None, "mains_hz": st.hum})
+
+
+def coloured_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
+    """(n,) in-band noise power of detrended equation errors ``resid`` (N, n), summed over
+    the analysed samples, under a white plus 1/f noise model: per DFT bin of a window, the
+    mean power over the windows; the white level ``w`` from the bins above the band
+    (:func:`algid.noise.white_floor`); the 1/f level ``p`` the median over the band's bins of
+    ``(power - w) f`` (a median: an effect's power on a few bins does not move it); the
+    floor ``sum over the band of w + p / f``. For white noise ``p`` is about 0 and this is
+    the white floor's band share."""
+    R = P.windows(resid)  # (nw, L, n)
+    pw = parseval_weights(P.L)[:, None] * np.mean(np.abs(np.fft.rfft(R, axis=1)) ** 2, axis=0) / P.L
+    fk = np.fft.rfftfreq(P.L, P.dt)
+    band = P.band_mask & (fk > 0)
+    if P.full_band or band.sum() < 4:  # no bins above the band to tell the white level
+        return np.zeros(P.n)
+    w = white_floor(fk[~P.band_mask], pw[~P.band_mask]) if (~P.band_mask).sum() >= 2 else np.median(pw, axis=0)
+    p = np.median(np.maximum(pw[band] - w, 0.0) * fk[band, None], axis=0)
+    return P.nw * (w * band.sum() + p * np.sum(1.0 / fk[band]))
 
 
 def _candidate_sse_eq(lin: LinearFit, s: Scored) -> np.ndarray:
