@@ -125,7 +125,8 @@ def physical(fit: "CandidateFit") -> bool:
 #: A Stribeck peak counts only beyond this many jackknife sigma of its excess over the
 #: Coulomb level (the nested Coulomb model otherwise explains as much).
 STRIBECK_Z = 4.0
-#: Velocity scale of the Stribeck candidate's sign, a share of its Stribeck velocity.
+#: Velocity scale of the Stribeck candidate's sign, a share of its Stribeck velocity, when
+#: no Coulomb candidate was fitted at the same DOF first.
 STRIBECK_SIGN = 0.05
 #: Longest input delay searched [samples]; the analysis skips at least this many samples.
 MAX_DELAY_SAMPLES = 100
@@ -142,6 +143,8 @@ class Context:
     lin: LinearFit
     x: np.ndarray
     v: np.ndarray
+    #: what one candidate's fit tells another (the Coulomb velocity scale of each DOF)
+    shared: dict = field(default_factory=dict)
 
     @property
     def mass(self) -> np.ndarray:
@@ -284,6 +287,7 @@ def fit_coulomb(ctx: Context, i: int) -> CandidateFit:
         return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2), y=target(P, i), E=col[:, None], key=("base", i))]
 
     fit = _fit_grid(ctx, "coulomb_friction", {"dof": i + 1}, build, grid, np.exp, ["v_scale"], ["force"])
+    ctx.shared[("v_scale", i)] = fit.params["v_scale"]
     order = ("force", "v_scale")
     fit.params = {k: fit.params[k] for k in order}
     fit.params_std = {k: fit.params_std[k] for k in order}
@@ -297,9 +301,12 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
     rms = np.sqrt(np.mean(v**2))
     grid = np.log(rms * np.geomspace(1e-3, 1.0, N_GRID))
 
+    v_sign = ctx.shared.get(("v_scale", i))  # the Coulomb fit's: the velocity noise around rest
+
     def build(lg):
         vs = np.exp(lg)
-        sgn = np.tanh(v / (STRIBECK_SIGN * vs))  # the friction's sign fades in well inside the Stribeck zone
+        # the friction's sign fades in as the Coulomb candidate found, or well inside the zone
+        sgn = np.tanh(v / (v_sign if v_sign is not None else STRIBECK_SIGN * vs))
         cols = np.stack([effect_column(P, i, sgn, ctx.mass),
                          effect_column(P, i, np.exp(-((v / vs) ** 2)) * sgn, ctx.mass)], axis=1)
         return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2), y=target(P, i), E=cols, key=("base", i))]

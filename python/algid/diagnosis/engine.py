@@ -397,7 +397,8 @@ def _refit_leaders(st: Setup, ctx: Context, scored: list[Scored]) -> list[Scored
             for e, th in zip(s.fit.eqs, s.fit.thetas):
                 thetas[e] = th
             x, v = reconstruct_states(P, thetas, raw_residual(ctx, s.fit))
-            refit = _assess(P, lin, fit_candidate(Context(P=P, lin=lin, x=x, v=v), s.fit.effect, loc), st.denom,
+            refit = _assess(P, lin, fit_candidate(Context(P=P, lin=lin, x=x, v=v, shared=ctx.shared), s.fit.effect,
+                                                  loc), st.denom,
                             st.floor)
             if refit.gap_after >= 0.999 * s.gap_after:
                 break

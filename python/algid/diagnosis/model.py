@@ -14,7 +14,7 @@ recording and of the linear fit, and reports the first that fails with its evide
    above :data:`PEAK_COHERENCE` (a structure measured at fewer points than it has modes).
 3. ``not_a_chain``: the linear fit is not physical: a mass, a damping or a spring below
    zero by more than three jackknife sigma (a mass that is not positive within that is
-   question 1's), unless its force is negligible (:data:`NEGLIGIBLE` of the force).
+   question 1's), unless its force is under :data:`NEGLIGIBLE` of the force.
 
 Otherwise ``chain``. ``admissible`` (question 3 alone) is reported too; the diagnosis
 never says ``none`` (nothing to explain) unless the fit is admissible and the record has
@@ -36,8 +36,9 @@ INERTIA_SHARE = 0.02
 #: A resonance peak stands this many times above the lower of its two flanking minima.
 PEAK_PROMINENCE = 2.0
 #: A negative damping or spring whose force is below this share of the force in the band
-#: does not make the fit inadmissible.
-NEGLIGIBLE = 0.01
+#: does not make the fit inadmissible (the windowed fit of a closed-loop axis without a
+#: spring puts a few percent of its force into a small negative spring).
+NEGLIGIBLE = 0.05
 #: Coherence of force and acceleration at a resonance peak that is counted.
 PEAK_COHERENCE = 0.8
 
