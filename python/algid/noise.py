@@ -164,7 +164,10 @@ def white_floor(f: np.ndarray, S: np.ndarray) -> np.ndarray:
     over the upper third of the spectrum; where the spectrum falls off towards Nyquist
     (an anti-alias filter: the top tenth :data:`ROLL_OFF` times below the tenth under it),
     the median of the highest tenth of the upper half below the roll-off (each tenth
-    walked past is more than :data:`ROLL_OFF` times below the one under it)."""
+    walked past is more than :data:`ROLL_OFF` times below the one under it), provided the
+    spectrum is flat there (the next tenth down within :data:`ROLL_OFF`; a spectrum that
+    keeps falling through the upper half is the signal's own, and has no flat floor to
+    find)."""
     S = np.asarray(S, dtype=float)
     one = S.ndim == 1
     S2 = S[:, None] if one else S
@@ -178,7 +181,7 @@ def white_floor(f: np.ndarray, S: np.ndarray) -> np.ndarray:
         k = 4
         while k > 0 and tenth[k - 1][c] > ROLL_OFF * tenth[k][c]:
             k -= 1
-        if k < 4:
+        if 0 < k < 4:  # a flat stretch under the roll-off (a spectrum still falling at mid-band is signal)
             out[c] = tenth[k][c]
     return out[0] if one else out
 

@@ -487,11 +487,12 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     if gap_before < GAP_RESOLUTION:
         best = None
     floor_rel = max(floor_rel, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
+    floor_white = floor_rel
     # the noise of the final residual may be coloured (1/f sensor noise): its in-band floor
     # with a 1/f part fitted robustly to that residual (:func:`coloured_floor`)
     final = lin.resid if best is None else detrend(P, raw_residual(ctx, best.fit)).reshape(lin.resid.shape)
     floor_rel = max(floor_rel, float(np.sqrt(coloured_floor(P, final).sum() / denom)))
-    verdict = _verdict(gap_before, gap_before_full, floor_rel, best, st.model)
+    verdict = _verdict(gap_before, gap_before_full, floor_rel, best, st.model, floor_white)
     effect, best, explained = verdict["effect"], verdict["best"], verdict["explained"]
     gap_after = best.gap_after if best is not None else gap_before
     gap_after_full = best.gap_after_full if best is not None else gap_before_full
@@ -540,11 +541,12 @@ def _candidate_sse_eq(lin: LinearFit, s: Scored) -> np.ndarray:
 
 
 def _verdict(gap_before: float, gap_before_full: float, floor_rel: float, best: Scored | None,
-             model: ModelVerdict) -> dict:
+             model: ModelVerdict, floor_white: float | None = None) -> dict:
     """Effect verdict (module docstring, step 4): the best significant candidate unless it
-    leaves most of a large gap unexplained (``unknown``); ``none`` only when nothing is
-    beyond noise, the gap is at the noise floor, the linear fit is admissible and the record
-    has no more modes than the chain (:mod:`.model`); else ``unknown``."""
+    leaves most of a large gap unexplained (``unknown``), or, on a record with more modes
+    than the chain, unless it brings the gap to the white noise floor; ``none`` only when
+    nothing is beyond noise, the gap is at the noise floor, the linear fit is admissible
+    and the record has no more modes than the chain (:mod:`.model`); else ``unknown``."""
     excess = gap_before**2 - floor_rel**2
     if best is None:
         at_floor = gap_before <= UNKNOWN_FLOOR_RATIO * floor_rel
@@ -552,6 +554,11 @@ def _verdict(gap_before: float, gap_before_full: float, floor_rel: float, best: 
         return {"effect": "none" if at_floor and fits else "unknown", "best": None, "explained": 0.0}
     explained = float((gap_before**2 - best.gap_after**2) / excess) if excess > 0 else 1.0
     if best.gap_after > UNKNOWN_FLOOR_RATIO * floor_rel and explained < MIN_EXPLAINED:
+        return {"effect": "unknown", "best": None, "explained": explained}
+    white = floor_rel if floor_white is None else floor_white
+    if model.verdict == "more_modes_than_dof" and best.gap_after > UNKNOWN_FLOOR_RATIO * white:
+        # a chain short of modes leaves a gap no effect of the chain closes: only an effect
+        # that brings it to the white noise floor is an explanation
         return {"effect": "unknown", "best": None, "explained": explained}
     return {"effect": best.fit.effect, "best": best, "explained": explained}
 

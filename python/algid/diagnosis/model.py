@@ -41,6 +41,9 @@ PEAK_PROMINENCE = 2.0
 NEGLIGIBLE = 0.05
 #: Coherence of force and acceleration at a resonance peak that is counted.
 PEAK_COHERENCE = 0.8
+#: A peak this many times above its flanks counts down to this coherence.
+PEAK_STRONG = 10.0
+PEAK_COHERENCE_STRONG = 0.15
 
 
 @dataclass
@@ -90,12 +93,16 @@ def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> d
 
 
 def resonances(P: Prepared, f_hi: float) -> dict:
-    """Resonance peaks of every forced DOF's drive-point H1 (question 2), where its force
-    carries power (up to the force's own band edge, :func:`algid.noise.channel`) and in
-    the signal band; segments of an eighth of the record (fine resolution, 8 averages)."""
+    """Resonance peaks of every forced DOF's drive-point H1 (question 2), in the signal band,
+    below the force's own band edge (:func:`algid.noise.channel`) and where it carries
+    power (PSD above :data:`algid.noise.DETECT` times its white floor); segments of an eighth of the record (fine resolution, 8 averages). A peak
+    counts with coherence of at least :data:`PEAK_COHERENCE`, or, standing
+    :data:`PEAK_STRONG` times above its flanks, of at least :data:`PEAK_COHERENCE_STRONG`
+    (a struck, lightly damped structure rings on into segments the hammer did not touch,
+    which lowers the coherence of its sharpest resonances)."""
     from scipy.signal import csd, find_peaks, welch
 
-    from ..noise import channel
+    from ..noise import DETECT, channel, white_floor
 
     fs = 1.0 / P.dt
     T = P.u_full.shape[0]
@@ -103,18 +110,19 @@ def resonances(P: Prepared, f_hi: float) -> dict:
     out = {}
     for e in np.nonzero(P.forced)[0]:
         u, a = P.u_full[:, e], P.a_full[:, e]
-        f_top = min(f_hi, channel("u", u, P.dt).f_hi)
         f, Puu = welch(u, fs=fs, nperseg=nper)
         _, Paa = welch(a, fs=fs, nperseg=nper)
         _, Pua = csd(u, a, fs=fs, nperseg=nper)
         with np.errstate(divide="ignore", invalid="ignore"):
             H = np.abs(Pua) / Puu
             coh = np.abs(Pua) ** 2 / (Puu * Paa)
-        keep = (f > 2 * f[1]) & (f <= f_top) & np.isfinite(H) & (H > 0)
+        f_top = min(f_hi, channel("u", u, P.dt).f_hi)
+        keep = (f > 2 * f[1]) & (f <= f_top) & (Puu > DETECT * white_floor(f, Puu)) & np.isfinite(H) & (H > 0)
         logH = np.where(keep, np.log(np.where(H > 0, H, 1.0)), -np.inf)
-        idx, _ = find_peaks(logH, prominence=np.log(PEAK_PROMINENCE))
-        peaks = [float(f[i]) for i in idx if keep[i] and coh[i] >= PEAK_COHERENCE]
-        out[int(e) + 1] = {"peaks_hz": peaks, "count": len(peaks), "searched_hz": [float(2 * f[1]), float(f_top)]}
+        idx, props = find_peaks(logH, prominence=np.log(PEAK_PROMINENCE))
+        peaks = [float(f[i]) for i, pr in zip(idx, props["prominences"]) if keep[i] and (
+            coh[i] >= PEAK_COHERENCE or (pr >= np.log(PEAK_STRONG) and coh[i] >= PEAK_COHERENCE_STRONG))]
+        out[int(e) + 1] = {"peaks_hz": peaks, "count": len(peaks)}
     return out
 
 
