@@ -80,6 +80,11 @@ def test_f16_lumped_chain_is_not_explained_by_one_effect():
     d = diagnose(f16_chain_recording(DATA, 7), boundary="free")
     assert d.effect == "unknown"
     assert d.gap_before > 0.2  # a three-mass chain is far from a full aircraft
+    # ... and says why: the drive point shows the aircraft's modes, more than three
+    model = d.extra["model"]
+    assert model.verdict == "more_modes_than_dof"
+    peaks = model.evidence["resonances"][1]["peaks_hz"]
+    assert len(peaks) > 3 and any(abs(f - 7.3) < 0.2 for f in peaks)  # the wing-torsion mode among them
     # The worst equations are those of the joint (wing side, payload side), not the shaker's.
     gaps = [p["gap"] for p in d.where["per_dof"]]
     assert min(gaps[1], gaps[2]) > gaps[0]

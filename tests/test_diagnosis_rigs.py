@@ -1,0 +1,98 @@
+"""``algid diagnose`` on recordings as rigs write them (issue 16): encoder positions, velocities,
+quasi-static devices, closed loops, hum, anti-alias filters, struck structures. Every record
+is generated with its truth (``algid.scenarios``); the checks are on the diagnosis's answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.signal import butter, lfilter
+from signals import FRICTION_AND_OFFSET, multisine
+
+from algid.chain import TABLE1, Chain
+from algid.diagnosis import diagnose
+from algid.diagnosis.report import to_json
+from algid.recording import Recording
+from algid.scenarios import displacement_driven, impact_test, positioning_axis
+from algid.simulator import simulate
+
+
+def _coulomb(force):
+    return {"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": force}}
+
+
+def test_closed_loop_axis_from_encoder_counts_is_dry_friction():
+    d = diagnose(positioning_axis(seed=2, effects=FRICTION_AND_OFFSET).recording)
+    assert d.band.source == "force 1"  # not the differentiated encoder noise
+    assert d.effect == "coulomb_friction" and d.params["force"] == pytest.approx(1.5, rel=0.3)
+    js = to_json(d)
+    assert js["gap_after_force"] < js["gap_before_force"] and js["gap_before"] / js["gap_after"] > 1.5
+
+
+def test_quasi_static_device_is_solved_for_the_force():
+    lin = diagnose(displacement_driven(seed=1).recording)
+    assert lin.effect == "none" and lin.extra["form"] == "force"
+    assert lin.extra["model"].verdict == "inertia_not_identifiable"
+    assert lin.lin.theta[0][1] == pytest.approx(200.0, rel=0.02)  # damping
+    assert lin.lin.theta[0][2] == pytest.approx(2e4, rel=0.01)  # spring
+    d = diagnose(displacement_driven(seed=1, effects=[_coulomb(20.0)]).recording)
+    assert d.effect == "coulomb_friction" and d.params["force"] == pytest.approx(20.0, rel=0.05)
+    assert d.gap_before / d.gap_after > 10
+
+
+def test_friction_with_backlash_is_reported_as_a_combination():
+    backlash = {"name": "clearance", "location": {"spring": 1}, "params": {"gap": 2e-4, "stiffness": 2e4}}
+    d = diagnose(displacement_driven(seed=0, stiffness_n_m=0.0, effects=[_coulomb(20.0), backlash]).recording)
+    combo = to_json(d)["combination"]
+    assert combo is not None
+    parts = {p["effect"]: p for p in combo["effects"]}
+    assert set(parts) == {"coulomb_friction", "clearance"}
+    assert parts["coulomb_friction"]["params"]["force"] == pytest.approx(20.0, rel=0.05)
+    assert parts["clearance"]["params"]["gap"] == pytest.approx(2e-4, rel=0.4)
+    assert combo["gap_after"] < 0.5 * d.gap_after
+
+
+@pytest.mark.parametrize("effect,params,loc", [
+    ("amplitude_damping", {"c_amp": 4e6}, {"spring": 1}),
+    ("stribeck_friction", {"force": 8.0, "static": 24.0, "v_stribeck": 2e-3}, {"dof": 1}),
+])
+def test_new_effects_of_the_vocabulary(effect, params, loc):
+    d = diagnose(displacement_driven(seed=3, effects=[{"name": effect, "location": loc, "params": params}]).recording)
+    assert d.effect == effect and d.location == loc
+    main = "c_amp" if effect == "amplitude_damping" else "force"
+    assert d.params[main] == pytest.approx(params[main], rel=0.2)
+
+
+def test_struck_structure_has_more_modes_than_its_one_dof():
+    sc = impact_test(seed=0)  # force and drive-point velocity, 10 kHz, five modes
+    d = diagnose(sc.recording)
+    assert d.effect in ("unknown", "none") and d.extra["model"].verdict == "more_modes_than_dof"
+    found = d.extra["model"].evidence["resonances"][1]["peaks_hz"]
+    for f in sc.info["natural_hz"]:
+        assert min(abs(np.array(found) - f)) < 0.03 * f
+
+
+def _table1(noise_db=50.0, seed=4):
+    r = simulate(TABLE1, multisine(3, seed=seed, offset_n=0.0), 10.0, 1000.0)
+    rng = np.random.default_rng(seed)
+    a = r.a + 10 ** (-noise_db / 20) * r.a.std(axis=0) * rng.standard_normal(r.a.shape)
+    return r.t, r.u, a
+
+
+def test_hum_and_anti_alias_filter_are_not_effects():
+    t, u, a = _table1()
+    hum = np.sin(2 * np.pi * 50.0 * t)[:, None] + 0.5 * np.sin(2 * np.pi * 150.0 * t + 1.0)[:, None]
+    d = diagnose(Recording(t=t, u=u, a=a + 0.05 * a.std(axis=0) * hum))
+    assert d.effect == "none" and {50.0, 150.0} <= set(d.extra["mains_hz"])
+    bb, aa = butter(4, 0.6)  # a common anti-alias filter at 0.3 fs on every channel
+    d = diagnose(Recording(t=t, u=lfilter(bb, aa, u, axis=0), a=lfilter(bb, aa, a, axis=0)))
+    assert d.effect == "none" and d.extra["model"].verdict == "chain"
+
+
+def test_velocity_record_with_dry_friction():
+    chain = Chain([1.5, 2.0], [3.0, 4.0], [800.0, 600.0, 900.0])
+    r = simulate(chain, multisine(2, seed=5, offset_n=0.0), 10.0, 1000.0, effects=[_coulomb(0.5)])
+    v = r.v + 1e-3 * r.v.std(axis=0) * np.random.default_rng(5).standard_normal(r.v.shape)
+    d = diagnose(Recording(t=r.t, u=r.u, v=v))  # a laser vibrometer on each mass
+    assert (d.effect, d.location) == ("coulomb_friction", {"dof": 1})
+    assert d.params["force"] == pytest.approx(0.5, rel=0.2)
