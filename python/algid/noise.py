@@ -278,3 +278,17 @@ def notch(x: np.ndarray, dt: float, lines_hz: list[float], width_hz: float = 0.5
     for fl in lines_hz:
         X[np.abs(f - fl) <= width_hz] = 0.0
     return np.fft.irfft(X, T, axis=0)
+
+
+def without_hum(rec):
+    """The recording (:class:`algid.recording.Recording`) with mains hum notched out of
+    every channel alike (:func:`mains_lines`, :func:`notch`), and the lines removed [Hz]."""
+    from .recording import Recording, motion
+
+    kind, y = motion(rec)
+    lines = mains_lines(np.column_stack([rec.u, y]), rec.dt)
+    if not lines:
+        return rec, []
+    key = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
+    clean = {"t": rec.t, "u": notch(rec.u, rec.dt, lines), key: notch(y, rec.dt, lines)}
+    return Recording(**clean, path=rec.path), lines

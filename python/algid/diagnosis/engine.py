@@ -25,7 +25,7 @@ from typing import Callable
 import numpy as np
 
 from ..chain import Chain
-from ..noise import channel, mains_lines, notch, white_floor
+from ..noise import channel, white_floor, without_hum
 from ..recording import Recording, accelerations, derivative
 from ..recording import motion as recording_motion
 from .candidates import (
@@ -261,18 +261,6 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     lin = fit_linear(P)
     shares = [d["inertia_share"] for d in inertia(P, lin, physical_uncertainty(P, lin), band.f_hi).values()]
     return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
-
-
-def without_hum(rec: Recording) -> tuple[Recording, list[float]]:
-    """The recording with mains hum notched out of every channel alike
-    (:func:`algid.noise.mains_lines`, :func:`algid.noise.notch`), and the lines removed."""
-    kind, motion = recording_motion(rec)
-    lines = mains_lines(np.column_stack([rec.u, motion]), rec.dt)
-    if not lines:
-        return rec, []
-    key = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
-    clean = {"t": rec.t, "u": notch(rec.u, rec.dt, lines), key: notch(motion, rec.dt, lines)}
-    return Recording(**clean, path=rec.path), lines
 
 
 def _prepare(rec: Recording, boundary: str, progress) -> Setup:

@@ -1,7 +1,8 @@
 """``algid.identify(recording)``: the whole-record identification with uncertainty and
 verdicts.
 
-1. Signals: the measured accelerations, or the second derivative of the displacements
+1. Signals: mains hum notched out of every channel alike (:func:`algid.noise.without_hum`);
+   the measured accelerations, or the derivatives of the velocities or displacements
    (:func:`algid.recording.accelerations`); the forces.
 2. Noise model and signal band of the recording (:mod:`algid.noise`).
 3. Plan (:mod:`.plan`): which estimator; for the continuous estimator, a first run with a
@@ -30,7 +31,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ..noise import NoiseModel, analyse
+from ..noise import NoiseModel, analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations
 from ..recording import motion as recording_motion
 from .plan import Plan, make_plan, natural_frequencies_hz, window_candidates, window_limits
@@ -132,6 +133,7 @@ def identify(rec: Recording, boundary: str = "fixed", estimator: str = "auto", r
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     if int(replicates) < 2:
         raise ValueError(f"replicates must be >= 2, got {replicates}")
+    rec, hum = without_hum(rec)
     n, dt = rec.n, float(rec.dt)
     a = accelerations(rec, DEFAULT_DIFF_POINTS)
     kind, motion = recording_motion(rec)
@@ -164,4 +166,4 @@ def identify(rec: Recording, boundary: str = "fixed", estimator: str = "auto", r
                           theta=theta, sigma=sigma, raw=run.theta, bias=np.where(correct, boot.bias, 0.0),
                           verdicts=verdicts, time_s=run.time_s, history=run.history,
                           history_sigma=boot.history_sigma, windows=run.windows, replicates=int(replicates),
-                          motion=kind, path=rec.path)
+                          motion=kind, path=rec.path, hum_hz=tuple(hum))

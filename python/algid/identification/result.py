@@ -55,6 +55,7 @@ class Identification:
     replicates: int
     motion: str
     path: Optional[Path] = None
+    hum_hz: tuple = ()  #: mains lines notched out of every channel [Hz]
 
     # ---- views -------------------------------------------------------------------------
     @property
@@ -140,6 +141,7 @@ class Identification:
             "window_results": self.windows, "bootstrap_replicates": self.replicates,
             "samples": self.samples, "dt_s": self.dt, "duration_s": self.samples * self.dt,
             "motion": self.motion, "noise_model": self.noise.to_json(),
+            "mains_hum_removed_hz": list(self.hum_hz),
         }
         if n == 1 and self.boundary == "fixed":
             doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
