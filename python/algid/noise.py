@@ -165,9 +165,9 @@ def white_floor(f: np.ndarray, S: np.ndarray) -> np.ndarray:
     (an anti-alias filter: the top tenth :data:`ROLL_OFF` times below the tenth under it),
     the median of the highest tenth of the upper half below the roll-off (each tenth
     walked past is more than :data:`ROLL_OFF` times below the one under it), provided the
-    spectrum is flat there (the next tenth down within :data:`ROLL_OFF`; a spectrum that
-    keeps falling through the upper half is the signal's own, and has no flat floor to
-    find)."""
+    spectrum is flat there (the next tenth down within :data:`ROLL_OFF`) and lies
+    ``DETECT^2`` below the spectrum's peak (a spectrum that keeps falling through the upper
+    half, or the plateau of an input that stops at a band edge, is signal)."""
     S = np.asarray(S, dtype=float)
     one = S.ndim == 1
     S2 = S[:, None] if one else S
@@ -181,7 +181,9 @@ def white_floor(f: np.ndarray, S: np.ndarray) -> np.ndarray:
         k = 4
         while k > 0 and tenth[k - 1][c] > ROLL_OFF * tenth[k][c]:
             k -= 1
-        if 0 < k < 4:  # a flat stretch under the roll-off (a spectrum still falling at mid-band is signal)
+        # a flat stretch under the roll-off, far below the spectrum's peak (a spectrum still
+        # falling at mid-band, or the plateau of a band-limited input, is signal)
+        if 0 < k < 4 and tenth[k][c] < np.max(S2[:, c]) / DETECT**2:
             out[c] = tenth[k][c]
     return out[0] if one else out
 

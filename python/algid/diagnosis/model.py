@@ -41,6 +41,9 @@ PEAK_PROMINENCE = 2.0
 NEGLIGIBLE = 0.05
 #: Coherence of force and acceleration at a resonance peak that is counted.
 PEAK_COHERENCE = 0.8
+#: Share of the force's band edge searched for peaks (at the edge the force's PSD falls
+#: steeply and H1 turns to noise).
+FORCE_EDGE = 0.8
 #: A peak this many times above its flanks counts down to this coherence.
 PEAK_STRONG = 10.0
 PEAK_COHERENCE_STRONG = 0.15
@@ -94,7 +97,8 @@ def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> d
 
 def resonances(P: Prepared, f_hi: float) -> dict:
     """Resonance peaks of every forced DOF's drive-point H1 (question 2), in the signal band,
-    below the force's own band edge (:func:`algid.noise.channel`) and where it carries
+    below :data:`FORCE_EDGE` of the force's own band edge (:func:`algid.noise.channel`) and
+    where it carries
     power (PSD above :data:`algid.noise.DETECT` times its white floor); segments of an eighth of the record (fine resolution, 8 averages). A peak
     counts with coherence of at least :data:`PEAK_COHERENCE`, or, standing
     :data:`PEAK_STRONG` times above its flanks, of at least :data:`PEAK_COHERENCE_STRONG`
@@ -116,7 +120,7 @@ def resonances(P: Prepared, f_hi: float) -> dict:
         with np.errstate(divide="ignore", invalid="ignore"):
             H = np.abs(Pua) / Puu
             coh = np.abs(Pua) ** 2 / (Puu * Paa)
-        f_top = min(f_hi, channel("u", u, P.dt).f_hi)
+        f_top = min(f_hi, FORCE_EDGE * channel("u", u, P.dt).f_hi)
         keep = (f > 2 * f[1]) & (f <= f_top) & (Puu > DETECT * white_floor(f, Puu)) & np.isfinite(H) & (H > 0)
         logH = np.where(keep, np.log(np.where(H > 0, H, 1.0)), -np.inf)
         idx, props = find_peaks(logH, prominence=np.log(PEAK_PROMINENCE))
