@@ -73,7 +73,8 @@ def f16_modal_recording(data: Path, level: int, channel: int = 1) -> Recording:
 def _summary(d) -> dict:
     js = to_json(d)
     keep = ("effect", "location", "params", "params_std", "gap_before", "gap_after", "gap_before_fullband",
-            "gap_after_fullband", "band", "linear_model", "analysis")
+            "gap_after_fullband", "gap_before_force", "gap_after_force", "band", "linear_model", "analysis", "model",
+            "equation_form", "combination", "mains_hum_removed_hz")
     out = {k: js[k] for k in keep}
     out["ranking_top3"] = [{k: r[k] for k in ("effect", "location", "params", "gap_after", "gap_after_fullband",
                                               "z_noise")}

@@ -38,8 +38,8 @@ Scores (issue 16): as the blind check (top-1, location, main parameter within 20
 gap shrink) plus the share of effect cases answered ``none`` and the share of ``none``
 answers on an inadmissible linear fit.
 
-    python bench/realistic_blind.py --seeds 0:150 --work /tmp/realistic      # tuning seeds
-    python bench/realistic_blind.py --seeds 10000:10300 --work /tmp/realistic  # the report
+    python bench/realistic_blind.py --seeds 0:150 --work /tmp/realistic          # tuning seeds
+    python bench/realistic_blind.py --seeds 20000:20300 --work /tmp/realistic-20k  # the report
 """
 
 from __future__ import annotations

@@ -43,7 +43,7 @@ NEGLIGIBLE = 0.05
 PEAK_COHERENCE = 0.8
 #: Share of the force's band edge searched for peaks (at the edge the force's PSD falls
 #: steeply and H1 turns to noise).
-FORCE_EDGE = 0.8
+FORCE_EDGE = 0.9
 #: A peak this many times above its flanks counts down to this coherence.
 PEAK_STRONG = 10.0
 PEAK_COHERENCE_STRONG = 0.15
@@ -98,8 +98,9 @@ def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> d
 def resonances(P: Prepared, f_hi: float) -> dict:
     """Resonance peaks of every forced DOF's drive-point H1 (question 2), in the signal band,
     below :data:`FORCE_EDGE` of the force's own band edge (:func:`algid.noise.channel`) and
-    where it carries
-    power (PSD above :data:`algid.noise.DETECT` times its white floor); segments of an eighth of the record (fine resolution, 8 averages). A peak
+    where it carries power (PSD above :data:`algid.noise.DETECT` times its white floor and
+    within ``DETECT^2`` of its peak: a band-passed record has no floor to speak of);
+    segments of an eighth of the record (fine resolution, 8 averages). A peak
     counts with coherence of at least :data:`PEAK_COHERENCE`, or, standing
     :data:`PEAK_STRONG` times above its flanks, of at least :data:`PEAK_COHERENCE_STRONG`
     (a struck, lightly damped structure rings on into segments the hammer did not touch,
@@ -121,7 +122,8 @@ def resonances(P: Prepared, f_hi: float) -> dict:
             H = np.abs(Pua) / Puu
             coh = np.abs(Pua) ** 2 / (Puu * Paa)
         f_top = min(f_hi, FORCE_EDGE * channel("u", u, P.dt).f_hi)
-        keep = (f > 2 * f[1]) & (f <= f_top) & (Puu > DETECT * white_floor(f, Puu)) & np.isfinite(H) & (H > 0)
+        powered = (Puu > DETECT * white_floor(f, Puu)) & (Puu > Puu.max() / DETECT**2)
+        keep = (f > 2 * f[1]) & (f <= f_top) & powered & np.isfinite(H) & (H > 0)
         logH = np.where(keep, np.log(np.where(H > 0, H, 1.0)), -np.inf)
         idx, props = find_peaks(logH, prominence=np.log(PEAK_PROMINENCE))
         peaks = [float(f[i]) for i, pr in zip(idx, props["prominences"]) if keep[i] and (
