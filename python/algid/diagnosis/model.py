@@ -105,6 +105,7 @@ def resonances(P: Prepared, f_hi: float) -> dict:
     :data:`PEAK_STRONG` times above its flanks, of at least :data:`PEAK_COHERENCE_STRONG`
     (a struck, lightly damped structure rings on into segments the hammer did not touch,
     which lowers the coherence of its sharpest resonances)."""
+    from scipy.ndimage import maximum_filter1d
     from scipy.signal import csd, find_peaks, welch
 
     from ..noise import DETECT, channel, white_floor
@@ -122,12 +123,16 @@ def resonances(P: Prepared, f_hi: float) -> dict:
             H = np.abs(Pua) / Puu
             coh = np.abs(Pua) ** 2 / (Puu * Paa)
         f_top = min(f_hi, FORCE_EDGE * channel("u", u, P.dt).f_hi)
-        powered = (Puu > DETECT * white_floor(f, Puu)) & (Puu > Puu.max() / DETECT**2)
+        # where the force has power: above its floor, within DETECT^2 of its peak, and not
+        # in a valley between the lines of a sparse multisine (within DETECT of the largest
+        # force PSD within 3 bins: H1 there is leakage, not a response)
+        local = maximum_filter1d(Puu, size=7, mode="nearest")
+        powered = (Puu > DETECT * white_floor(f, Puu)) & (Puu > Puu.max() / DETECT**2) & (Puu > local / DETECT)
         keep = (f > 2 * f[1]) & (f <= f_top) & powered & np.isfinite(H) & (H > 0)
-        logH = np.where(keep, np.log(np.where(H > 0, H, 1.0)), -np.inf)
-        idx, props = find_peaks(logH, prominence=np.log(PEAK_PROMINENCE))
-        peaks = [float(f[i]) for i, pr in zip(idx, props["prominences"]) if keep[i] and (
-            coh[i] >= PEAK_COHERENCE or (pr >= np.log(PEAK_STRONG) and coh[i] >= PEAK_COHERENCE_STRONG))]
+        at = np.nonzero(keep)[0]  # the kept bins as one sequence: a line spectrum's lines are neighbours
+        idx, props = find_peaks(np.log(H[at]), prominence=np.log(PEAK_PROMINENCE)) if at.size > 2 else ([], {})
+        peaks = [float(f[at[i]]) for i, pr in zip(idx, props.get("prominences", [])) if (
+            coh[at[i]] >= PEAK_COHERENCE or (pr >= np.log(PEAK_STRONG) and coh[at[i]] >= PEAK_COHERENCE_STRONG))]
         out[int(e) + 1] = {"peaks_hz": peaks, "count": len(peaks)}
     return out
 
