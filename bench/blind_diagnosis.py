@@ -392,6 +392,16 @@ def score_case(lab: dict, res: dict) -> dict:
     return out
 
 
+def score_all(work: Path, seeds: list[int], score) -> list[dict]:
+    """``score(label, diagnosis)`` of every seed's case in ``work``."""
+    rows = []
+    for seed in seeds:
+        lab = json.loads((work / "labels" / f"case{seed:05d}.json").read_text())
+        res = json.loads((work / "diagnoses" / f"case{seed:05d}.json").read_text())
+        rows.append(score(lab, res))
+    return rows
+
+
 def summarize(rows: list[dict]) -> dict:
     real = [r for r in rows if r["truth"] != "none"]
     none = [r for r in rows if r["truth"] == "none"]
@@ -550,11 +560,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"[diagnose {k + 1}/{len(seeds)}] seed {seed}: {res['effect']} ({res['_wall_s']:.1f} s)",
                   file=sys.stderr, flush=True)
     if args.stage in ("all", "score"):
-        rows = []
-        for seed in seeds:
-            lab = json.loads((work / "labels" / f"case{seed:05d}.json").read_text())
-            res = json.loads((work / "diagnoses" / f"case{seed:05d}.json").read_text())
-            rows.append(score_case(lab, res))
+        rows = score_all(work, seeds, score_case)
         summary = summarize(rows)
         out = {"seeds": args.seeds, "duration_s": args.duration, "fs_hz": args.fs, "summary": summary, "cases": rows}
         if args.timing:

@@ -322,11 +322,7 @@ def main(argv=None) -> int:
             print(f"[diagnose {k + 1}/{len(seeds)}] seed {seed} {lab['rig']}: {lab['effect']} -> {res['effect']} "
                   f"({res['_wall_s']:.1f} s)", file=sys.stderr, flush=True)
     if args.stage in ("all", "score"):
-        rows = []
-        for seed in seeds:
-            lab = json.loads((work / "labels" / f"case{seed:05d}.json").read_text())
-            res = json.loads((work / "diagnoses" / f"case{seed:05d}.json").read_text())
-            rows.append(score(lab, res))
+        rows = B.score_all(work, seeds, score)
         summary = summarize(rows)
         print(B.confusion_table(summary["confusion"]))
         for key in ("cases", "top1_accuracy", "location_accuracy_among_correct", "param_within_20pct_among_correct",

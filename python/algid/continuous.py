@@ -53,6 +53,12 @@ def parameter_names(n: int) -> list[str]:
     return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
 
 
+def unpack(vec: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mass, damping and spring views ``(n,), (n,), (n+1,)`` of a packed vector
+    ``m1..mn, c1..cn, k1..k{n+1}`` (the order of :func:`parameter_names`)."""
+    return vec[:n], vec[n: 2 * n], vec[2 * n:]
+
+
 class PackedParameters:
     """Mass, damping and stiffness views of a packed ``estimate`` vector
     ``m1..mn, c1..cn, k1..k{n+1}`` (the order of :func:`parameter_names`)."""
@@ -62,17 +68,17 @@ class PackedParameters:
     @property
     def mass(self) -> np.ndarray:
         """Masses m_i [kg] (n,)."""
-        return self.estimate[: self.n]
+        return unpack(self.estimate, self.n)[0]
 
     @property
     def damping(self) -> np.ndarray:
         """Dampings c_i [N s/m] (n,)."""
-        return self.estimate[self.n: 2 * self.n]
+        return unpack(self.estimate, self.n)[1]
 
     @property
     def stiffness(self) -> np.ndarray:
         """Springs k_1..k_{n+1} [N/m] (n+1,)."""
-        return self.estimate[2 * self.n:]
+        return unpack(self.estimate, self.n)[2]
 
 
 class ContinuousEstimator(PackedParameters):

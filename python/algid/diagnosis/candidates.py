@@ -518,25 +518,15 @@ def all_candidates(P: Prepared) -> list[tuple[str, int]]:
 
 def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
     """Fit one candidate; ``loc`` is a 0-based DOF or a 1-based spring."""
-    if effect == "coulomb_friction":
-        return fit_coulomb(ctx, loc)
-    if effect == "stribeck_friction":
-        return fit_stribeck(ctx, loc)
-    if effect == "amplitude_damping":
-        return fit_amplitude_damping(ctx, loc)
-    if effect == "quadratic_damping":
-        return fit_dof_force(ctx, effect, loc)
-    if effect in ("cubic_stiffness", "parameter_drift"):
-        return fit_spring_linear(ctx, effect, loc)
-    if effect == "clearance":
-        return fit_clearance(ctx, loc)
-    if effect == "input_delay":
-        return fit_delay(ctx, loc)
-    if effect == "sensor_bias":
-        return fit_bias(ctx, loc)
-    if effect == "sensor_lowpass":
-        return fit_lowpass(ctx, loc)
-    raise ValueError(f"unknown effect {effect!r}")
+    fits = {"coulomb_friction": fit_coulomb, "stribeck_friction": fit_stribeck,
+            "amplitude_damping": fit_amplitude_damping, "clearance": fit_clearance, "input_delay": fit_delay,
+            "sensor_bias": fit_bias, "sensor_lowpass": fit_lowpass,
+            "quadratic_damping": lambda c, i: fit_dof_force(c, effect, i),
+            "cubic_stiffness": lambda c, j: fit_spring_linear(c, effect, j),
+            "parameter_drift": lambda c, j: fit_spring_linear(c, effect, j)}
+    if effect not in fits:
+        raise ValueError(f"unknown effect {effect!r}")
+    return fits[effect](ctx, loc)
 
 
 #: Effects that only add a force column to the linear equations (their fits combine).

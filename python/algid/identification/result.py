@@ -9,6 +9,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..continuous import PackedParameters, unpack
 from ..noise import NoiseModel
 from .plan import Plan
 from .verdicts import Verdict, dof_validity, parameter_names
@@ -19,7 +20,7 @@ def _num(v: float):
 
 
 @dataclass
-class Identification:
+class Identification(PackedParameters):
     """Estimates of an n-DOF chain from a whole recording.
 
     Attributes
@@ -64,31 +65,24 @@ class Identification:
         return parameter_names(self.n)
 
     @property
-    def mass(self) -> np.ndarray:
-        """Masses [kg] (n,)."""
-        return self.theta[: self.n]
-
-    @property
-    def damping(self) -> np.ndarray:
-        """Dampings [N s/m] (n,)."""
-        return self.theta[self.n: 2 * self.n]
-
-    @property
-    def stiffness(self) -> np.ndarray:
-        """Springs k_1..k_{n+1} [N/m] (n+1,)."""
-        return self.theta[2 * self.n:]
+    def estimate(self) -> np.ndarray:
+        """The packed estimates (``theta``), as the estimators name them."""
+        return self.theta
 
     @property
     def sigma_mass(self) -> np.ndarray:
-        return self.sigma[: self.n]
+        """One standard deviation of the masses [kg] (n,)."""
+        return unpack(self.sigma, self.n)[0]
 
     @property
     def sigma_damping(self) -> np.ndarray:
-        return self.sigma[self.n: 2 * self.n]
+        """One standard deviation of the dampings [N s/m] (n,)."""
+        return unpack(self.sigma, self.n)[1]
 
     @property
     def sigma_stiffness(self) -> np.ndarray:
-        return self.sigma[2 * self.n:]
+        """One standard deviation of the springs [N/m] (n+1,)."""
+        return unpack(self.sigma, self.n)[2]
 
     @property
     def valid_dof(self) -> np.ndarray:
