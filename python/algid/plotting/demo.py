@@ -1,4 +1,4 @@
-"""Figures of ``algid demo`` (matplotlib, Agg backend; PNG files).
+"""Figures of ``algid demo`` (matplotlib figures without pyplot; PNG files).
 
 * ``estimates.png`` (the paper's fig. 2): the on-line estimates against time with the true
   values, one parameter family (masses, dampings, stiffnesses) per row; left the first
@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from . import subplots
 
 __all__ = ["write_figures"]
 
@@ -47,11 +49,6 @@ def _families(res: Any) -> list[tuple[str, np.ndarray, np.ndarray, list[str]]]:
 
 def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     """Write the demo's PNG figures into ``out``; returns their paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     t = res.t
@@ -65,7 +62,7 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     fams = _families(res)
 
     # ---- estimates (fig. 2)
-    fig, axes = plt.subplots(3, 2, figsize=(12, 9), sharex="col")
+    fig, axes = subplots(3, 2, figsize=(12, 9), sharex="col")
     zoom = t <= min(0.25, t[-1])
     for row, (label, est, true, names) in enumerate(fams):
         for col, mask in enumerate((zoom, np.ones_like(zoom))):
@@ -88,10 +85,9 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     fig.tight_layout()
     paths.append(out / "estimates.png")
     fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
 
     # ---- positions (fig. 3)
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    fig, (ax1, ax2) = subplots(2, 1, figsize=(10, 7), sharex=True)
     for i in range(res.chain.n):
         line, = ax1.plot(t, 1e3 * res.x[:, i], lw=1.4, label=f"x{i + 1} actual")
         ax1.plot(t, 1e3 * res.x_ref[:, i], ls="--", color=line.get_color(), lw=1.0,
@@ -110,14 +106,13 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     fig.tight_layout()
     paths.append(out / "positions.png")
     fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
 
     # ---- forces (fig. 4)
     chain = res.chain
     M, C, K = chain.matrices()
     log = res.controller_log
     u_ff = log["xdd_ref"] @ M.T + log["xd_ref"] @ C.T + res.x_ref @ K.T
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(10, 7))
+    fig, (ax1, ax2) = subplots(2, 1, figsize=(10, 7))
     zmask = (t >= max(0.0, t_sw - 0.05)) & (t <= t_sw + 0.2)
     for i in range(chain.n):
         line, = ax1.plot(t, res.u_applied[:, i], lw=1.3, label=f"u{i + 1}")
@@ -137,12 +132,11 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     fig.tight_layout()
     paths.append(out / "forces.png")
     fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
 
     # ---- estimation error (log scale)
     drift = getattr(res, "drift", None)
     rows = 4 if drift is not None else 3
-    fig, axes = plt.subplots(rows, 1, figsize=(10, 3 * rows), sharex=True)
+    fig, axes = subplots(rows, 1, figsize=(10, 3 * rows), sharex=True)
     tpos = np.maximum(t, t[1])
     y_lo = 1e-10 if summary["noise_db"] is None else 1e-5
     for ax, (label, est, true, names) in zip(axes[:3], fams):
@@ -181,5 +175,4 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     fig.tight_layout()
     paths.append(out / "estimation_error.png")
     fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
     return paths

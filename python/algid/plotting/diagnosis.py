@@ -1,4 +1,4 @@
-"""Figures of ``algid diagnose`` (matplotlib, Agg backend; PNG files).
+"""Figures of ``algid diagnose`` (matplotlib figures without pyplot; PNG files).
 
 Each figure answers one question a vibration engineer asks of the gap between the
 recording and the linear chain:
@@ -24,16 +24,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from scipy.signal import welch
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from scipy.signal import welch  # noqa: E402
-
-from ..diagnosis.candidates import deformation, spring_sides  # noqa: E402
-from ..diagnosis.core import springs  # noqa: E402
-from ..diagnosis.locate import window_parameters  # noqa: E402
+from ..diagnosis.candidates import deformation, spring_sides
+from ..diagnosis.core import springs
+from ..diagnosis.locate import window_parameters
+from . import subplots
 
 DPI = 90
 C_BEFORE = "#c0392b"
@@ -58,7 +55,7 @@ def fig_residuals_time(d):
     P = d.P
     before, after = d.residuals()
     n = P.n
-    fig, axes = plt.subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
+    fig, axes = subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
     t = P.t
     tw = P.t[0] + P.dt * P.L * (np.arange(P.nw) + 0.5)
     for i, ax in enumerate(axes[:, 0]):
@@ -86,7 +83,7 @@ def fig_residuals_spectrum(d):
     _, Sb = welch(before, fs=fs, nperseg=nper, axis=0)
     _, Sf = welch(after, fs=fs, nperseg=nper, axis=0)
     n = P.n
-    fig, axes = plt.subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
+    fig, axes = subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
     for i, ax in enumerate(axes[:, 0]):
         ax.loglog(f[1:], Sa[1:, i], color=C_MEAS, lw=0.8,
                   label="measured force" if P.form == "force" and P.forced[i] else "measured acceleration")
@@ -120,7 +117,7 @@ def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: s
     law, and below it the unexplained force alone (scatter and binned mean), which is
     where a nonlinearity shows. ``items``: (label, z, linear_force, unexplained, coef_txt)."""
     cols = len(items)
-    fig, axes = plt.subplots(2, cols, figsize=(max(3.3 * cols, 6.0), 5.4), squeeze=False, sharex="col")
+    fig, axes = subplots(2, cols, figsize=(max(3.3 * cols, 6.0), 5.4), squeeze=False, sharex="col")
     for c, (label, z, lin_f, r, coef_txt) in enumerate(items):
         idx = _subsample(z.size)
         top, bot = axes[0, c], axes[1, c]
@@ -184,7 +181,7 @@ def fig_window_parameters(d):
     wp = window_parameters(P, lin)
     t = np.array(wp["t_mid_s"])
     n = P.n
-    fig, axes = plt.subplots(n, 1, figsize=(9, 1.8 * n + 0.9), sharex=True, squeeze=False)
+    fig, axes = subplots(n, 1, figsize=(9, 1.8 * n + 0.9), sharex=True, squeeze=False)
     for e, ax in enumerate(axes[:, 0]):
         vals = np.array(wp["least_squares"][e]["values"])
         names = wp["least_squares"][e]["names"]
@@ -209,7 +206,7 @@ def fig_window_parameters(d):
 
 def fig_ranking(d, top: int = 12):
     rk = d.ranking[:top]
-    fig, ax = plt.subplots(figsize=(8, 0.32 * len(rk) + 1.4))
+    fig, ax = subplots(figsize=(8, 0.32 * len(rk) + 1.4))
     labels = []
     for s in rk:
         (k, v), = s.fit.location.items()
@@ -250,6 +247,5 @@ def save_figures(d, folder, which: tuple[str, ...] | None = None) -> list[Path]:
         fig = make(d)
         path = folder / name
         fig.savefig(path, dpi=DPI)
-        plt.close(fig)
         out.append(path)
     return out

@@ -13,15 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
+from . import subplots
+
 FAMILIES = (("m", "masses"), ("c", "dampings"), ("k", "springs"))
 
 
 def estimates_figure(res):
     """The figure (a ``matplotlib.figure.Figure``) of an :class:`algid.Identification`."""
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(9, 7.5), dpi=90)
-    axes = fig.subplots(3, 1, sharex=True)
+    fig, axes = subplots(3, 1, figsize=(9, 7.5), sharex=True)
     rows = min(res.history.shape[0], res.history_sigma.shape[0])
     t, H, S = res.time_s[-rows:], res.history[-rows:], res.history_sigma[-rows:]
     for ax, (fam, title) in zip(axes, FAMILIES):
