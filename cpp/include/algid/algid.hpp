@@ -2,11 +2,11 @@
 /// @file algid.hpp
 /// Umbrella header: every public algid header, nothing else.
 
+#include "algid/algebraic_system.hpp"
 #include "algid/chain_config.hpp"
 #include "algid/chain_estimator.hpp"
 #include "algid/continuous_estimator.hpp"
 #include "algid/cramer.hpp"
-#include "algid/dof_estimator.hpp"
 #include "algid/histories.hpp"
 #include "algid/integrator_chain.hpp"
 #include "algid/quadrature.hpp"

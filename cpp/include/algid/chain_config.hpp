@@ -2,7 +2,7 @@
 /// @file chain_config.hpp
 /// Configuration of a ChainEstimator and its validation (the configuration phase).
 
-#include "algid/dof_estimator.hpp"
+#include "algid/algebraic_system.hpp"
 #include "algid/types.hpp"
 
 #include <cmath>
@@ -18,7 +18,7 @@ struct ChainConfig {
 };
 
 /// Why a configuration is rejected (kNone: accepted).
-enum class ConfigError { kNone, kBadSamplePeriod, kBadMinSamples, kBadMinHadamard };
+enum class ConfigError { kNone, kBadSamplePeriod, kBadMinSamples, kBadMinHadamard, kBadDofs };
 
 /// Human-readable text of a ConfigError.
 inline const char* to_string(ConfigError e) noexcept {
@@ -27,6 +27,7 @@ inline const char* to_string(ConfigError e) noexcept {
     case ConfigError::kBadSamplePeriod: return "dt must be finite and > 0 [s]";
     case ConfigError::kBadMinSamples: return "validity.min_samples must be >= 1";
     case ConfigError::kBadMinHadamard: return "validity.min_hadamard must be in [0, 1)";
+    case ConfigError::kBadDofs: return "the number of DOF must be >= 1 (and equal N for a fixed-size estimator)";
   }
   return "unknown";
 }

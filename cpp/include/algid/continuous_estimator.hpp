@@ -49,11 +49,13 @@
 ///
 /// Storage: MaxStagger ChainEstimator<N>, the prefilter (8 states per channel), and per
 /// parameter two rings of Capacity scalars (window results and their z-scores):
-/// 2 (3N+1) Capacity scalars. sizeof: about 50 KiB for N = 3, 0.85 MiB for N = 64 (defaults).
+/// 2 (3n+1) Capacity scalars: about 50 KiB for n = 3, 0.85 MiB for n = 64 (defaults). Inside the
+/// object for a fixed N; allocated by the constructor for N = Dynamic (n given at run time).
 
 #include "algid/chain_estimator.hpp"
 #include "algid/detail/prefilter.hpp"
 #include "algid/detail/robust.hpp"
+#include "algid/detail/storage.hpp"
 #include "algid/types.hpp"
 
 #include <algorithm>
@@ -123,6 +125,7 @@ enum class ContinuousConfigError {
   kBadEfficiency,
   kBadHorizon,
   kBadPrefilter,
+  kBadDofs,
 };
 
 /// Human-readable text of a ContinuousConfigError.
@@ -145,20 +148,21 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
     case ContinuousConfigError::kBadHorizon: return "horizon_s must be finite and >= 0 [s]";
     case ContinuousConfigError::kBadPrefilter:
       return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in (0, 0.45/dt) [Hz], prefilter_order 2 or 4";
+    case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
   }
   return "unknown";
 }
 
 /// Continuous estimator of an N-DOF chain: staggered reseeded windows, robust running
 /// estimate with uncertainty, change detection (see the file comment).
-/// @tparam N number of DOF, >= 1.
+/// @tparam N number of DOF, >= 1, or Dynamic (given to the constructor).
 /// @tparam Scalar double or float.
 /// @tparam P quadrature points of the windows (see ChainEstimator).
 /// @tparam Capacity window results kept per parameter (ring); bounds `block`, `confirm`.
 /// @tparam MaxStagger most windows in flight (storage for MaxStagger ChainEstimators).
 template <int N, class Scalar = double, int P = 8, int Capacity = 64, int MaxStagger = 4>
 class ContinuousEstimator {
-  static_assert(N >= 1, "a chain has at least one DOF");
+  static_assert(N >= 1 || N == Dynamic, "a chain has at least one DOF");
   static_assert(Capacity >= 3, "the ring must hold a median and a MAD");
   static_assert(MaxStagger >= 1, "at least one window");
 
@@ -169,22 +173,23 @@ class ContinuousEstimator {
   using Config = ContinuousConfig<Scalar>;
   /// Change event type.
   using Event = ChangeEvent<Scalar>;
-  /// Number of DOF.
+  /// Number of DOF (Dynamic: see dofs()).
   static constexpr int kDofs = N;
-  /// Number of reported parameters: m_1..m_N, c_1..c_N, k_1..k_{N+1}.
-  static constexpr int kParams = 3 * N + 1;
+  /// Number of reported parameters: m_1..m_N, c_1..c_N, k_1..k_{N+1} (Dynamic: see params()).
+  static constexpr int kParams = N == Dynamic ? Dynamic : 3 * N + 1;
   /// Ring capacity per parameter [window results].
   static constexpr int kCapacity = Capacity;
   /// Most windows in flight.
   static constexpr int kMaxStagger = MaxStagger;
 
   /// Check a configuration without side effects. @realtime no allocation, no throw
-  static ContinuousConfigError validate(const Config& c) noexcept {
-    switch (Window::validate(window_config(c))) {
+  static ContinuousConfigError validate(const Config& c, int n = N) noexcept {
+    switch (Window::validate(window_config(c), n)) {
       case ConfigError::kNone: break;
       case ConfigError::kBadSamplePeriod: return ContinuousConfigError::kBadSamplePeriod;
       case ConfigError::kBadMinSamples: return ContinuousConfigError::kBadMinSamples;
       case ConfigError::kBadMinHadamard: return ContinuousConfigError::kBadMinHadamard;
+      case ConfigError::kBadDofs: return ContinuousConfigError::kBadDofs;
     }
     if (!std::isfinite(c.window_s) || !(c.window_s > Scalar(0))) return ContinuousConfigError::kBadWindow;
     const Scalar samples = c.window_s / c.dt;
@@ -211,8 +216,17 @@ class ContinuousEstimator {
   }
 
   /// Configure; throws std::invalid_argument on a bad configuration.
-  explicit ContinuousEstimator(const Config& config)
-      : config_(checked(config)), windows_(make_windows(window_config(config), std::make_index_sequence<MaxStagger>{})) {
+  explicit ContinuousEstimator(const Config& config, int n = N)
+      : config_(checked(config, n)),
+        n_(detail::fixed_or<N>(n)),
+        params_(3 * n_ + 1),
+        windows_(make_windows(window_config(config), n_, std::make_index_sequence<MaxStagger>{})) {
+    filter_.configure_channels(2 * n_);
+    io_.resize(2 * n_);
+    known_.resize(params_);
+    tracks_.resize(params_);
+    events_.resize(params_);
+    for (auto* v : {&estimate_, &sigma_, &last_window_, &pending_}) v->setZero(params_);
     window_samples_ = std::lround(config_.window_s / config_.dt);
     const Scalar fc = config_.prefilter_hz < Scalar(0) ? Scalar(0.05) / config_.dt : config_.prefilter_hz;
     if (fc > Scalar(0)) {
@@ -227,16 +241,16 @@ class ContinuousEstimator {
       const long next = e + 1 < config_.stagger ? offset_[e + 1] : window_samples_ + offset_[0];
       spacing = std::min(spacing, next - offset_[e]);
     }
-    budget_ = config_.amortize ? static_cast<int>((kParams + spacing - 1) / spacing) : kParams;
+    budget_ = config_.amortize ? static_cast<int>((params_ + spacing - 1) / spacing) : params_;
     confirm_ = config_.confirm > 0 ? config_.confirm : std::min(2 * config_.stagger + 1, Capacity);
     const Scalar block_s = static_cast<Scalar>(config_.block) * static_cast<Scalar>(window_samples_) /
                            static_cast<Scalar>(config_.stagger) * config_.dt;
     forget_ = config_.horizon_s > Scalar(0) ? std::exp(-block_s / config_.horizon_s) : Scalar(1);
     block_scale_ = detail::kMedianInefficiency<Scalar> /
                    std::sqrt(static_cast<Scalar>(config_.block) * config_.overlap_efficiency);
-    for (int j = 0; j < kParams; ++j) known_[j] = Known::kEstimated;
-    if (config_.boundary == Boundary::kFree) known_[kParams - 1] = Known::kZero;
-    if (N == 1 && config_.boundary == Boundary::kFixed) known_[kParams - 1] = Known::kUnidentifiable;
+    for (int j = 0; j < params_; ++j) known_[j] = Known::kEstimated;
+    if (config_.boundary == Boundary::kFree) known_[params_ - 1] = Known::kZero;
+    if (n_ == 1 && config_.boundary == Boundary::kFixed) known_[params_ - 1] = Known::kUnidentifiable;
     reset();
   }
 
@@ -245,7 +259,7 @@ class ContinuousEstimator {
   void reset() noexcept {
     restart_windows();
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    for (int j = 0; j < kParams; ++j) {
+    for (int j = 0; j < params_; ++j) {
       tracks_[j] = Track{};
       const Scalar fixed = known_[j] == Known::kZero ? Scalar(0) : nan;
       estimate_(j) = fixed;
@@ -253,7 +267,7 @@ class ContinuousEstimator {
       last_window_(j) = fixed;
       pending_(j) = nan;
     }
-    pending_next_ = kParams;
+    pending_next_ = params_;
     samples_ = 0;
     results_ = 0;
     event_count_ = 0;
@@ -267,7 +281,7 @@ class ContinuousEstimator {
   Status update(const Scalar* accel, const Scalar* force) noexcept {
     event_count_ = 0;
     ++samples_;
-    for (int i = 0; i < N; ++i) {
+    for (int i = 0; i < n_; ++i) {
       if (!std::isfinite(accel[i]) || !std::isfinite(force[i])) {
         restart_windows();
         work();
@@ -277,13 +291,13 @@ class ContinuousEstimator {
     const Scalar* a = accel;
     const Scalar* f = force;
     if (filtered_) {
-      for (int i = 0; i < N; ++i) {
-        io_[static_cast<std::size_t>(i)] = accel[i];
-        io_[static_cast<std::size_t>(N + i)] = force[i];
+      for (int i = 0; i < n_; ++i) {
+        io_[i] = accel[i];
+        io_[n_ + i] = force[i];
       }
       filter_.process(io_.data(), io_.data());
       a = io_.data();
-      f = io_.data() + N;
+      f = io_.data() + n_;
     }
     for (int e = 0; e < config_.stagger; ++e) {
       if (phase_[e] < 0) {
@@ -303,8 +317,9 @@ class ContinuousEstimator {
 
   /// Same as update(const Scalar*, const Scalar*) for Eigen vectors.
   /// @realtime no allocation, no throw
-  Status update(const Vector<Scalar, N>& accel, const Vector<Scalar, N>& force) noexcept {
-    return update(accel.data(), force.data());
+  template <class A, class F>
+  Status update(const Eigen::MatrixBase<A>& accel, const Eigen::MatrixBase<F>& force) noexcept {
+    return update(accel.derived().data(), force.derived().data());
   }
 
   /// Running estimates of all parameters: m_1..m_N [kg], c_1..c_N [N s/m], k_1..k_{N+1} [N/m]
@@ -314,19 +329,25 @@ class ContinuousEstimator {
   /// One-standard-deviation statistical uncertainty of estimate() [same units].
   const Vector<Scalar, kParams>& sigma() const noexcept { return sigma_; }
   /// Running masses m_i [kg].
-  Vector<Scalar, N> mass() const noexcept { return estimate_.template head<N>(); }
+  Eigen::Map<const Vector<Scalar, N>> mass() const noexcept {
+    return Eigen::Map<const Vector<Scalar, N>>(estimate_.data(), n_);
+  }
   /// Running dampings c_i [N s/m].
-  Vector<Scalar, N> damping() const noexcept { return estimate_.template segment<N>(N); }
+  Eigen::Map<const Vector<Scalar, N>> damping() const noexcept {
+    return Eigen::Map<const Vector<Scalar, N>>(estimate_.data() + n_, n_);
+  }
   /// Running springs k_1..k_{N+1} [N/m].
-  Vector<Scalar, N + 1> stiffness() const noexcept { return estimate_.template tail<N + 1>(); }
+  Eigen::Map<const Vector<Scalar, N == Dynamic ? Dynamic : N + 1>> stiffness() const noexcept {
+    return Eigen::Map<const Vector<Scalar, N == Dynamic ? Dynamic : N + 1>>(estimate_.data() + 2 * n_, n_ + 1);
+  }
   /// True once every identified parameter has a running estimate.
   bool ready() const noexcept {
-    for (int j = 0; j < kParams; ++j)
+    for (int j = 0; j < params_; ++j)
       if (known_[j] == Known::kEstimated && !std::isfinite(estimate_(j))) return false;
     return true;
   }
 
-  /// Change events raised by the last update() (0 .. kParams).
+  /// Change events raised by the last update() (0 .. params()).
   int events() const noexcept { return event_count_; }
   /// Event i (0 .. events()-1) of the last update().
   const Event& event(int i) const noexcept { return events_[static_cast<std::size_t>(i)]; }
@@ -353,10 +374,14 @@ class ContinuousEstimator {
   }
   /// Window results in the step test (config.confirm, or 2K+1).
   int confirm() const noexcept { return confirm_; }
-  /// Parameters aggregated per sample (kParams when not amortized).
+  /// Parameters aggregated per sample (params() when not amortized).
   int budget() const noexcept { return budget_; }
   /// The configuration in force.
   const Config& config() const noexcept { return config_; }
+  /// Number of DOF.
+  int dofs() const noexcept { return n_; }
+  /// Number of reported parameters, 3 dofs() + 1.
+  int params() const noexcept { return params_; }
 
  private:
   enum class Known { kEstimated, kZero, kUnidentifiable };
@@ -385,15 +410,16 @@ class ContinuousEstimator {
     return w;
   }
 
-  static const Config& checked(const Config& c) {
-    const ContinuousConfigError e = validate(c);
+  static const Config& checked(const Config& c, int n) {
+    const ContinuousConfigError e = validate(c, n);
     if (e != ContinuousConfigError::kNone) detail::config_error(to_string(e));
     return c;
   }
 
   template <std::size_t... I>
-  static std::array<Window, sizeof...(I)> make_windows(const typename Window::Config& c, std::index_sequence<I...>) {
-    return {{((void)I, Window(c))...}};
+  static std::array<Window, sizeof...(I)> make_windows(const typename Window::Config& c, int n,
+                                                        std::index_sequence<I...>) {
+    return {{((void)I, Window(c, n))...}};
   }
 
   void restart_windows() noexcept {
@@ -407,19 +433,19 @@ class ContinuousEstimator {
   void harvest(const Window& w) noexcept {
     // Finish the previous result first (only if the budget was too small, e.g. a bad sample
     // shifted the schedule), so no result is lost.
-    while (pending_next_ < kParams) process(pending_next_++);
-    for (int i = 0; i < N; ++i) {
+    while (pending_next_ < params_) process(pending_next_++);
+    for (int i = 0; i < n_; ++i) {
       last_window_(i) = w.mass()(i);
-      last_window_(N + i) = w.damping()(i);
+      last_window_(n_ + i) = w.damping()(i);
     }
-    for (int j = 0; j <= N; ++j) last_window_(2 * N + j) = w.stiffness()(j);
+    for (int j = 0; j <= n_; ++j) last_window_(2 * n_ + j) = w.stiffness()(j);
     pending_ = last_window_;
     pending_next_ = 0;
     ++results_;
   }
 
   void work() noexcept {
-    for (int b = 0; b < budget_ && pending_next_ < kParams; ++b) process(pending_next_++);
+    for (int b = 0; b < budget_ && pending_next_ < params_; ++b) process(pending_next_++);
   }
 
   // Copy the newest `count` entries of a ring into scratch_, newest last.
@@ -436,7 +462,7 @@ class ContinuousEstimator {
     if (known_[j] != Known::kEstimated) return;
     const Scalar x = pending_(j);
     if (!std::isfinite(x)) return;
-    Track& t = tracks_[static_cast<std::size_t>(j)];
+    Track& t = tracks_[j];
     const Scalar est = estimate_(j);
     Scalar z = std::numeric_limits<Scalar>::quiet_NaN();
     if (t.spread_ok && std::isfinite(est)) {
@@ -569,38 +595,39 @@ class ContinuousEstimator {
   void finish_restart(int j, Track& t, ChangeKind kind) noexcept {
     const Scalar before = estimate_(j);
     refresh(j, t);
-    Event& ev = events_[static_cast<std::size_t>(event_count_ < kParams ? event_count_ : kParams - 1)];
+    Event& ev = events_[event_count_ < params_ ? event_count_ : params_ - 1];
     ev.sample = samples_ - 1;
     ev.param = j;
     ev.kind = kind;
     ev.before = before;
     ev.after = estimate_(j);
-    if (event_count_ < kParams) ++event_count_;
+    if (event_count_ < params_) ++event_count_;
     ++total_events_;
   }
 
+  static constexpr int kChannels = N == Dynamic ? Dynamic : 2 * N;
+
   Config config_;
+  int n_;
+  int params_;
   std::array<Window, MaxStagger> windows_;
-  detail::ButterworthLowpass<Scalar, 2 * N> filter_{};
-  std::array<Scalar, 2 * N> io_{};
+  detail::ButterworthLowpass<Scalar, kChannels> filter_{};
+  detail::Storage<Scalar, kChannels> io_{};
   bool filtered_ = false;
   long settle_ = 0;
   std::array<long, MaxStagger> phase_{};
   std::array<long, MaxStagger> offset_{};
   long window_samples_ = 0;
-  int budget_ = kParams;
+  int budget_ = 0;
   int confirm_ = 1;
   Scalar forget_ = Scalar(1);
   Scalar block_scale_ = Scalar(1);
-  std::array<Known, kParams> known_{};
-  std::array<Track, kParams> tracks_{};
+  detail::Storage<Known, kParams> known_{};
+  detail::Storage<Track, kParams> tracks_{};
   std::array<Scalar, Capacity> scratch_{};
-  Vector<Scalar, kParams> estimate_ = Vector<Scalar, kParams>::Zero();
-  Vector<Scalar, kParams> sigma_ = Vector<Scalar, kParams>::Zero();
-  Vector<Scalar, kParams> last_window_ = Vector<Scalar, kParams>::Zero();
-  Vector<Scalar, kParams> pending_ = Vector<Scalar, kParams>::Zero();
-  int pending_next_ = kParams;
-  std::array<Event, kParams> events_{};
+  Vector<Scalar, kParams> estimate_, sigma_, last_window_, pending_;
+  int pending_next_ = 0;
+  detail::Storage<Event, kParams> events_{};
   int event_count_ = 0;
   long total_events_ = 0;
   long samples_ = 0;

@@ -19,90 +19,36 @@
 
 namespace algid {
 
-/// Eq. 7 for an M x M system. @tparam M 4 (full DOF) or 3 (reduced DOF).
-template <int M, class Scalar = double>
-class RatioEstimator {
+/// Power of (t - t0) that relates |det A| of an M x M system of eq. 5 to the determinant of the
+/// time-scaled system (19 for 4x4, 12 for 3x3).
+template <int M>
+inline constexpr int kTimeExponent = M == 4 ? 19 : 12;
+
+/// Factor (prev_tau / tau)^q, q = kTimeExponent<M>, that carries the tau^-q-scaled states of eq.
+/// 7 from prev_tau to tau (0 from prev_tau = 0, i.e. at the first sample of a window). The same
+/// for every DOF of a chain: computed once per sample. @realtime no allocation, no throw
+template <int M, class T>
+inline T ratio_decay(const T& prev_tau, const T& tau) noexcept {
   static_assert(M == 3 || M == 4, "eq. 5 systems are 3x3 or 4x4");
-
- public:
-  /// Power of (t - t0) that relates |det A| to the determinant of the time-scaled system.
-  static constexpr int kTimeExponent = M == 4 ? 19 : 12;
-
-  /// |Delta| and the M numerators side by side (slot 0: |Delta|, slot 1 + j: numerator j),
-  /// padded with zeros to whole SIMD registers of four: one vector recurrence advances them all.
-  static constexpr int kSlots = M + 1 <= 4 ? 4 : 8;
-  using Packed = Vector<Scalar, kSlots>;
-
-  /// Start a new window. @realtime no allocation, no throw
-  void reset() noexcept {
-    i1_.setZero();
-    i2_.setZero();
-    prev_.setZero();
-  }
-
-  /// Factor (prev_tau / tau)^q that carries the tau^-q-scaled states from prev_tau to tau
-  /// (0 from prev_tau = 0, i.e. at the first sample of a window). The same for every DOF of a
-  /// chain: compute it once per sample. @realtime no allocation, no throw
-  /// Also lane by lane for Eigen arrays of instants (the same operations, the same bits).
-  template <class T>
-  static T decay(const T& prev_tau, const T& tau) noexcept {
-    T ratio = prev_tau / tau;
-    // ratio^q by repeated squaring (q is a small compile-time constant > 0); the first factor
-    // is taken as it is (1 * x == x exactly).
-    T rho = ratio;
-    bool first = true;
-    for (int e = kTimeExponent; e > 0; e >>= 1) {
-      if (e & 1) {
-        if (!first) rho = rho * ratio;
-        first = false;
-      }
-      ratio = ratio * ratio;
+  T ratio = prev_tau / tau;
+  // ratio^q by repeated squaring; the first factor is taken as it is (1 * x == x exactly).
+  T rho = ratio;
+  bool first = true;
+  for (int e = kTimeExponent<M>; e > 0; e >>= 1) {
+    if (e & 1) {
+      if (!first) rho = rho * ratio;
+      first = false;
     }
-    return rho;
+    ratio = ratio * ratio;
   }
+  return rho;
+}
 
-  /// Add the sample at tau = t - t0 with sample period `h` [s]: `x` = [weight, weighted_0 ..
-  /// weighted_(M-1), 0 ...] with weight = |det S| and weighted = weight * theta_instant (all 0
-  /// for a sample that is not trusted); `rho` = decay(previous tau, tau) carries the scaled
-  /// states from the previous sample. @realtime no allocation, no throw
-  void add(Scalar rho, Scalar h, const Packed& x) noexcept {
-    const Scalar half = Scalar(0.5) * h;
-    const Packed i1 = rho * (i1_ + half * prev_) + half * x;
-    i2_ = rho * (i2_ + half * i1_) + half * i1;
-    i1_ = i1;
-    prev_ = x;
-  }
-
-  /// True once a trusted sample has entered the double integral.
-  bool valid() const noexcept { return i2_(0) > Scalar(0); }
-
-  /// Eq. 7 estimate of parameter j (meaningful only when valid()).
-  Scalar estimate(int j) const noexcept { return i2_(1 + j) / i2_(0); }
-
-  /// All M eq. 7 estimates at once (one division), in slots 1 .. M (slot 0 is
-  /// I^2|Delta| / I^2|Delta|).
-  Packed packed_estimates() const noexcept { return i2_ * (Scalar(1) / i2_(0)); }
-
-  /// All M eq. 7 estimates at once (one division).
-  Vector<Scalar, M> estimates() const noexcept { return packed_estimates().template segment<M>(1); }
-
-  /// The scaled double integrals [I^2 |Delta|, I^2 sgn(Delta) Delta_0 .. Delta_(M-1), 0 ...]
-  /// * tau^-q, whose ratios are the estimates.
-  const Packed& integrals() const noexcept { return i2_; }
-
-  /// Scaled denominator I^2|Delta| * tau^-q (a confidence weight for fusion and diagnostics).
-  Scalar denominator() const noexcept { return i2_(0); }
-
- private:
-  // I^1, I^2 and the last sample of [|Delta|, sgn(Delta) Delta_j ...]
-  Packed i1_ = Packed::Zero(), i2_ = Packed::Zero(), prev_ = Packed::Zero();
-};
-
-/// Eq. 7 of W DOF side by side, one per SIMD lane (the lane layout of ChainEstimator), for
-/// the four parameters of a 4x4 system; a DOF with a 3x3 system has 0 in its fourth numerator,
-/// and its own decay factor in its lane. Per lane, the trapezoidal double integrals of
-/// RatioEstimator with the same scaling, for |Delta| and the four sgn(Delta) Delta_j alike.
-template <class Scalar, int W>
+/// Eq. 7 of W DOF side by side, one per SIMD lane (the layout of ChainEstimator), for the M
+/// parameters of their M x M systems; a 3x3 DOF among 4x4 ones has 0 in its fourth numerator
+/// and its own decay factor in its lane. Per lane, the trapezoidal double integrals of |Delta|
+/// and of the M sgn(Delta) Delta_j, scaled as in the file comment.
+template <class Scalar, int W, int M = 4>
 class RatioLanes {
  public:
   using L = detail::Lanes<Scalar, W>;
@@ -116,8 +62,8 @@ class RatioLanes {
     }
   }
 
-  /// Add the sample at the next interval end: `rho` = RatioEstimator<M>::decay(previous tau,
-  /// tau) of each lane's M, `half` = h / 2 [s], `weight` = |det S| (0 where not trusted) and
+  /// Add the sample at the next interval end: `rho` = ratio_decay<M>(previous tau, tau) of
+  /// each lane's M, `half` = h / 2 [s], `weight` = |det S| (0 where not trusted) and
   /// `weighted[j]` = weight * theta_instant_j (0 where not trusted).
   /// @realtime no allocation, no throw
   void add(const L& rho, Scalar half, const L& weight, const L* weighted) noexcept {
@@ -134,12 +80,12 @@ class RatioLanes {
 
   /// Scaled I^2|Delta| of every lane: a lane's estimate is valid where it is > 0.
   const L& denominator() const noexcept { return i2_[0]; }
-  /// Scaled I^2(sgn(Delta) Delta_j) of every lane, j = 0 .. 3 (contiguous).
+  /// Scaled I^2(sgn(Delta) Delta_j) of every lane, j = 0 .. M - 1 (contiguous).
   const L* numerators() const noexcept { return &i2_[1]; }
 
  private:
-  static constexpr int kIntegrals = 5;  // |Delta| and the four numerators
-  // I^1, I^2 and the last sample of [|Delta|, sgn(Delta) Delta_1 .. Delta_4], lane by lane
+  static constexpr int kIntegrals = M + 1;  // |Delta| and the M numerators
+  // I^1, I^2 and the last sample of [|Delta|, sgn(Delta) Delta_1 .. Delta_M], lane by lane
   L i1_[kIntegrals], i2_[kIntegrals], prev_[kIntegrals];
 };
 

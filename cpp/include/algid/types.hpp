@@ -19,11 +19,15 @@
 
 namespace algid {
 
-/// Fixed-size column vector.
+/// A size known only at run time (Eigen's Dynamic): ChainEstimator<Dynamic> takes the number of
+/// DOF in its configuration phase.
+inline constexpr int Dynamic = Eigen::Dynamic;
+
+/// Column vector (fixed size, or Dynamic).
 template <class Scalar, int Rows>
 using Vector = Eigen::Matrix<Scalar, Rows, 1>;
 
-/// Fixed-size matrix (column-major).
+/// Matrix (column-major).
 template <class Scalar, int Rows, int Cols>
 using Matrix = Eigen::Matrix<Scalar, Rows, Cols>;
 

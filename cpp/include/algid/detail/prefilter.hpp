@@ -10,6 +10,8 @@
 /// filter removes the out-of-band noise, which is what biases (errors in the regressors)
 /// and scatters the algebraic windows.
 
+#include "algid/detail/storage.hpp"
+
 #include <array>
 #include <cmath>
 
@@ -17,13 +19,22 @@ namespace algid {
 namespace detail {
 
 /// Cascade of `Sections` second-order sections (transposed direct form II) on `Channels`
-/// channels; Butterworth of order 2 * active sections, bilinear transform with pre-warping.
+/// channels (or a run-time number: Channels = Dynamic, sized by configure_channels()); Butterworth
+/// of order 2 * active sections, bilinear transform with pre-warping.
 /// Storage: 5 coefficients per section and 2 states per section and channel.
 template <class Scalar, int Channels, int Sections = 2>
 class ButterworthLowpass {
  public:
   /// Design for cut-off `fc` [Hz] at sample period `dt` [s] and order 2 or 4 (not checked
   /// here: the owner validates). May be called in the configuration phase only.
+  /// Size the states for `channels` channels (Channels, unless Dynamic). May be called in the
+  /// configuration phase only.
+  void configure_channels(int channels) {
+    channels_ = fixed_or<Channels>(channels);
+    state_.resize(channels_ * Sections);
+    reset();
+  }
+
   void configure(Scalar fc, Scalar dt, int order) noexcept {
     active_ = order / 2;
     const double pi = 3.14159265358979323846;
@@ -47,17 +58,17 @@ class ButterworthLowpass {
 
   /// Zero the states. @realtime no allocation, no throw
   void reset() noexcept {
-    for (auto& s : state_) s = {};
+    state_.fill({});
   }
 
   /// Filter one sample of every channel, `in` -> `out` (may alias).
   /// @realtime no allocation, no throw
   void process(const Scalar* in, Scalar* out) noexcept {
-    for (int ch = 0; ch < Channels; ++ch) {
+    for (int ch = 0; ch < channels_; ++ch) {
       Scalar x = in[ch];
       for (int s = 0; s < active_; ++s) {
         const Coef& c = coef_[static_cast<std::size_t>(s)];
-        auto& z = state_[static_cast<std::size_t>(ch * Sections + s)];
+        auto& z = state_[ch * Sections + s];
         const Scalar y = c.b0 * x + z[0];
         z[0] = c.b1 * x - c.a1 * y + z[1];
         z[1] = c.b2 * x - c.a2 * y;
@@ -75,7 +86,8 @@ class ButterworthLowpass {
     Scalar b0 = Scalar(1), b1 = Scalar(0), b2 = Scalar(0), a1 = Scalar(0), a2 = Scalar(0);
   };
   std::array<Coef, Sections> coef_{};
-  std::array<std::array<Scalar, 2>, static_cast<std::size_t>(Channels * Sections)> state_{};
+  Storage<std::array<Scalar, 2>, Channels == Dynamic ? Dynamic : Channels * Sections> state_{};
+  int channels_ = Channels == Dynamic ? 0 : Channels;
   int active_ = 0;
   Scalar decay_ = Scalar(0);
 };
