@@ -331,7 +331,7 @@ def main() -> None:
     snrs = [None if s == "none" else float(s) for s in args.snr]
     t_start = time.perf_counter()
     results = {"config": {"fs_hz": FS, "duration_s": DURATION, "seeds": args.seeds, "snr_db": args.snr,
-                          "band_hz": 20.0, "continuous_defaults": algid.continuous.DEFAULTS,
+                          "band_hz": 20.0, "continuous_defaults": algid.continuous.config_dict(algid.continuous.ContinuousConfig()),
                           "baselines": TUNED, "ukf_seconds": args.ukf_seconds, "ukf_snr": args.ukf_snr,
                           "ukf_decimation": 4},
                "constant": {}, "tracking": {}}

@@ -147,9 +147,71 @@ def test_bad_sample_reseeds(table1_record):
     assert err.max() < 1e-5
 
 
+@pytest.mark.parametrize("n,boundary", [(11, "fixed"), (30, "free")])
+def test_any_n_agrees_with_numpy_reference(n, boundary):
+    """Sizes that are not compiled as fixed-size instantiations run the run-time sized
+    estimator: the same eq. 7 estimates as the numpy reference, exact on noise-free data."""
+    assert n not in algid.SIZES
+    chain = Chain.random(n, np.random.default_rng(n), boundary)
+    _, a, u, _ = simulate_chain(chain, multisine(n, seed=n), 0.3)
+    est = algid.ChainEstimator(n, 1e-3, boundary=boundary)
+    out = est.run(a, u, full=True)
+    ref = reference.estimate(a, u, 1e-3, boundary=boundary, points=8)
+    d = est.delay_samples
+    cpp, npy = out["theta"][d:], ref["theta_ratio"][: len(a) - d]
+    assert np.array_equal(np.isnan(cpp), np.isnan(npy)), "same validity decisions"
+    late = slice(40, None)
+    assert np.nanmax(np.abs(cpp[late] / npy[late] - 1)) < 1e-8
+    err = relative_errors(chain, out["mass"][-1], out["damping"][-1], out["stiffness"][-1])
+    assert err.max() < 1e-5
+
+
+@pytest.mark.parametrize("n", [1, 3, 10])
+def test_fixed_and_runtime_sizes_agree(n):
+    """The fixed-size and the run-time sized estimators of one build are one arithmetic: the same
+    estimates to rounding (bit for bit where their lane widths agree)."""
+    from algid.estimator import chain_core
+
+    core = chain_core()
+    _, a, u, _ = simulate_chain(Chain.random(n, np.random.default_rng(n)), multisine(n, seed=n), 0.2)
+    cfg = algid.ChainConfig()
+    fixed, dynamic = getattr(core, f"ChainEstimator{n}")(cfg, n), core.ChainEstimatorDynamic(cfg, n)
+    out_f, out_d = fixed.run(a, u), dynamic.run(a, u)
+    for key in ("mass", "damping", "stiffness"):
+        if fixed.lanes == dynamic.lanes and n > 1:
+            np.testing.assert_array_equal(out_f[key], out_d[key])
+        else:
+            np.testing.assert_allclose(out_f[key], out_d[key], rtol=1e-9, atol=0)
+    np.testing.assert_array_equal(out_f["valid"], out_d["valid"])
+
+
+@pytest.mark.parametrize("n", [200, 1000])
+def test_large_chains_run(n):
+    """Large chains identify every parameter of a noise-free record."""
+    chain = Chain.random(n, np.random.default_rng(n))
+    _, a, u, _ = simulate_chain(chain, multisine(n, seed=n), 0.1)
+    out = algid.ChainEstimator(n, 1e-3).run(a, u)
+    err = relative_errors(chain, out["mass"][-1], out["damping"][-1], out["stiffness"][-1])
+    assert out["valid"][-1].all() and err.max() < 1e-4
+
+
+def test_configuration_is_the_cpp_struct():
+    """Defaults live in C++: a fresh ChainConfig carries them, options set its fields, and
+    unknown options, bad sizes and bad values are refused with the reason."""
+    cfg = algid.ChainConfig()
+    assert (cfg.dt, cfg.boundary, cfg.min_samples, cfg.min_hadamard) == (1e-3, "fixed", 16, 1e-9)
+    est = algid.ChainEstimator(4, 2e-3, boundary="free", min_samples=20)
+    assert (est.config.dt, est.config.boundary, est.config.min_samples) == (2e-3, "free", 20)
+    with pytest.raises(TypeError, match="unknown option"):
+        algid.ChainEstimator(3, 1e-3, min_sample=3)
+    with pytest.raises(ValueError, match=">= 1"):
+        algid.ChainEstimator(0, 1e-3)
+    with pytest.raises(ValueError, match="min_hadamard"):
+        algid.ChainEstimator(3, 1e-3, min_hadamard=2.0)
+    assert cfg.validate(3) == "ok" and "DOF" in cfg.validate(0)
+
+
 def test_argument_errors():
-    with pytest.raises(ValueError, match="not compiled in"):
-        algid.ChainEstimator(11, 1e-3)
     with pytest.raises(ValueError, match="boundary"):
         algid.ChainEstimator(3, 1e-3, boundary="clamped")
     with pytest.raises(ValueError, match="dt"):
@@ -159,6 +221,11 @@ def test_argument_errors():
         est.run(np.zeros((10, 2)), np.zeros((10, 2)))
     with pytest.raises(ValueError, match="3 entries"):
         est.update(np.zeros(2), np.zeros(3))
+    for index in (3, -1, 100_000):
+        with pytest.raises(IndexError, match="dof"):
+            est.theta(index)
+        with pytest.raises(IndexError, match="dof"):
+            est._impl.theta_instant(index)
 
 
 def test_run_releases_the_gil():
@@ -202,9 +269,8 @@ def _isa_builds() -> list[str]:
 @pytest.mark.parametrize("isa", _isa_builds())
 @pytest.mark.parametrize("n,boundary", [(1, "fixed"), (2, "free"), (3, "fixed"), (10, "fixed")])
 def test_run_is_update_bit_for_bit_in_every_build(isa, n, boundary):
-    """Within one build, run() (blocks of 8 instants in the v3 build) leaves every estimate,
-    instantaneous solution and Hadamard ratio exactly where update() does, sample by sample,
-    across a bad sample and a record length that is not a multiple of 8."""
+    """Within one build, run() leaves every estimate, instantaneous solution and Hadamard ratio
+    exactly where update() does, sample by sample, across a bad sample."""
     from algid.estimator import chain_core
 
     core = chain_core(isa)
@@ -212,8 +278,10 @@ def test_run_is_update_bit_for_bit_in_every_build(isa, n, boundary):
     t, a, u, _ = simulate_chain(chain, multisine(n), 0.403)
     a[211, 0] = np.nan  # reseeds inside what would be a block
     make = getattr(core, f"ChainEstimator{n}")
-    batch = make(1e-3, boundary, 16, 1e-9).run(a, u, True)
-    one = make(1e-3, boundary, 16, 1e-9)
+    cfg = algid.ChainConfig()
+    cfg.boundary = boundary
+    batch = make(cfg, n).run(a, u, True)
+    one = make(cfg, n)
     theta = np.empty_like(batch["theta"])
     inst = np.empty_like(batch["theta_instant"])
     had = np.empty_like(batch["hadamard"])
@@ -242,7 +310,7 @@ def test_isa_builds_agree_and_selection():
     if len(builds) < 2:
         pytest.skip("no wider build or CPU here")
     _, a, u, _ = simulate_chain(TABLE1, multisine(3), 0.3)
-    outs = [getattr(chain_core(isa), "ChainEstimator3")(1e-3, "fixed", 16, 1e-9).run(a, u) for isa in builds]
+    outs = [getattr(chain_core(isa), "ChainEstimator3")(algid.ChainConfig(), 3).run(a, u) for isa in builds]
     late = slice(60, None)
     for out in outs[1:]:
         for key in ("mass", "damping", "stiffness"):

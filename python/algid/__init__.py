@@ -1,13 +1,13 @@
 """algid: on-line algebraic identification of vibrating mass-spring-damper chains."""
 
 from .chain import TABLE1, Chain
-from .continuous import ChangeEvent, ContinuousEstimator
-from .estimator import ISA, SIZES, ChainEstimator, Status
+from .continuous import ChangeEvent, ContinuousConfig, ContinuousEstimator
+from .estimator import ISA, SIZES, ChainConfig, ChainEstimator, Status
 from .identification import Identification, identify
 from .recording import Recording, load_recording
 
-__all__ = ["Chain", "ChainEstimator", "ChangeEvent", "ContinuousEstimator", "ISA", "Identification", "Recording",
-           "SIZES", "Status", "TABLE1", "get_include", "identify", "load_recording"]
+__all__ = ["Chain", "ChainConfig", "ChainEstimator", "ChangeEvent", "ContinuousConfig", "ContinuousEstimator", "ISA",
+           "Identification", "Recording", "SIZES", "Status", "TABLE1", "get_include", "identify", "load_recording"]
 __version__ = "0.1.0"
 
 

@@ -23,16 +23,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _core
-from .estimator import SIZES, Status, as_record, as_sample
+from .estimator import Status, as_record, as_sample, config_fields, dofs, estimator_class, make_config
 
 ChangeKind = _core.ChangeKind
+#: Configuration of a :class:`ContinuousEstimator` (the C++ ``ContinuousConfig``; its defaults,
+#: benchmarked in bench/continuous.py, are C++'s).
+ContinuousConfig = _core.ContinuousConfig
 
-#: Defaults of the C++ ContinuousConfig (benchmarked in bench/continuous.py).
-DEFAULTS = dict(window_s=0.3, stagger=4, block=16, confirm=0, step_threshold=6.0, cusum_reference=0.75,
-                cusum_threshold=5.0, cusum_clip=4.0, min_relative_spread=1e-2, min_windows=8,
-                overlap_efficiency=0.5, horizon_s=0.0, prefilter_hz=-1.0, prefilter_order=4, detect=True,
-                amortize=True, min_samples=16,
-                min_hadamard=1e-9)
+
+def config_dict(config) -> dict:
+    """The fields of a configuration struct as a dict (``config_dict(ContinuousConfig())``: the
+    defaults)."""
+    return {name: getattr(config, name) for name in config_fields(config)}
 
 
 @dataclass(frozen=True)
@@ -88,11 +90,16 @@ class ContinuousEstimator(PackedParameters):
     Parameters
     ----------
     n : int
-        Number of DOF (one of :data:`algid.SIZES`).
+        Number of DOF, any n >= 1.
     dt : float
         Sample period [s].
-    boundary : {"fixed", "free"}
-        Right end: a wall (k_{n+1} identified) or free (k_{n+1} = 0 known).
+    boundary : {"fixed", "free"}, optional
+        Right end: a wall (k_{n+1} identified, the default) or free (k_{n+1} = 0 known).
+    config : ContinuousConfig, optional
+        A whole configuration; ``dt``, ``boundary`` and ``options`` override its fields.
+    **options
+        Fields of :class:`ContinuousConfig` (defaults: ``ContinuousConfig()``):
+
     window_s : float
         Window length L [s] (default 0.3).
     stagger : int
@@ -132,19 +139,16 @@ class ContinuousEstimator(PackedParameters):
         Validity rule of each window (see :class:`algid.ChainEstimator`).
     """
 
-    def __init__(self, n: int, dt: float, boundary: str = "fixed", **options) -> None:
-        n = int(n)
-        if n not in SIZES:
-            raise ValueError(f"n = {n} is not compiled in; available chain sizes: {SIZES}")
-        if boundary not in ("fixed", "free"):
-            raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
-        unknown = set(options) - set(DEFAULTS)
-        if unknown:
-            raise TypeError(f"unknown option(s) {sorted(unknown)}; known: {sorted(DEFAULTS)}")
-        cfg = {**DEFAULTS, **options}
-        self._impl = getattr(_core, f"ContinuousEstimator{n}")(float(dt), boundary, **cfg)
-        self.n, self.dt, self.boundary = n, float(dt), boundary
-        self.options = cfg
+    def __init__(self, n: int, dt: float | None = None, boundary: str | None = None,
+                 config: ContinuousConfig | None = None, **options) -> None:
+        n = dofs(n)
+        if dt is None and config is None:
+            raise TypeError("ContinuousEstimator needs dt (or a config)")
+        cfg = make_config(config if config is not None else ContinuousConfig(), dt, boundary, options)
+        self._impl = estimator_class("Continuous", n)(cfg, n)
+        self.n, self.dt, self.boundary = n, float(cfg.dt), str(cfg.boundary)
+        #: the configuration in force, as a dict
+        self.options = config_dict(cfg)
         #: parameter names in estimate order
         self.names = parameter_names(n)
 

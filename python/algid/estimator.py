@@ -1,9 +1,11 @@
 """Python face of the C++ estimator: ``ChainEstimator(n, dt, boundary)``.
 
 The per-sample work runs in the header-only C++ core (``cpp/include/algid``); this module
-only picks the fixed-size instantiation for ``n`` and checks arguments before they cross
-into C++. ``update()`` is one sample (for notebooks and control loops), ``run()`` a whole
-record with the GIL released.
+only picks the instantiation for ``n`` (a fixed-size one for the sizes in :data:`SIZES`, the
+run-time sized one for any other n) and the instruction-set build, and converts arguments.
+The configuration is the C++ struct itself (:class:`ChainConfig`), defaults included.
+``update()`` is one sample (for notebooks and control loops), ``run()`` a whole record with
+the GIL released.
 """
 
 from __future__ import annotations
@@ -15,10 +17,13 @@ import numpy as np
 
 from . import _core
 
-#: Chain sizes compiled into the wheel (fixed-size C++ instantiations).
+#: Chain sizes compiled as fixed-size C++ instantiations; any other n >= 1 runs the run-time
+#: sized estimator (the same arithmetic; about 1.1-1.4x the cost per DOF-sample).
 SIZES: tuple[int, ...] = tuple(_core.SIZES)
 
 Status = _core.Status
+#: Configuration of a :class:`ChainEstimator` (the C++ ``ChainConfig``; its defaults are C++'s).
+ChainConfig = _core.ChainConfig
 
 #: Instruction-set builds of the chain estimators, widest first: module name and level.
 _BUILDS: tuple[tuple[str, str], ...] = (("_core_v4", "x86-64-v4"), ("_core_v3", "x86-64-v3"), ("_core", "x86-64"))
@@ -63,6 +68,40 @@ _chains = chain_core()
 ISA: str = str(_chains.ISA)
 
 
+def estimator_class(kind: str, n: int, core=None):
+    """The C++ class of a ``kind`` ("Chain" or "Continuous") estimator of n DOF in ``core``
+    (default: :func:`chain_core`): the fixed-size one when n is in :data:`SIZES`, else the
+    run-time sized one."""
+    return getattr(core or _chains, f"{kind}Estimator{n}" if n in SIZES else f"{kind}EstimatorDynamic")
+
+
+def config_fields(config) -> list[str]:
+    """The settable fields of a configuration struct."""
+    return [name for name in dir(config) if not name.startswith("_") and not callable(getattr(config, name))]
+
+
+def make_config(config, dt, boundary, options: dict):
+    """``config`` (a :class:`ChainConfig` or ``ContinuousConfig``, C++ defaults) with ``dt``,
+    ``boundary`` and the named ``options`` set; TypeError on an unknown option."""
+    unknown = set(options) - set(config_fields(config))
+    if unknown:
+        raise TypeError(f"unknown option(s) {sorted(unknown)}; known: {config_fields(config)}")
+    if dt is not None:
+        config.dt = float(dt)
+    if boundary is not None:
+        config.boundary = boundary
+    for name, value in options.items():
+        setattr(config, name, value)
+    return config
+
+
+def dofs(n) -> int:
+    """The number of DOF as an int >= 1; ValueError otherwise."""
+    if int(n) != n or n < 1:
+        raise ValueError(f"n must be an integer >= 1, got {n!r}")
+    return int(n)
+
+
 def as_sample(accel, force, n: int) -> tuple[np.ndarray, np.ndarray]:
     """One simultaneous sample as contiguous float arrays of n entries; ValueError otherwise."""
     a = np.ascontiguousarray(accel, dtype=float).reshape(-1)
@@ -89,16 +128,19 @@ class ChainEstimator:
     Parameters
     ----------
     n : int
-        Number of DOF (one of :data:`SIZES`).
+        Number of DOF, any n >= 1 (the sizes in :data:`SIZES` are compiled as fixed-size
+        instantiations, the others run the run-time sized one).
     dt : float
         Sample period [s].
-    boundary : {"fixed", "free"}
-        Right end: a wall (k_{n+1} identified) or free (k_{n+1} = 0 known).
-    min_samples : int
-        Samples since t0 before any instantaneous solution is trusted.
-    min_hadamard : float
-        Lowest doubly equilibrated Hadamard ratio of the 4x4 system that is trusted
-        (0 = singular, 1 = orthogonal); see the validity rule in ``dof_estimator.hpp``.
+    boundary : {"fixed", "free"}, optional
+        Right end: a wall (k_{n+1} identified, the default) or free (k_{n+1} = 0 known).
+    config : ChainConfig, optional
+        A whole configuration; ``dt``, ``boundary`` and ``options`` override its fields.
+    **options
+        Fields of :class:`ChainConfig`: ``min_samples`` (samples since t0 before any
+        instantaneous solution is trusted), ``min_hadamard`` (lowest doubly equilibrated
+        Hadamard ratio of the system that is trusted: 0 singular, 1 orthogonal; see the
+        validity rule in ``algebraic_system.hpp``). Defaults: ``ChainConfig()``.
 
     Notes
     -----
@@ -106,16 +148,19 @@ class ChainEstimator:
     (the quadrature centres its stencil). A non-finite sample reseeds the estimator.
     """
 
-    def __init__(self, n: int, dt: float, boundary: str = "fixed", min_samples: int = 16,
-                 min_hadamard: float = 1e-9) -> None:
-        n = int(n)
-        if n not in SIZES:
-            raise ValueError(f"n = {n} is not compiled in; available chain sizes: {SIZES}")
-        if boundary not in ("fixed", "free"):
-            raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
-        self._impl = getattr(_chains, f"ChainEstimator{n}")(float(dt), boundary, int(min_samples),
-                                                            float(min_hadamard))
-        self.n, self.dt, self.boundary = n, float(dt), boundary
+    def __init__(self, n: int, dt: float | None = None, boundary: str | None = None,
+                 config: ChainConfig | None = None, **options) -> None:
+        n = dofs(n)
+        if dt is None and config is None:
+            raise TypeError("ChainEstimator needs dt (or a config)")
+        cfg = make_config(config if config is not None else ChainConfig(), dt, boundary, options)
+        self._impl = estimator_class("Chain", n)(cfg, n)
+        self.n, self.dt, self.boundary = n, float(cfg.dt), str(cfg.boundary)
+
+    @property
+    def config(self) -> ChainConfig:
+        """The configuration in force (a copy)."""
+        return self._impl.config
 
     @property
     def delay_samples(self) -> int:
@@ -159,16 +204,11 @@ class ChainEstimator:
     def theta(self, dof: int) -> np.ndarray:
         """Eq. 7 ``[m_i, c_i, k_i, k_{i+1}]`` of DOF ``dof`` (0-based); both estimates of
         an interior spring are here (slot 3 of DOF i and slot 2 of DOF i+1)."""
-        return self._impl.theta(self._dof(dof))
+        return self._impl.theta(int(dof))
 
     def theta_instant(self, dof: int) -> np.ndarray:
         """Instantaneous Cramer solution of eq. 5 for DOF ``dof`` (0-based)."""
-        return self._impl.theta_instant(self._dof(dof))
-
-    def _dof(self, dof: int) -> int:
-        if not 0 <= dof < self.n:
-            raise IndexError(f"dof must be in 0..{self.n - 1}")
-        return int(dof)
+        return self._impl.theta_instant(int(dof))
 
     def run(self, accel, force, full: bool = False) -> dict[str, np.ndarray]:
         """Feed a whole record through the C++ loop (GIL released).

@@ -65,7 +65,7 @@ def run(args) -> int:
         rec = load_recording(args.recording)
         try:
             result = identify(rec, args.boundary, args.estimator, replicates=args.replicates, progress=progress)
-        except ValueError as err:  # e.g. a chain size that is not compiled in
+        except ValueError as err:  # e.g. a configuration the estimator rejects
             raise IdentifyError(str(err)) from err
         finally:
             progress.close()

@@ -1,0 +1,87 @@
+// The configuration structs and enums, bound once in algid._core and used by every
+// instruction-set module (pybind11's global type registry): the defaults live in C++ only.
+#include "bind_estimators.hpp"
+
+#include <sstream>
+#include <string>
+
+namespace algid_bindings {
+
+namespace {
+
+algid::Boundary parse_boundary(const std::string& b) {
+  if (b == "fixed") return algid::Boundary::kFixed;
+  if (b == "free") return algid::Boundary::kFree;
+  throw py::value_error("boundary must be 'fixed' or 'free', got '" + b + "'");
+}
+
+const char* boundary_name(algid::Boundary b) { return b == algid::Boundary::kFree ? "free" : "fixed"; }
+
+// dt, boundary (as "fixed" / "free") and the validity rule, which both configs carry.
+template <class Config, class Class>
+void bind_window_fields(Class& cls) {
+  cls.def_readwrite("dt", &Config::dt, "sample period [s]")
+      .def_property(
+          "boundary", [](const Config& c) { return boundary_name(c.boundary); },
+          [](Config& c, const std::string& b) { c.boundary = parse_boundary(b); },
+          "right end: 'fixed' (a wall, k_{n+1} identified) or 'free' (k_{n+1} = 0)")
+      .def_property(
+          "min_samples", [](const Config& c) { return c.validity.min_samples; },
+          [](Config& c, int v) { c.validity.min_samples = v; }, "samples since t0 before a solution is trusted")
+      .def_property(
+          "min_hadamard", [](const Config& c) { return c.validity.min_hadamard; },
+          [](Config& c, double v) { c.validity.min_hadamard = v; },
+          "lowest doubly equilibrated Hadamard ratio of a trusted system, in [0, 1)");
+}
+
+}  // namespace
+
+void bind_config_classes(py::module_& m) {
+  py::enum_<algid::Status>(m, "Status")
+      .value("OK", algid::Status::kOk)
+      .value("WARMUP", algid::Status::kWarmup)
+      .value("BAD_INPUT", algid::Status::kBadInput);
+  py::enum_<algid::ChangeKind>(m, "ChangeKind")
+      .value("NONE", algid::ChangeKind::kNone)
+      .value("STEP", algid::ChangeKind::kStep)
+      .value("DRIFT", algid::ChangeKind::kDrift);
+
+  using Chain = algid::ChainConfig<double>;
+  py::class_<Chain> chain(m, "ChainConfig", "Configuration of a ChainEstimator (C++ ChainConfig; defaults from C++).");
+  chain.def(py::init<>());
+  bind_window_fields<Chain>(chain);
+  chain.def("validate", [](const Chain& c, int n) { return std::string(algid::to_string(algid::validate(c, n))); },
+            py::arg("n"), "'ok', or why a chain of n DOF rejects this configuration");
+
+  using Cont = algid::ContinuousConfig<double>;
+  py::class_<Cont> cont(m, "ContinuousConfig",
+                        "Configuration of a ContinuousEstimator (C++ ContinuousConfig; defaults from C++).");
+  cont.def(py::init<>());
+  bind_window_fields<Cont>(cont);
+  cont.def_readwrite("window_s", &Cont::window_s, "window length L [s]")
+      .def_readwrite("stagger", &Cont::stagger, "windows in flight K, started L/K apart")
+      .def_readwrite("block", &Cont::block, "window results per block median")
+      .def_readwrite("confirm", &Cont::confirm, "window results in the step test; 0: 2K+1")
+      .def_readwrite("step_threshold", &Cont::step_threshold, "step test: |median z| above this")
+      .def_readwrite("cusum_reference", &Cont::cusum_reference, "drift test: CUSUM reference [block-median sigmas]")
+      .def_readwrite("cusum_threshold", &Cont::cusum_threshold, "drift test: alarm level [block-median sigmas]")
+      .def_readwrite("cusum_clip", &Cont::cusum_clip, "drift test: clip of one standardised block median")
+      .def_readwrite("min_relative_spread", &Cont::min_relative_spread,
+                     "floor of the per-window spread relative to |estimate|")
+      .def_readwrite("min_windows", &Cont::min_windows, "window results since a restart before the tests are armed")
+      .def_readwrite("overlap_efficiency", &Cont::overlap_efficiency,
+                     "independent fraction of the staggered window results, (0, 1]")
+      .def_readwrite("horizon_s", &Cont::horizon_s, "forgetting time constant of the block mean [s]; 0: none")
+      .def_readwrite("prefilter_hz", &Cont::prefilter_hz, "low-pass on accelerations and forces [Hz]; -1: 0.05/dt, 0: off")
+      .def_readwrite("prefilter_order", &Cont::prefilter_order, "Butterworth order of the prefilter: 2 or 4")
+      .def_readwrite("detect", &Cont::detect, "run the change detector")
+      .def_readwrite("amortize", &Cont::amortize, "spread the per-parameter work over the samples");
+  cont.def(
+      "validate",
+      [](const Cont& c, int n) {
+        return std::string(algid::to_string(algid::ContinuousEstimator<algid::Dynamic, double>::validate(c, n)));
+      },
+      py::arg("n"), "'ok', or why a chain of n DOF rejects this configuration");
+}
+
+}  // namespace algid_bindings
