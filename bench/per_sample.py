@@ -4,6 +4,7 @@ Run from the repository root::
 
     python bench/per_sample.py            # full run (~2-4 min on 2 cores, most of it building)
     python bench/per_sample.py --quick    # fewer windows, no callgrind, no x86-64-v3 build
+    python bench/per_sample.py --baseline b531827   # and the code of that revision, side by side
 
 What it does, in one process so every ratio compares figures from the same run:
 
@@ -12,14 +13,16 @@ What it does, in one process so every ratio compares figures from the same run:
    ``-march=x86-64-v4`` plus ``-ffp-contract=off`` (the flags of ``algid._core_v3`` and
    ``_core_v4``, reported as ``*_v3`` / ``*_v4``) where this CPU runs them;
 2. runs ``bench_per_sample`` (steady_clock; median / p99 of 16-sample batches, worst single
-   sample, per DOF-sample) for ChainEstimator ``update()`` ("default"), its batch path
-   ``record()`` ("batch", what the Python ``run()`` calls: blocks of 8 instants for n = 1, update()
-   sample by sample in the lane layout of n >= 3), the continuous configuration and an RLS baseline at n = 1, 3, 10, 50 in
-   double and float;
+   sample, per DOF-sample) for ChainEstimator ``update()`` ("default"), the run-time sized
+   ChainEstimator<Dynamic> at the same n ("dynamic"), the batch path ``record()`` ("batch", what
+   the Python ``run()`` calls), the continuous configuration and an RLS baseline at n = 1, 3,
+   10, 50 in double and float; with ``--baseline REF`` also the same bench built from git
+   revision REF, in every round ("baseline_*", and the after / before ratios);
 3. counts instructions per DOF-sample under ``valgrind --tool=callgrind`` (client requests
    bracket the measured loop);
-4. times the Python per-sample ``update()``, the batch ``run()`` (GIL released; for every
-   instruction-set build the CPU runs, the default one first) and the numpy reference
+4. times the Python per-sample ``update()``, the batch ``run()`` of the fixed-size and of the
+   run-time sized class (GIL released; for every instruction-set build the CPU runs, the
+   default one first) and the numpy reference
    ``algid.reference.estimate`` on the same kind of signals;
 5. counts the flops per DOF-sample on an instrumented scalar type (``flop_count``) and measures
    the machine's multiply-add peak (``peak_flops``), giving a lower bound;
@@ -59,10 +62,10 @@ DT = 1e-3  # [s]
 # building and running the C++ side
 
 
-def cmake_build(build_dir: Path, targets: list[str], extra_flags: str = "") -> Path:
+def cmake_build(build_dir: Path, targets: list[str], extra_flags: str = "", source: Path = ROOT) -> Path:
     """Configure (Release, optional extra CXX flags) and build the given bench targets."""
     gen = ["-G", "Ninja"] if shutil.which("ninja") else []
-    cfg = ["cmake", "-S", str(ROOT), "-B", str(build_dir), *gen, "-DCMAKE_BUILD_TYPE=Release",
+    cfg = ["cmake", "-S", str(source), "-B", str(build_dir), *gen, "-DCMAKE_BUILD_TYPE=Release",
            "-DALGID_BUILD_BENCH=ON", "-DALGID_BUILD_TESTS=OFF", "-DALGID_BUILD_PYTHON=OFF",
            f"-DCMAKE_CXX_FLAGS={extra_flags}"]
     subprocess.run(cfg, check=True, stdout=subprocess.DEVNULL)
@@ -70,6 +73,19 @@ def cmake_build(build_dir: Path, targets: list[str], extra_flags: str = "") -> P
     subprocess.run(["cmake", "--build", str(build_dir), "-j2", "--target", *targets], check=True,
                    stdout=subprocess.DEVNULL)
     return build_dir / "bench" / "cpp"
+
+
+def baseline_source(ref: str, build_dir: Path) -> Path:
+    """A checkout of git revision `ref` (a detached worktree under `build_dir`): the code the
+    current figures are compared with, built and timed in the same run."""
+    path = build_dir / "baseline-src"
+    if path.exists():
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(path)], check=False,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        shutil.rmtree(path, ignore_errors=True)
+    subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(path), ref], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return path
 
 
 def json_lines(cmd: list[str]) -> list[dict]:
@@ -110,14 +126,26 @@ def load_signals(binary: Path, n: int, samples: int) -> tuple[np.ndarray, np.nda
     return np.ascontiguousarray(a), np.ascontiguousarray(u)
 
 
+def config() -> object:
+    """The estimators' configuration at the bench's sample period (C++ defaults otherwise)."""
+    import algid
+
+    cfg = algid.ChainConfig()
+    cfg.dt = DT
+    return cfg
+
+
 def python_figures(a: np.ndarray, u: np.ndarray, reps: int, isa: str | None = None) -> dict:
-    """Python update() (default build only) and run() of the chain estimators of build `isa`."""
+    """Python update() (default build only) and run() of the chain estimators of build `isa`:
+    the fixed-size class of n ("python_run") and the run-time sized one ("python_run_dynamic"),
+    timed alternately."""
     import algid
     from algid.estimator import chain_core
 
     samples, n = a.shape
     out: dict[str, dict] = {}
-    make = getattr(chain_core(isa), f"ChainEstimator{n}")
+    core = chain_core(isa)
+    makers = {"python_run": getattr(core, f"ChainEstimator{n}"), "python_run_dynamic": core.ChainEstimatorDynamic}
 
     if isa is None:
         # Per-sample update(): each call timed (minus the timer's own median cost).
@@ -140,18 +168,19 @@ def python_figures(a: np.ndarray, u: np.ndarray, reps: int, isa: str | None = No
     # Batch run(): GIL released; includes filling the (T, n) output arrays. Whole record per call,
     # the same protocol as the C++ window_min figure (whole window / T, min over windows): on a
     # shared machine the min is the figure least disturbed by other jobs.
-    per_rep = []
+    per_rep: dict[str, list[float]] = {key: [] for key in makers}
     for rep in range(2 * reps + 1):
-        est = make(DT, "fixed", 16, 1e-9)
-        t0 = time.perf_counter_ns()
-        est.run(a, u, False)
-        t1 = time.perf_counter_ns()
-        if rep:
-            per_rep.append((t1 - t0) / (samples * n))
-    out["python_run"] = {"ns_per_dof_sample_median": float(np.median(per_rep)), "window_min": float(min(per_rep)),
-                         "p99": None, "max": None, "samples": samples, "reps": len(per_rep),
-                         "isa": isa or algid.ISA,
-                         "note": "one timing per whole-record call (T samples); median and min over calls"}
+        for key, make in makers.items():
+            est = make(config(), n)
+            t0 = time.perf_counter_ns()
+            est.run(a, u, False)
+            t1 = time.perf_counter_ns()
+            if rep:
+                per_rep[key].append((t1 - t0) / (samples * n))
+    for key, times in per_rep.items():
+        out[key] = {"ns_per_dof_sample_median": float(np.median(times)), "window_min": float(min(times)),
+                    "p99": None, "max": None, "samples": samples, "reps": len(times), "isa": isa or algid.ISA,
+                    "note": "one timing per whole-record call (T samples); median and min over calls"}
     return out
 
 
@@ -217,7 +246,7 @@ def interleaved_numpy_ratio(a_all: np.ndarray, u_all: np.ndarray, reps: int, run
             t2 = time.perf_counter_ns()
             best = None
             for _ in range(5):
-                est = make(DT, "fixed", 16, 1e-9)
+                est = make(config(), n)
                 t3 = time.perf_counter_ns()
                 est.run(a_all[:run_samples], u_all[:run_samples], False)
                 dt_ns = time.perf_counter_ns() - t3
@@ -265,6 +294,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-callgrind", action="store_true")
     ap.add_argument("--rounds", type=int, default=3, help="repetitions of the timing (best median kept)")
     ap.add_argument("--output", type=Path, default=RESULTS)
+    ap.add_argument("--baseline", metavar="REF", help="also build bench/cpp at git revision REF and time it in "
+                    "every round (configurations baseline_*): before/after figures from one run")
     args = ap.parse_args(argv)
     windows = 3 if args.quick else 5
     if args.quick:
@@ -287,6 +318,16 @@ def main(argv: list[str] | None = None) -> int:
                   "flags) ...", flush=True)
             wide_dirs[level] = cmake_build(args.build_dir / f"x86-64-{level}", ["bench_per_sample", "peak_flops"],
                                            f"-march=x86-64-{level} -ffp-contract=off")
+
+    # The baseline revision's C++ bench, built with the same flags: {"": dir, "v3": dir, ...}.
+    baseline_dirs: dict[str, Path] = {}
+    if args.baseline:
+        source = baseline_source(args.baseline, args.build_dir)
+        print(f"building bench/cpp of {args.baseline} (the baseline) ...", flush=True)
+        baseline_dirs[""] = cmake_build(args.build_dir / "baseline-default", ["bench_per_sample"], source=source)
+        for level in wide_dirs:
+            baseline_dirs[f"_{level}"] = cmake_build(args.build_dir / f"baseline-x86-64-{level}", ["bench_per_sample"],
+                                                     f"-march=x86-64-{level} -ffp-contract=off", source=source)
 
     configs: dict[str, dict[str, dict]] = {}
 
@@ -321,6 +362,10 @@ def main(argv: list[str] | None = None) -> int:
         for level, wide_dir in wide_dirs.items():
             for row in json_lines([str(wide_dir / "bench_per_sample"), "--windows", str(windows)]):
                 add(f"{row['config']}_{row['scalar']}_{level}", row["n"],
+                    {k: v for k, v in row.items() if k not in ("config", "n", "scalar")})
+        for suffix, base_dir in baseline_dirs.items():
+            for row in json_lines([str(base_dir / "bench_per_sample"), "--windows", str(windows)]):
+                add(f"baseline_{row['config']}_{row['scalar']}{suffix}", row["n"],
                     {k: v for k, v in row.items() if k not in ("config", "n", "scalar")})
         for n in SIZES:
             a, u = signals[n]
@@ -486,6 +531,32 @@ def main(argv: list[str] | None = None) -> int:
         for n in SIZES if fig("default_double", n).get("instructions_per_dof_sample")
         and fig("rls_double", n).get("instructions_per_dof_sample")}
 
+    # The run-time sized estimator against the fixed-size one at the same n, same build and run.
+    runtime_over_fixed = {}
+    for suffix in ["", *(f"_{level}" for level in wide_dirs)]:
+        for scalar in ("double", "float"):
+            ratios = {str(n): fig(f"dynamic_{scalar}{suffix}", n)["ns_per_dof_sample_median"] /
+                      fig(f"default_{scalar}{suffix}", n)["ns_per_dof_sample_median"]
+                      for n in SIZES if fig(f"dynamic_{scalar}{suffix}", n) and fig(f"default_{scalar}{suffix}", n)}
+            if ratios:
+                runtime_over_fixed[f"update_{scalar}{suffix}"] = ratios
+    for isa in [None, *other_isas]:
+        suffix = f"_{isa}" if isa else ""
+        runtime_over_fixed[f"python_run{suffix}"] = {
+            str(n): fig(f"python_run_dynamic_double{suffix}", n)["window_min"] / fig(f"python_run_double{suffix}", n)["window_min"]
+            for n in SIZES if fig(f"python_run_dynamic_double{suffix}", n)}
+    targets["runtime_within_1.5x_of_fixed"] = {
+        key: {"worst": max(ratios.values()), "met": max(ratios.values()) <= 1.5}
+        for key, ratios in runtime_over_fixed.items() if ratios}
+    # After over before, where a baseline was timed: < 1 is faster now.
+    after_over_before = {}
+    for config in sorted(configs):
+        if config.startswith("baseline_") and config[len("baseline_"):] in configs:
+            now = config[len("baseline_"):]
+            after_over_before[now] = {
+                str(n): fig(now, n)["ns_per_dof_sample_median"] / fig(config, n)["ns_per_dof_sample_median"]
+                for n in SIZES if fig(now, n) and fig(config, n)}
+
     single = [r for r in accuracy if r["scalar"] in ("double", "float")]
     float_1k = [r for r in single if r["scalar"] == "float" and r["rate_hz"] == 1000]
     targets["float_within_1pct_at_t0_plus_0.1s_1kHz"] = {
@@ -494,7 +565,8 @@ def main(argv: list[str] | None = None) -> int:
 
     result = {
         "meta": {"date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-                 "command": "python bench/per_sample.py" + (" --quick" if args.quick else ""),
+                 "command": "python bench/per_sample.py" + (" --quick" if args.quick else "") +
+                            (f" --baseline {args.baseline}" if args.baseline else ""),
                  "machine": machine_info(), "loadavg_before": load_before, "loadavg_after": load_after,
                  "build": {"default": "CMAKE_BUILD_TYPE=Release (-O3 -DNDEBUG), no -march: the flags of the "
                                       "wheel's baseline module algid._core (which adds -fPIC -fvisibility=hidden)",
@@ -533,6 +605,8 @@ def main(argv: list[str] | None = None) -> int:
         "lower_bound": bound,
         "ratio_estimator_over_rls": {"time": rls_ratio, "instructions": rls_ratio_instructions},
         "numpy_reference_over_python_run_interleaved": interleaved,
+        "runtime_over_fixed": runtime_over_fixed,
+        "after_over_before": {"baseline": args.baseline, "ratios": after_over_before},
         "single_precision": accuracy,
         "targets": targets,
     }
@@ -586,6 +660,13 @@ def main(argv: list[str] | None = None) -> int:
     print("  float at t0 + 0.1 s, 1 kHz: " + ", ".join(
         f"{src}: {v['max_rel_error']:.1e}" for src, v in t["float_within_1pct_at_t0_plus_0.1s_1kHz"].items()))
     print(f"  continuous configuration: {continuous_note}")
+    print("  run-time sized / fixed-size, same n: " + "; ".join(
+        f"{key}: " + ", ".join(f"n={n} {r:.2f}x" for n, r in ratios.items())
+        for key, ratios in runtime_over_fixed.items() if ratios))
+    if after_over_before:
+        print(f"  after / before ({args.baseline}), median ns per DOF-sample: " + "; ".join(
+            f"{key}: " + ", ".join(f"n={n} {r:.2f}x" for n, r in ratios.items())
+            for key, ratios in after_over_before.items() if ratios))
     print(f"\nwrote {args.output.relative_to(ROOT) if args.output.is_relative_to(ROOT) else args.output}")
     return 0
 
