@@ -36,7 +36,7 @@ inline T ratio_decay(const T& prev_tau, const T& tau) noexcept {
   bool first = true;
   for (int e = kTimeExponent<M>; e > 0; e >>= 1) {
     if (e & 1) {
-      if (!first) rho = rho * ratio;
+      rho = first ? ratio : T(rho * ratio);
       first = false;
     }
     ratio = ratio * ratio;
