@@ -147,6 +147,23 @@ def test_bad_sample_reseeds(table1_record):
     assert err.max() < 1e-5
 
 
+@pytest.mark.parametrize("n,boundary", [(1, "fixed"), (1, "free"), (2, "free"), (4, "fixed")])
+def test_noisy_eq7_agrees_with_numpy_reference(n, boundary):
+    """With noise the instantaneous solutions scatter and eq. 7's weighting shows: every system
+    size (3x3 for n = 1 and a free end, 4x4 otherwise) weighs them by |det A| as the reference
+    does, to rounding."""
+    chain = Chain.random(n, np.random.default_rng(n), boundary)
+    _, a, u, _ = simulate_chain(chain, multisine(n, seed=n), 0.3)
+    a = a + 1e-2 * np.random.default_rng(1).standard_normal(a.shape) * a.std(0)
+    est = algid.ChainEstimator(n, 1e-3, boundary=boundary)
+    out = est.run(a, u, full=True)
+    ref = reference.estimate(a, u, 1e-3, boundary=boundary, points=8)
+    d = est.delay_samples
+    cpp, npy = out["theta"][d:][40:], ref["theta_ratio"][: len(a) - d][40:]
+    assert np.array_equal(np.isnan(cpp), np.isnan(npy))
+    assert np.nanmax(np.abs(cpp / npy - 1)) < 1e-8
+
+
 @pytest.mark.parametrize("n,boundary", [(11, "fixed"), (30, "free")])
 def test_any_n_agrees_with_numpy_reference(n, boundary):
     """Sizes that are not compiled as fixed-size instantiations run the run-time sized

@@ -53,46 +53,6 @@ constexpr int lane_width() noexcept {
   return w;
 }
 
-/// `count` rounded up to a whole number of the registers lane_width() picks for many DOF (at
-/// most 256 bits: 2 doubles with SSE2, 4 with AVX and AVX-512), but no more than `cap`.
-template <class Scalar>
-constexpr int simd_padded(int count, int cap) noexcept {
-  constexpr int width = lane_width<1 << 30, Scalar>();
-  const int padded = (count + width - 1) / width * width;
-  return padded < cap ? padded : cap;
-}
-
-// (GCC warns that a SIMD type's alignment attribute is dropped as a template argument, as
-// Eigen's own packet code does everywhere; Eigen silences it in its headers, we here.)
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wignored-attributes"
-#endif
-/// The widest SIMD register (Eigen packet) of Scalar of at most 256 bits (see lane_width())
-/// whose lane count divides Size; Scalar itself where none does.
-template <class Scalar, int Size>
-struct DividingPacket {
- private:
-  template <class Packet>
-  static auto pick() {
-    constexpr int width = Eigen::internal::unpacket_traits<Packet>::size;
-    using Half = typename Eigen::internal::unpacket_traits<Packet>::half;
-    if constexpr (width > 1 && Size % width == 0 && width * sizeof(Scalar) <= 32) {
-      return Packet{};
-    } else if constexpr (width > 1 && Eigen::internal::unpacket_traits<Half>::size < width) {
-      return pick<Half>();
-    } else {
-      return Scalar{};
-    }
-  }
-
- public:
-  using type = decltype(pick<typename Eigen::internal::packet_traits<Scalar>::type>());
-};
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
-
 /// Lane operations on Lanes<Scalar, W>.
 template <class Scalar, int W>
 struct LaneOps {
