@@ -35,6 +35,11 @@ def parameter_names(n: int) -> list[str]:
     return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
 
 
+def dof_parameter_names(i: int) -> list[str]:
+    """``m_i, c_i, k_i, k_{i+1}`` of DOF ``i`` (0-based): the packed parameters its equation holds."""
+    return [f"m{i + 1}", f"c{i + 1}", f"k{i + 1}", f"k{i + 2}"]
+
+
 def spring_columns(n: int, boundary: str) -> list[list[tuple[int, int]]]:
     """For every DOF equation e (0-based): list of (spring j (1-based), other DOF or -1).
 

@@ -55,14 +55,7 @@ from scipy.signal import lfilter, lfilter_zi
 
 from ..chain import spring_columns, spring_deformation, spring_sides, springs
 from .equations import base_design, effect_column, target, to_physical
-from .gram import (
-    CVResult,
-    EqSpec,
-    cross_validate,
-    cross_validate_grid,
-    jackknife_std,
-    window_stats,
-)
+from .gram import CVResult, EqSpec, cross_validate, cross_validate_grid, jackknife_std, window_stats
 from .linear import LinearFit
 from .windows import Prepared
 

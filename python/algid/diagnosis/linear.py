@@ -125,7 +125,8 @@ def fit_linear(P: Prepared) -> LinearFit:
     x, v = reconstruct_states(P, theta_a, raw)
     theta = [to_physical(P, e, th) for e, th in enumerate(theta_a)]
     resid = detrend(P, raw).reshape(raw.shape)
-    return LinearFit(theta_a=theta_a, theta=theta, names=[equation_parameter_names(P.n, P.boundary, e) for e in range(P.n)],
+    names = [equation_parameter_names(P.n, P.boundary, e) for e in range(P.n)]
+    return LinearFit(theta_a=theta_a, theta=theta, names=names,
                      forced=P.forced.copy(), cv=cv, x=x, v=v, resid=resid,
                      resid_force=resid * force_scale(P, theta)[None, :])
 

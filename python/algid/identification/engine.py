@@ -34,13 +34,7 @@ import numpy as np
 from ..noise import NoiseModel, analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations
 from ..recording import motion as recording_motion
-from .plan import (
-    Plan,
-    make_plan,
-    natural_frequencies_hz,
-    window_candidates,
-    window_limits,
-)
+from .plan import Plan, make_plan, natural_frequencies_hz, window_candidates, window_limits
 from .result import Identification
 from .runner import Run, run_plan
 from .surrogate import REPLICATES, bootstrap

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..chain import parameter_names, spring_deformation
+from ..chain import dof_parameter_names, parameter_names, spring_deformation
 from ..noise import NoiseModel
 from .surrogate import Motion
 
@@ -185,5 +185,4 @@ def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm) -> Verdict:
 def dof_validity(verdicts: list[Verdict], n: int) -> np.ndarray:
     """(n,) a DOF is valid when its m, c and both springs are valid (module docstring)."""
     by = {v.name: v for v in verdicts}
-    return np.array([all(by[k].valid for k in (f"m{i + 1}", f"c{i + 1}", f"k{i + 1}", f"k{i + 2}"))
-                     for i in range(n)])
+    return np.array([all(by[k].valid for k in dof_parameter_names(i)) for i in range(n)])

@@ -95,7 +95,16 @@ law once per sample on the measured positions and holds its force. In both modes
 controller's estimator is fed, sample by sample, the measured accelerations and recorded
 forces, and the parameters it uses on ``[t_k, t_{k+1})`` depend on samples up to ``k - 1``
 (one sample of computation latency), so the force samples of the convention above are
-well defined.
+well defined. The simulator asks of a controller only what :class:`Controller` (sampled
+mode) or :class:`ContinuousController` (continuous mode) names.
+
+Package
+-------
+:mod:`.inputs` validates the arguments, :mod:`.schedule` cuts every sample interval into
+steps, :mod:`.state_space` holds the state layout, the linear system and the stepper,
+:mod:`.pieces` the force pieces, :mod:`.open_loop` and :mod:`.closed_loop` drive a run and
+:mod:`.sensors` reads it; :mod:`.plant` and :mod:`.effects` are the plant, :mod:`.result`
+what a run returns and :mod:`.protocol` what a controller provides.
 """
 
 from __future__ import annotations

@@ -38,14 +38,14 @@ class Progress:
 
 @dataclass
 class Run:
-    """Everything a driver needs: ``Lm, Bg, B_in`` are the linear system of
-    :func:`~.state_space.linear_system`, ``bias`` the accelerometers' bias [m/s^2] (n,)."""
+    """Everything a driver needs: ``Bg`` and ``B_in`` say how a force on the masses and the
+    commanded force enter the state (:func:`~.state_space.linear_system`), ``bias`` is the
+    accelerometers' bias [m/s^2] (n,)."""
 
     inputs: RunInputs
     schedule: Schedule
     plant: Plant
     layout: StateLayout
-    Lm: np.ndarray
     Bg: np.ndarray
     B_in: np.ndarray
     stepper: Stepper
@@ -78,6 +78,6 @@ def build_run(inp: RunInputs, report: Progress) -> Run:
     Lm, Bg, B_in = linear_system(plant, lay, inp.actuator_lag_s)
     rk = plant.nonlinear or inp.controller_in_ode
     stepper = Stepper(Lm, B_in, None if inp.controller_in_ode else Bg, sched.lengths_s, inp.fs_hz, rk, plant)
-    return Run(inputs=inp, schedule=sched, plant=plant, layout=lay, Lm=Lm, Bg=Bg, B_in=B_in, stepper=stepper,
+    return Run(inputs=inp, schedule=sched, plant=plant, layout=lay, Bg=Bg, B_in=B_in, stepper=stepper,
                routing=InputRouting(sched.bounds, inp.delays, inp.fs_hz, inp.h),
                bias=accelerometer_bias(inp.effects, inp.n), report=report)
