@@ -43,6 +43,7 @@ only the scoring of withheld windows is restricted. Outside the band the recordi
 carries no signal, only the accelerometer's white noise, which no model can explain and
 which would otherwise bound the gap shrink by the ratio of the full-band to the in-band
 noise. The full-band gap (the same without the projection) is reported alongside.
+
 The band rule is in :mod:`.band`. The machinery itself lives in :mod:`.band` (the signal
 band), :mod:`.windows` (windows, detrending, band projection), :mod:`.integrals` (A1, A2),
 :mod:`.equations` (the columns of every DOF's equation) and :mod:`.gram` (per-window Grams
@@ -52,13 +53,13 @@ and gathers the building blocks under one name.
 
 from __future__ import annotations
 
-from .band import Band, signal_band
+from .band import signal_band
 from .equations import to_physical
 from .gram import EqSpec, cross_validate, window_stats
 from .integrals import integrals
 from .windows import band_filter, detrend, prepare
 
-__all__ = ["METRIC", "METRIC_FORCE", "Band", "EqSpec", "band_filter", "cross_validate", "detrend", "integrals",
+__all__ = ["METRIC", "METRIC_FORCE", "EqSpec", "band_filter", "cross_validate", "detrend", "integrals",
            "prepare", "signal_band", "to_physical", "window_stats"]
 
 METRIC = (

@@ -27,7 +27,7 @@ class RunInputs:
 
     ``t`` (T,) sample times [s]; ``force_samples`` (T, n) [N] or ``force_fn`` ``t -> (n,)``
     [N] (both None: no force, or a controller); ``x0`` [m], ``v0`` [m/s] (n,) initial
-    state; ``delays`` (n,) input delay of every DOF [s]; the rest as :func:`simulate`.
+    state; ``delays`` (n,) input delay of every DOF [s]; the rest as :func:`algid.simulator.simulate`.
     """
 
     chain: Chain
