@@ -391,3 +391,44 @@ def test_bang_bang_reference_profile():
     assert x[np.searchsorted(t, 0.2 + dur + 0.1), 0] == pytest.approx(0.04)
     assert x[-1, 0] == pytest.approx(0.0, abs=1e-12)
     assert ref.evaluate(0.3)[0].shape == (1,)
+
+
+def test_a_controller_needs_only_the_protocol_methods():
+    """A sampled loop runs a controller that has the methods of ``algid.simulator.Controller``
+    and nothing else (no ``reference``); a noisy loop's noise level comes from its
+    ``reference_motion``: noise RMS = SNR ratio x RMS of the nominal position."""
+
+    class HoldAt:
+        __slots__ = ("n", "target", "forces")
+
+        def __init__(self, target_m):
+            self.target = target_m
+
+        def start(self, chain_n, dt, boundary="fixed", samples=0, mode="continuous"):
+            self.n, self.forces = chain_n, []
+
+        def params_for_sample(self, k, z=None):
+            return None
+
+        def sampled_force(self, k, t, x_meas):
+            u = 2000.0 * (self.target - x_meas)
+            self.forces.append(u)
+            return u
+
+        def observe(self, k, t, accel, force, x_meas, z=None):
+            pass
+
+        def reference_motion(self, t):
+            still = np.zeros((np.size(t), self.n))
+            return still + self.target, still, still
+
+        def log(self):
+            return {"force_command": np.array(self.forces)}
+
+    ctl = HoldAt(np.array([1e-3, -2e-3, 1e-3]))
+    res = simulate(TABLE1, None, 0.5, 1000.0, controller=ctl, mode="sampled", noise_db=40.0,
+                   noise_on=("position",), seed=3)
+    ratio = 10 ** (-40.0 / 20)
+    np.testing.assert_allclose(res.noise_rms["position"], ratio * np.abs(ctl.target), rtol=1e-12)
+    np.testing.assert_array_equal(res.controller_log["force_command"], res.limits["u_plus"])  # held from t_k+
+    assert res.x_ref is None and res.estimates is None

@@ -1,10 +1,13 @@
-"""The n-DOF mass-spring-damper chain of the paper's eq. 1.
+"""The n-DOF mass-spring-damper chain of the paper's eq. 1 and its topology.
 
 Spring ``j`` (1-based, ``j = 1 .. n+1``) joins DOF ``j-1`` and DOF ``j``; DOF 0 and
 DOF ``n+1`` are the walls (``x_0 = x_{n+1} = 0``). Every mass has a viscous damper
 to ground. With a *free* right end spring ``n+1`` is absent (``k_{n+1} = 0`` known).
 
     m_i x_i'' + c_i x_i' + k_i (x_i - x_{i-1}) + k_{i+1} (x_i - x_{i+1}) = u_i     (1)
+
+The topology (the stiffness matrix, the packed parameter names, which springs enter
+which DOF's equation, spring deformations) is built here and nowhere else.
 """
 
 from __future__ import annotations
@@ -14,6 +17,95 @@ from dataclasses import dataclass
 import numpy as np
 
 BOUNDARIES = ("fixed", "free")
+
+
+def stiffness_matrix(k: np.ndarray) -> np.ndarray:
+    """Stiffness matrix K (n, n) [N/m] of eq. 1 from the springs ``k_1 .. k_{n+1}`` (n+1,)."""
+    n = len(k) - 1
+    K = np.zeros((n, n))
+    for i in range(n):
+        K[i, i] = k[i] + k[i + 1]
+        if i + 1 < n:
+            K[i, i + 1] = K[i + 1, i] = -k[i + 1]
+    return K
+
+
+def parameter_names(n: int) -> list[str]:
+    """``m1..mn, c1..cn, k1..k{n+1}``: the order of every packed parameter vector."""
+    return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
+
+
+def dof_parameter_names(i: int) -> list[str]:
+    """``m_i, c_i, k_i, k_{i+1}`` of DOF ``i`` (0-based): the packed parameters its equation holds."""
+    return [f"m{i + 1}", f"c{i + 1}", f"k{i + 1}", f"k{i + 2}"]
+
+
+def spring_columns(n: int, boundary: str) -> list[list[tuple[int, int]]]:
+    """For every DOF equation e (0-based): list of (spring j (1-based), other DOF or -1).
+
+    The column of spring j in equation e is ``x_e - x_other`` (x_other = 0 for a wall).
+    For n = 1 the two springs act in parallel: one column (x_1) identifies k_1 + k_2 and
+    is attributed to spring 1. With a free right end spring n+1 does not exist.
+    """
+    out = []
+    for e in range(n):
+        cols = [(e + 1, e - 1 if e >= 1 else -1)]
+        if n == 1:
+            out.append(cols)
+            continue
+        if e + 1 < n:
+            cols.append((e + 2, e + 1))
+        elif boundary == "fixed":
+            cols.append((e + 2, -1))
+        out.append(cols)
+    return out
+
+
+def springs(n: int, boundary: str) -> list[int]:
+    """Springs (1-based) that exist and can be told apart: 1..n+1 (fixed), 1..n (free),
+    only 1 for n = 1."""
+    if n == 1:
+        return [1]
+    return list(range(1, n + 1 + (boundary == "fixed")))
+
+
+def equation_parameter_names(n: int, boundary: str, e: int) -> list[str]:
+    """Names of the parameters of DOF ``e``'s own equation (0-based): ``m, c, k<j> ...``."""
+    return ["m", "c"] + [f"k{j}" for j, _ in spring_columns(n, boundary)[e]]
+
+
+def spring_sides(n: int, j: int) -> list[tuple[int, float]]:
+    """(DOF equation (0-based), sign) pairs where a force of spring ``j`` (1-based) enters:
+    DOF j (+), DOF j-1 (-); for n = 1 only DOF 1."""
+    if n == 1:
+        return [(0, 1.0)]
+    out = []
+    if j - 1 < n:
+        out.append((j - 1, 1.0))
+    if j - 2 >= 0:
+        out.append((j - 2, -1.0))
+    return out
+
+
+def deformation_matrix(n: int) -> np.ndarray:
+    """``D`` (n+1, n) with ``d = D x``: ``d_j = x_j - x_{j-1}`` [m] for every spring (walls at 0)."""
+    D = np.zeros((n + 1, n))
+    for j in range(n + 1):
+        if j < n:
+            D[j, j] = 1.0
+        if j >= 1:
+            D[j, j - 1] = -1.0
+    return D
+
+
+def spring_deformation(x: np.ndarray, j: int, n: int) -> np.ndarray:
+    """Deformation ``d_j = x_j - x_{j-1}`` (T,) [m] of spring ``j`` (1-based) from positions
+    ``x`` (T, n) (walls at 0); for n = 1, ``x_1`` (both springs in parallel)."""
+    if n == 1:
+        return x[:, 0]
+    right = x[:, j - 1] if j - 1 < n else 0.0
+    left = x[:, j - 2] if j - 2 >= 0 else 0.0
+    return right - left
 
 
 @dataclass(frozen=True)
@@ -64,13 +156,7 @@ class Chain:
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Mass, damping and stiffness matrices (M, C, K) of eq. 1."""
-        n, k = self.n, self.stiffness
-        K = np.zeros((n, n))
-        for i in range(n):
-            K[i, i] = k[i] + k[i + 1]
-            if i + 1 < n:
-                K[i, i + 1] = K[i + 1, i] = -k[i + 1]
-        return np.diag(self.mass), np.diag(self.damping), K
+        return np.diag(self.mass), np.diag(self.damping), stiffness_matrix(self.stiffness)
 
     def natural_frequencies_hz(self) -> np.ndarray:
         """Undamped natural frequencies [Hz], ascending (eigenvalues of M^-1 K)."""

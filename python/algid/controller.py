@@ -56,17 +56,14 @@ law keeps the nominal parameters: the loop stays stable but does not track.
 (every relative one-sigma uncertainty of the DOF at most 5 % by default) and they are
 physically admissible; the first substitution waits until all DOFs pass, afterwards each
 DOF follows the estimates while they pass and keeps its last accepted values otherwise.
-With 40 dB on the accelerations and a 0.05 N-per-line probe multisine (:class:`Multisine`)
-the demo substitutes at about 0.2 s and the peak tracking error after 1 s is 1.8-2.8 % of
-the stroke over three seeds (the single window in the same loop: 12.6 %;
-``bench/demo_report.py``).
+With 40 dB on the accelerations and a 0.05 N-per-line probe multisine
+(:class:`~algid.trajectories.Multisine`) the demo substitutes at about 0.2 s and the peak
+tracking error after 1 s is 1.8-2.8 % of the stroke over three seeds (the single window in
+the same loop: 12.6 %; ``bench/demo_report.py``).
 
-References (:class:`BezierReference`): Bezier rest-to-rest polynomials
-``psi(tau) = tau^5 (252 - 1050 tau + 1800 tau^2 - 1575 tau^3 + 700 tau^4 - 126 tau^5)``
-(``psi(0) = 0``, ``psi(1) = 1``, derivatives 1-4 zero at both ends) move each DOF from rest
-to its target over ``t_out`` and back to rest over ``t_back``. The paper's targets are
-``(0.005, 0.005, -0.005) m``; :meth:`BezierReference.paper` generalises to any ``n`` by
-repeating the pattern ``+, +, -`` (``n = 1``: ``+5 mm``; ``n = 5``: ``+, +, -, +, +``).
+The references (:class:`~algid.trajectories.BezierReference`) and the probing multisine
+(:class:`~algid.trajectories.Multisine`) are in :mod:`algid.trajectories`; the law of eqs. 8-10
+in :mod:`algid.control_law`, the acceptance rule in :mod:`algid.estimate_gate`.
 
 The estimator is any object with ``update(accel (n,), force (n,)) -> status`` and the
 attributes ``mass (n,)``, ``damping (n,)``, ``stiffness (n+1,)``, ``valid (n,)``; the default
@@ -78,16 +75,18 @@ estimator may also expose ``theta(dof)`` (each DOF's own four estimates), ``sigm
 
 from __future__ import annotations
 
-from typing import Any, Callable, Optional, Sequence, Union
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
 from .continuous import PackedParameters
+from .control_law import DEFAULT_POLES, ControlLaw, LawParameters, pole_placement_gains
+from .controller_log import ControllerLog
+from .estimate_gate import ACCEPT_RULES, EstimateGate
+from .trajectories import BezierReference, bezier
 
 __all__ = [
-    "BEZIER_COEFFS",
     "ContinuousAdapter",
-    "Multisine",
     "DEFAULT_POLES",
     "BezierReference",
     "TrackingController",
@@ -95,158 +94,11 @@ __all__ = [
     "pole_placement_gains",
 ]
 
-#: Error poles [rad/s] of the default gains (a triple real pole).
-DEFAULT_POLES: tuple[float, float, float] = (-20.0, -20.0, -20.0)
-
-#: Coefficients of ``psi(tau)`` for ``tau^5 .. tau^10``.
-BEZIER_COEFFS = (252.0, -1050.0, 1800.0, -1575.0, 700.0, -126.0)
-
-
-def bezier(tau: Union[float, np.ndarray]) -> tuple[Any, Any, Any]:
-    """``psi``, ``dpsi/dtau``, ``d2psi/dtau2`` of the rest-to-rest Bezier polynomial, with
-    ``tau`` clipped to ``[0, 1]``."""
-    tau = np.clip(tau, 0.0, 1.0)
-    p = dp = ddp = 0.0 * tau
-    for q, c in enumerate(BEZIER_COEFFS):
-        e = q + 5
-        p = p + c * tau**e
-        dp = dp + c * e * tau ** (e - 1)
-        ddp = ddp + c * e * (e - 1) * tau ** (e - 2)
-    return p, dp, ddp
-
-
-def _bezier_scalar(tau: float) -> tuple[float, float, float]:
-    if tau <= 0.0:
-        return 0.0, 0.0, 0.0
-    if tau >= 1.0:
-        return 1.0, 0.0, 0.0
-    t2 = tau * tau
-    t3 = t2 * tau
-    # Horner in tau of the three polynomials (coefficients of tau^0.. after factoring)
-    p = t3 * t2 * (252.0 + tau * (-1050.0 + tau * (1800.0 + tau * (-1575.0 + tau * (700.0 - 126.0 * tau)))))
-    dp = t2 * t2 * (1260.0 + tau * (-6300.0 + tau * (12600.0 + tau * (-12600.0 + tau * (6300.0 - 1260.0 * tau)))))
-    ddp = t3 * (5040.0 + tau * (-31500.0 + tau * (75600.0 + tau * (-88200.0 + tau * (50400.0 - 11340.0 * tau)))))
-    return p, dp, ddp
-
-
-class BezierReference:
-    """Rest-to-rest reference: rest -> ``targets`` over ``t_out``, back to rest over ``t_back``.
-
-    Parameters
-    ----------
-    targets_m : array (n,)
-        Positions [m] held between the two moves.
-    t_out : (start, end) [s]
-        Interval of the outward move.
-    t_back : (start, end) [s]
-        Interval of the return move (after ``t_out``).
-    """
-
-    def __init__(self, targets_m: Sequence[float], t_out: tuple[float, float] = (0.0, 2.0),
-                 t_back: tuple[float, float] = (2.5, 4.5)) -> None:
-        self.targets = np.asarray(targets_m, dtype=float).reshape(-1)
-        if self.targets.size < 1 or not np.all(np.isfinite(self.targets)):
-            raise ValueError("targets_m must be finite with at least one entry")
-        a, b = map(float, t_out)
-        c, d = map(float, t_back)
-        if not (0.0 <= a < b <= c < d):
-            raise ValueError(f"need 0 <= t_out[0] < t_out[1] <= t_back[0] < t_back[1], got {t_out}, {t_back}")
-        self.t_out = (a, b)
-        self.t_back = (c, d)
-
-    @property
-    def n(self) -> int:
-        """Number of DOF."""
-        return int(self.targets.size)
-
-    @property
-    def stroke_m(self) -> float:
-        """Largest target magnitude [m]."""
-        return float(np.max(np.abs(self.targets)))
-
-    @classmethod
-    def paper(cls, n: int, stroke_m: float = 0.005, **kw: Any) -> "BezierReference":
-        """The paper's targets ``(+s, +s, -s)`` for n = 3, the pattern repeated for other n."""
-        pattern = np.array([1.0, 1.0, -1.0])
-        return cls(stroke_m * np.resize(pattern, int(n)), **kw)
-
-    def evaluate(self, t: Union[float, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Reference position [m], velocity [m/s] and acceleration [m/s^2] at ``t`` [s].
-
-        A scalar ``t`` gives three ``(n,)`` arrays, an array ``(T,)`` three ``(T, n)``.
-        """
-        if np.ndim(t) == 0:
-            t = float(t)
-            (a, b), (c, d) = self.t_out, self.t_back
-            if t < c:
-                L = b - a
-                p, dp, ddp = _bezier_scalar((t - a) / L)
-                return self.targets * p, self.targets * (dp / L), self.targets * (ddp / (L * L))
-            L = d - c
-            p, dp, ddp = _bezier_scalar((t - c) / L)
-            return self.targets * (1.0 - p), self.targets * (-dp / L), self.targets * (-ddp / (L * L))
-        t = np.asarray(t, dtype=float)
-        (a, b), (c, d) = self.t_out, self.t_back
-        p1, d1, dd1 = bezier((t - a) / (b - a))
-        p2, d2, dd2 = bezier((t - c) / (d - c))
-        shape = p1 - p2
-        vel = d1 / (b - a) - d2 / (d - c)
-        acc = dd1 / (b - a) ** 2 - dd2 / (d - c) ** 2
-        X = self.targets
-        return shape[:, None] * X, vel[:, None] * X, acc[:, None] * X
-
-
-def pole_placement_gains(poles: Sequence[complex] = DEFAULT_POLES) -> tuple[float, float, float]:
-    """Gains ``(beta_0, beta_1, beta_2)`` of eq. 9 placing the roots of
-    ``s^3 + beta_2 s^2 + beta_1 s + beta_0`` at ``poles`` [rad/s].
-
-    Raises ``ValueError`` unless there are three poles, all in the open left half-plane,
-    complex ones in conjugate pairs.
-    """
-    p = np.asarray(poles, dtype=complex).reshape(-1)
-    if p.size != 3:
-        raise ValueError(f"eq. 9 has three error poles, got {p.size}")
-    if not np.all(p.real < 0):
-        raise ValueError(f"poles must have negative real parts, got {poles}")
-    coeffs = np.poly(p)
-    if np.max(np.abs(coeffs.imag)) > 1e-9 * np.max(np.abs(coeffs)):
-        raise ValueError("complex poles must come in conjugate pairs")
-    c = coeffs.real
-    return float(c[3]), float(c[2]), float(c[1])
-
 
 def _default_estimator(n: int, dt: float, boundary: str) -> Any:
     from . import ChainEstimator  # the compiled core; imported only when a loop starts
 
     return ChainEstimator(n, dt, boundary=boundary)
-
-
-class Multisine:
-    """Probing force ``f_i(t) = amplitude * sum_q sin(2 pi f_q t + phi_iq)`` [N] per DOF.
-
-    The paper's references are slow (2 s rest-to-rest moves): their accelerations carry so
-    little information that 40 dB of accelerometer noise buries it (neither the growing
-    window nor the continuous estimator gets a usable estimate from them, even with the
-    loop tracking on the true parameters). A small known multisine added to the commanded
-    force keeps the chain excited; with the default 3-16 Hz lines each DOF moves by some
-    10 um (0.2 % of the stroke) under the loop's feedback. Phases are fixed per DOF
-    (``seed``), so every run gets the same probe.
-    """
-
-    FREQS_HZ = (3.1, 4.7, 6.3, 8.9, 12.1, 15.7)
-
-    def __init__(self, n: int, amplitude_n: float, freqs_hz: Sequence[float] = FREQS_HZ,
-                 seed: int = 0) -> None:
-        if not amplitude_n >= 0:
-            raise ValueError("amplitude_n must be >= 0")
-        self.amplitude_n = float(amplitude_n)
-        self.freqs_hz = np.asarray(freqs_hz, dtype=float)
-        self._w = 2 * np.pi * self.freqs_hz
-        self.phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, (int(n), self.freqs_hz.size))
-
-    def __call__(self, t: float) -> np.ndarray:
-        """Force [N] (n,) at time ``t`` [s]."""
-        return self.amplitude_n * np.sin(self._w * t + self.phases).sum(axis=1)
 
 
 class ContinuousAdapter(PackedParameters):
@@ -372,11 +224,12 @@ class TrackingController:
     eq10 : {"integrated", "product"}
         Stiffness estimates inside the integrals of eq. 10 (default) or multiplying them
         (the paper's literal form); see the module docstring.
-    accept : {"settled", "valid"}
+    accept : {"settled", "valid", "sigma"}
         Which estimates of a DOF the law takes (see the module docstring): ``"settled"``
         (default) needs them physically admissible and steady within ``settle_tol`` over
         the last ``settle_window_s``; ``"valid"`` takes every finite estimate the estimator
-        flags valid with a positive mass.
+        flags valid with a positive mass; ``"sigma"`` every physically admissible one the
+        estimator flags valid (its validity carries an uncertainty test).
     settle_window_s : float
         Window [s] of the steadiness test.
     settle_tol : float
@@ -386,14 +239,20 @@ class TrackingController:
         running and is logged); default False, the law follows the estimates.
     excitation : callable ``t [s] -> (n,)`` [N] or None
         A known probing force added to the commanded force of eq. 8 (see
-        :class:`Multisine`); it is part of ``u`` in eq. 10 and in what the estimator sees.
+        :class:`~algid.trajectories.Multisine`); it is part of ``u`` in eq. 10 and in what
+        the estimator sees.
 
     Notes
     -----
-    The simulator drives the controller through :meth:`start`, :meth:`params_for_sample`,
-    :meth:`continuous` (continuous mode) or :meth:`sampled_force` (sampled mode), and
-    :meth:`observe`; :meth:`log` returns the history.
+    A :class:`algid.simulator.ContinuousController`: the simulator drives it through
+    :meth:`start`, :meth:`params_for_sample`, :meth:`continuous` (continuous mode) or
+    :meth:`sampled_force` (sampled mode), and :meth:`observe`; :meth:`reference_motion`
+    sets the noise level of a noisy loop and :meth:`log` returns the history. The law is a
+    :class:`~algid.control_law.ControlLaw`, the acceptance rule an
+    :class:`~algid.estimate_gate.EstimateGate`, the history a
+    :class:`~algid.controller_log.ControllerLog` (all made by :meth:`start`).
     """
+
 
     def __init__(self, reference: Optional[BezierReference] = None,
                  poles: Sequence[complex] = DEFAULT_POLES, switch_time_s: float = 0.1,
@@ -403,7 +262,7 @@ class TrackingController:
                  settle_window_s: float = 0.02, settle_tol: float = 0.02, hold: bool = False,
                  excitation: Optional[Callable[[float], np.ndarray]] = None) -> None:
         self.excitation = excitation
-        if accept not in ("settled", "valid", "sigma"):
+        if accept not in ACCEPT_RULES:
             raise ValueError(f"accept must be 'settled', 'valid' or 'sigma', got {accept!r}")
         if not (settle_window_s > 0 and settle_tol > 0):
             raise ValueError("settle_window_s and settle_tol must be > 0")
@@ -426,9 +285,7 @@ class TrackingController:
         self.estimator_factory = estimator_factory or _default_estimator
         self.use_estimates = bool(use_estimates)
         self.estimator: Any = None
-        self._started = False
 
-    # ---- set-up -------------------------------------------------------------------
     def start(self, chain_n: int, dt: float, boundary: str = "fixed", samples: int = 0,
               mode: str = "continuous") -> None:
         """Prepare a run of ``samples`` samples every ``dt`` [s] on an ``chain_n``-DOF chain."""
@@ -440,57 +297,15 @@ class TrackingController:
         self.n, self.dt, self.boundary, self.mode = n, float(dt), boundary, mode
         self.k_switch = int(round(self.switch_time_s / self.dt))
         self.estimator = self.estimator_factory(n, self.dt, boundary)
-        self._has_theta = callable(getattr(self.estimator, "theta", None))
-        self._has_sigma = getattr(self.estimator, "sigma", None) is not None
-        T = int(samples)
-        self._T = T
-        self._good_m = np.full(n, self.nominal_mass_kg)
-        self._good_c = np.zeros(n)
-        self._good_k = np.zeros(n + 1)
-        self._win = max(2, int(round(self.settle_window_s / self.dt)))
-        self._hist_m = np.zeros((self._win, n))
-        self._hist_c = np.zeros((self._win, n))
-        self._hist_k = np.zeros((self._win, n + 1))
-        self._hist_n = 0
-        self._first_accept = None
-        self._k_right_absent = np.zeros(n, bool)
-        self._k_right_absent[-1] = (boundary == "free") or n == 1
-        self._nominal = self._pack(np.full(n, self.nominal_mass_kg), np.zeros(n), np.zeros(n + 1))
-        self._current = self._nominal
-        self._dirty = True
-        # discrete integrals of sampled mode: int (x - x*), int x, int K x, int u
-        self._E = np.zeros(n)
-        self._X = np.zeros(n)
-        self._S = np.zeros(n)
-        self._U = np.zeros(n)
-        self._x_prev = np.zeros(n)
-        self._kx_prev = np.zeros(n)
-        # eq10="integrated": K int x = S + R, R re-based at first substitutions
-        self._R = np.zeros(n)
-        self._accepted = np.zeros(n, bool)
-        self._used_accepted = np.zeros(n, bool)
-        self._p_prev = self._nominal
-        self._p_k = self._nominal
-        self._e_prev = np.zeros(n)
-        self._u_prev = np.zeros(n)
-        self._log = {
-            "est_mass": np.full((T, n), np.nan), "est_damping": np.full((T, n), np.nan),
-            "est_stiffness": np.full((T, n + 1), np.nan), "est_valid": np.zeros((T, n), bool),
-            "est_theta": np.full((T, n, 4), np.nan), "est_sigma": np.full((T, 3 * n + 1), np.nan),
-            "status": np.zeros(T, int), "used_mass": np.zeros((T, n)),
-            "used_damping": np.zeros((T, n)), "used_stiffness": np.zeros((T, n + 1)),
-            "velocity_estimate": np.full((T, n), np.nan), "force_command": np.full((T, n), np.nan),
-        }
-        self._started = True
-
-    def _pack(self, m: np.ndarray, c: np.ndarray, k: np.ndarray) -> tuple:
-        n = self.n
-        K = np.zeros((n, n))
-        for i in range(n):
-            K[i, i] = k[i] + k[i + 1]
-            if i + 1 < n:
-                K[i, i + 1] = K[i + 1, i] = -k[i + 1]
-        return (m.copy(), c.copy(), K, k.copy())
+        self.law = ControlLaw(self.reference, (self.beta0, self.beta1, self.beta2), self.eq10, self.excitation,
+                              n, self.dt)
+        self.gate = EstimateGate(n, boundary, self.dt, self.accept, self.settle_window_s, self.settle_tol,
+                                 self.hold, self.nominal_mass_kg)
+        self.history = ControllerLog(int(samples), n, self.estimator)
+        self._nominal = LawParameters.pack(np.full(n, self.nominal_mass_kg), np.zeros(n), np.zeros(n + 1))
+        self._used_accepted = np.zeros(n, bool)  # DOFs whose estimates the law used so far
+        self._p_prev = self._nominal  # parameters of the interval before
+        self._p_k = self._nominal  # parameters of the current interval
 
     @property
     def gains(self) -> dict[str, float]:
@@ -502,149 +317,58 @@ class TrackingController:
         """Continuous-mode controller states ``z = [int (x - x*), int x, int K x, int u]``."""
         return 4 * self.n
 
-    # ---- parameters in use ------------------------------------------------------------
-    def params_for_sample(self, k: int, z: Optional[np.ndarray] = None) -> tuple:
-        """Parameters ``(m (n,), c (n,), K (n, n), k (n+1,))`` the law uses on
-        ``[t_k, t_{k+1})`` (``z``: the continuous-mode controller states at ``t_k``);
-        logged as ``used_*``."""
+    def reference_motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Reference position [m], velocity [m/s] and acceleration [m/s^2] (T, n) at ``t`` [s]."""
+        return self.reference.evaluate(t)
+
+    def params_for_sample(self, k: int, z: Optional[np.ndarray] = None) -> LawParameters:
+        """Parameters the law uses on ``[t_k, t_{k+1})`` (``z``: the continuous-mode
+        controller states at ``t_k``); logged as ``used_*``."""
         if k < self.k_switch or not self.use_estimates:
             p = self._nominal
             used_acc = np.zeros(self.n, bool)
         else:
-            if self._dirty:
-                self._current = self._pack(self._good_m, self._good_c, self._good_k)
-                self._dirty = False
-            p = self._current
-            used_acc = self._accepted.copy()
+            p = self.gate.parameters()
+            used_acc = self.gate.accepted.copy()
         if self.eq10 == "integrated" and np.any(used_acc & ~self._used_accepted):
             # a first substitution: the new stiffnesses model the whole past (as in the
             # paper's product form); later changes enter the integral as they come
-            X = z[self.n:2 * self.n] if z is not None else self._X
-            self._R = self._R + (p[2] - self._p_prev[2]) @ X
+            X = z[self.n:2 * self.n] if z is not None else self.law.X
+            self.law.rebase(p.K, self._p_prev.K, X)
         self._used_accepted |= used_acc
         self._p_prev = p
-        if k < self._T:
-            self._log["used_mass"][k] = p[0]
-            self._log["used_damping"][k] = p[1]
-            self._log["used_stiffness"][k] = p[3]
+        self.history.used(k, p)
         self._p_k = p
         return p
 
-    # ---- the law ------------------------------------------------------------------------
-    def _law(self, t: float, x: np.ndarray, E: np.ndarray, X: np.ndarray, S: np.ndarray,
-             U: np.ndarray, p: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Eqs. 8-10 with ``X = int x`` and ``S = int K x`` (the integrated form's)."""
-        m, c, K, _ = p
-        xs, xsd, xsdd = self.reference.evaluate(t)
-        # eq. 10: K int x = k_i int(x_i - x_{i-1}) + k_{i+1} int(x_i - x_{i+1})
-        KX = S + self._R if self.eq10 == "integrated" else K @ X
-        xd = (U - c * x - KX) / m
-        v = xsdd - self.beta2 * (xd - xsd) - self.beta1 * (x - xs) - self.beta0 * E  # eq. 9
-        u = m * v + c * xd + K @ x  # eq. 8
-        if self.excitation is not None:
-            u = u + self.excitation(t)  # known probing force; eq. 10 integrates it with u
-        return u, xd, xs
-
-    def continuous(self, t: float, x: np.ndarray, z: np.ndarray, p: tuple) -> tuple[np.ndarray, np.ndarray]:
+    def continuous(self, t: float, x: np.ndarray, z: np.ndarray, p: LawParameters) -> tuple[np.ndarray, np.ndarray]:
         """Continuous-time law: force [N] and the derivative of the controller states
         ``z = [int (x - x*), int x, int K x, int u]`` (4n)."""
-        n = self.n
-        u, _, xs = self._law(t, x, z[:n], z[n:2 * n], z[2 * n:3 * n], z[3 * n:], p)
-        return u, np.concatenate((x - xs, x, p[2] @ x, u))
+        return self.law.continuous(t, x, z, p)
 
     def sampled_force(self, k: int, t: float, x_meas: np.ndarray) -> np.ndarray:
         """Sampled law at ``t_k`` from measured positions [m]: the force [N] held until
         ``t_{k+1}``. Integrals: trapezoidal for positions, exact for the held force."""
-        xs = self.reference.evaluate(t)[0]
-        e = x_meas - xs
-        kx = self._p_k[2] @ x_meas
-        if k > 0:
-            h2 = 0.5 * self.dt
-            self._E = self._E + h2 * (self._e_prev + e)
-            self._X = self._X + h2 * (self._x_prev + x_meas)
-            self._S = self._S + h2 * (self._kx_prev + kx)
-            self._U = self._U + self.dt * self._u_prev
-        u, xd, _ = self._law(t, x_meas, self._E, self._X, self._S, self._U, self._p_k)
-        self._x_prev, self._kx_prev, self._e_prev, self._u_prev = x_meas.copy(), kx, e, u
-        if k < self._T:
-            self._log["velocity_estimate"][k] = xd
-            self._log["force_command"][k] = u
+        u, xd = self.law.sampled(k, t, x_meas, self._p_k)
+        self.history.law(k, xd, u)
         return u
 
-    # ---- estimator ----------------------------------------------------------------------
     def observe(self, k: int, t: float, accel: np.ndarray, force: np.ndarray,
                 x_meas: np.ndarray, z: Optional[np.ndarray] = None) -> None:
         """Feed sample ``k`` (accelerations [m/s^2], forces [N]) to the estimator and keep
         its valid estimates for the following intervals."""
         n = self.n
-        if z is not None and k < self._T:
-            u, xd, _ = self._law(t, x_meas, z[:n], z[n:2 * n], z[2 * n:3 * n], z[3 * n:], self._p_k)
-            self._log["velocity_estimate"][k] = xd
-            self._log["force_command"][k] = u
+        if z is not None and k < self.history.T:
+            u, xd, _ = self.law.force(t, x_meas, z[:n], z[n:2 * n], z[2 * n:3 * n], z[3 * n:], self._p_k)
+            self.history.law(k, xd, u)
         status = self.estimator.update(accel, force)
         m = np.asarray(self.estimator.mass, dtype=float)
         c = np.asarray(self.estimator.damping, dtype=float)
         kk = np.asarray(self.estimator.stiffness, dtype=float)
         valid = np.asarray(self.estimator.valid, dtype=bool)
-        if k < self._T:
-            L = self._log
-            L["est_mass"][k], L["est_damping"][k], L["est_stiffness"][k] = m, c, kk
-            L["est_valid"][k] = valid
-            if self._has_sigma:
-                L["est_sigma"][k] = np.asarray(self.estimator.sigma, dtype=float)
-            if self._has_theta:
-                for i in range(n):
-                    L["est_theta"][k, i] = self.estimator.theta(i)
-            L["status"][k] = int(status)
-        self._accept(k, m, c, kk, valid)
+        self.history.estimates(k, self.estimator, m, c, kk, valid, status)
+        self.gate.offer(k, m, c, kk, valid)
 
-    def _accept(self, k: int, m: np.ndarray, c: np.ndarray, kk: np.ndarray, valid: np.ndarray) -> None:
-        """Take the estimates of every DOF that passes the acceptance rule."""
-        n, W = self.n, self._win
-        slot = k % W
-        self._hist_m[slot], self._hist_c[slot], self._hist_k[slot] = m, c, kk
-        self._hist_n = min(self._hist_n + 1, W)
-        k_left, k_right = kk[:n], kk[1:]
-        # the structurally unidentifiable right spring (n = 1 with walls, free end) is NaN
-        kr = np.where(np.isnan(k_right) & self._k_right_absent, 0.0, k_right)
-        ok = valid & np.isfinite(m) & np.isfinite(c) & np.isfinite(k_left) & np.isfinite(kr) & (m > 0)
-        if self.accept in ("settled", "sigma"):
-            ok &= (c >= 0) & (k_left >= 0) & (kr >= 0)
-            if self.accept == "sigma":
-                pass  # the estimator's valid flag carries the uncertainty test
-            elif self._hist_n < W:
-                ok[:] = False
-            else:
-                tol = self.settle_tol
-                c_floor = 0.01 * 2.0 * np.sqrt(np.abs((k_left + kr) * m))  # 1 % of critical
-                with np.errstate(invalid="ignore"):
-                    dm = np.max(np.abs(self._hist_m - m), axis=0) <= tol * np.abs(m)
-                    dc = np.max(np.abs(self._hist_c - c), axis=0) <= tol * np.maximum(np.abs(c), c_floor)
-                    dk = np.max(np.abs(self._hist_k - kk), axis=0)
-                    dk_ok = (dk <= tol * np.abs(kk)) | (np.isnan(kk) & np.append(np.zeros(n, bool), self._k_right_absent[-1]))
-                ok &= dm & dc & dk_ok[:n] & dk_ok[1:]
-            if self._first_accept is None and not np.all(ok):
-                # the first substitution takes all DOFs together: a spring between an
-                # accepted and a rejected DOF would otherwise get a half-garbage value
-                return
-        if self.hold and self._first_accept is not None:
-            return
-        if not np.any(ok):
-            return
-        self._good_m[ok] = m[ok]
-        self._good_c[ok] = c[ok]
-        self._accepted |= ok
-        # a spring is estimated by the DOFs at its ends: take it from an accepted neighbour
-        near = np.zeros(n + 1, bool)
-        near[:n] |= ok
-        near[1:] |= ok
-        near &= np.isfinite(kk)
-        self._good_k[near] = kk[near]
-        self._dirty = True
-        if self._first_accept is None:
-            self._first_accept = k
-
-    # ---- history ------------------------------------------------------------------------
     def log(self) -> dict[str, Any]:
         """History of the run (``T`` samples): reference ``x_ref``, ``xd_ref``, ``xdd_ref``
         (T, n); ``estimates`` = estimator output after each sample (``mass``, ``damping``
@@ -654,24 +378,16 @@ class TrackingController:
         parameters the law used on each interval; ``velocity_estimate`` (eq. 10) and
         ``force_command`` (T, n) at the samples; gains, poles, switch time and the
         estimator's ``delay_samples``."""
-        T = self._T
-        t = np.arange(T) * self.dt
+        t = np.arange(self.history.T) * self.dt
         xs, xd, xdd = self.reference.evaluate(t)
-        L = self._log
+        running_from = getattr(self.estimator, "running_from", None)
+        first = self.gate.first_accept
         return {
-            "t": t, "x_ref": xs, "xd_ref": xd, "xdd_ref": xdd,
-            "estimates": {"mass": L["est_mass"], "damping": L["est_damping"],
-                          "stiffness": L["est_stiffness"], "valid": L["est_valid"],
-                          "theta": L["est_theta"], "sigma": L["est_sigma"],
-                          "status": L["status"]},
-            "used": {"mass": L["used_mass"], "damping": L["used_damping"],
-                     "stiffness": L["used_stiffness"]},
-            "velocity_estimate": L["velocity_estimate"], "force_command": L["force_command"],
+            "t": t, "x_ref": xs, "xd_ref": xd, "xdd_ref": xdd, **self.history.history(),
             "gains": self.gains, "poles": [complex(p) for p in self.poles], "eq10": self.eq10,
             "switch_time_s": self.switch_time_s, "k_switch": self.k_switch,
             "delay_samples": int(getattr(self.estimator, "delay_samples", 0)),
             "accept": self.accept, "hold": self.hold,
-            "running_from_s": (None if getattr(self.estimator, "running_from", None) is None
-                               else self.estimator.running_from * self.dt), "first_accepted_s": (None if self._first_accept is None
-                                                       else self._first_accept * self.dt),
+            "running_from_s": None if running_from is None else running_from * self.dt,
+            "first_accepted_s": None if first is None else first * self.dt,
         }

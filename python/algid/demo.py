@@ -38,7 +38,7 @@ actual SNR of 22, 22 and 6 dB for a requested 40.
 **Probe** (``--excitation``). The paper's references alone carry too little information
 for 40 dB of accelerometer noise: on a loop tracking with the *true* parameters, neither
 estimator gets any parameter within 50 % from them. With ``--noise-db`` the controller
-therefore adds a known multisine force (:class:`algid.controller.Multisine`, six lines of
+therefore adds a known multisine force (:class:`algid.trajectories.Multisine`, six lines of
 3-16 Hz, ``--excitation`` N each, default 0.05 N) to its command; it moves each mass by
 about 50 um (1 % of the stroke), which is in the reported tracking error. Noise-free the
 default is no probe (the paper's experiment).
@@ -65,7 +65,7 @@ from typing import Any, Callable, Optional
 
 import numpy as np
 
-from .chain import TABLE1, Chain
+from .chain import TABLE1, Chain, parameter_names
 
 __all__ = ["add_parser", "run", "demo_chain", "run_scenario", "summarize", "settle_time",
            "format_summary", "jsonable"]
@@ -88,13 +88,6 @@ def demo_chain(n: int) -> Chain:
         raise ValueError(f"--n must be >= 1, got {n}")
     return Chain(np.resize(TABLE1.mass, n), np.resize(TABLE1.damping, n),
                  np.resize(TABLE1.stiffness, n + 1))
-
-
-def parameter_names(chain: Chain) -> list[str]:
-    """``m1..mn, c1..cn, k1..k(n+1)`` (the order of :meth:`Chain.identifiable`)."""
-    n = chain.n
-    return ([f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)]
-            + [f"k{j + 1}" for j in range(n + 1)])
 
 
 def settle_time(t: np.ndarray, rel_err: np.ndarray, tol: float = TOLERANCE) -> tuple[float, float]:
@@ -124,7 +117,7 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] 
     E = res.estimates
     est = np.concatenate([E["mass"], E["damping"], E["stiffness"]], axis=1)
     true = chain.identifiable()
-    names = parameter_names(chain)
+    names = parameter_names(chain.n)
     if chain.n == 1 and chain.boundary == "fixed":
         names[2] = "k1+k2"  # the two walls' springs act in parallel
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -297,8 +290,9 @@ def run_scenario(n: int = 3, mode: str = "continuous", noise_db: Optional[float]
     ``estimator``: ``single``, ``continuous`` or ``auto``; ``excitation_n``: probe amplitude
     per multisine line [N] (None: 0.05 N with noise, none without); ``drift``: also run both
     estimators open loop on the recorded samples (the drift table)."""
-    from .controller import BezierReference, Multisine, TrackingController
+    from .controller import TrackingController
     from .simulator import simulate
+    from .trajectories import BezierReference, Multisine
 
     kind = resolve_estimator(estimator, noise_db)
     if excitation_n is None:
@@ -319,11 +313,11 @@ def run_scenario(n: int = 3, mode: str = "continuous", noise_db: Optional[float]
     noise = None
     if noise_db is not None:
         # calibration: the same loop noise-free gives the actual acceleration RMS per DOF
-        from .simulator import _nominal_closed_loop_rms
+        from .simulator.sensors import nominal_closed_loop_rms
 
         ctrl0 = controller()
         cal = simulate(chain, None, duration_s, 1000.0, controller=ctrl0, mode=mode)
-        planned = _nominal_closed_loop_rms(chain, ctrl0, cal.t)["accel"]
+        planned = nominal_closed_loop_rms(chain, ctrl0, cal.t)["accel"]
         noise = _actual_snr_noise(noise_db, seed, np.sqrt(np.mean(cal.a_true ** 2, axis=0)) / planned)
     res = simulate(chain, None, duration_s, 1000.0, controller=controller(), mode=mode,
                    noise=noise, progress=progress)
@@ -423,19 +417,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return p
 
 
-def _progress_printer(stream: Any = sys.stderr) -> Callable[[float], None]:
-    last = [-1]
+class _ProgressPrinter:
+    """Prints the simulation's progress every 2 % on one line of ``stream``."""
 
-    def show(frac: float) -> None:
+    def __init__(self, stream: Any = sys.stderr) -> None:
+        self.stream = stream
+        self.last = -1  # percentage printed last
+
+    def __call__(self, frac: float) -> None:
         pct = int(100 * frac)
-        if pct != last[0] and (pct % 2 == 0 or pct == 100):
-            last[0] = pct
-            stream.write(f"\rsimulating closed loop ... {pct:3d} %")
+        if pct != self.last and (pct % 2 == 0 or pct == 100):
+            self.last = pct
+            self.stream.write(f"\rsimulating closed loop ... {pct:3d} %")
             if pct >= 100:
-                stream.write("\n")
-            stream.flush()
-
-    return show
+                self.stream.write("\n")
+            self.stream.flush()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -448,7 +444,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
     try:
         res, summary = run_scenario(args.n, args.mode, args.noise_db, args.seed, args.duration,
-                                    progress=_progress_printer(), estimator=args.estimator,
+                                    progress=_ProgressPrinter(), estimator=args.estimator,
                                     excitation_n=args.excitation)
     except ValueError as exc:
         print(f"algid demo: {exc}", file=sys.stderr)

@@ -122,8 +122,9 @@ class PositioningController:
 
     Notes
     -----
-    The simulator calls :meth:`start`, then per sample :meth:`params_for_sample`,
-    :meth:`sampled_force` and :meth:`observe`, and :meth:`log` at the end.
+    A :class:`algid.simulator.Controller`: the simulator calls :meth:`start`, then per
+    sample :meth:`params_for_sample`, :meth:`sampled_force` and :meth:`observe`, and
+    :meth:`log` at the end (:meth:`reference_motion` for the noise level of a noisy loop).
     """
 
     def __init__(self, reference: BangBangReference, f_max: float, kp: float, kd: float,
@@ -175,6 +176,10 @@ class PositioningController:
     def observe(self, k: int, t: float, accel: np.ndarray, force: np.ndarray, x_meas: np.ndarray,
                 z: Optional[np.ndarray] = None) -> None:
         """Nothing to learn from the measurements."""
+
+    def reference_motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Reference position [m], velocity [m/s] and acceleration [m/s^2] (T, n) at ``t`` [s]."""
+        return self.reference.evaluate(t)
 
     def log(self) -> dict[str, Any]:
         """``x_ref`` (T, n) [m], ``force_command`` (T, n) [N] and ``saturated`` (T, n)."""

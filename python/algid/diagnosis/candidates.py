@@ -21,7 +21,7 @@ The definitions are those of the simulator (the names are part of the interface)
 How each enters the least-squares problem (everything else as in :mod:`.core`): an
 effect force ``g`` (eq. 1 read as ``m a + c v + k x + g = u``) enters equation e as
 ``-g / m_e`` in the acceleration form, with ``m_e`` from the linear fit, and as ``g`` in
-the force form (:func:`.core.effect_column`), so that its coefficient is the physical
+the force form (:func:`.equations.effect_column`), so that its coefficient is the physical
 parameter either way:
 
 * linear in the effect parameter, from the reconstructed states ``x``, ``v``: quadratic
@@ -53,23 +53,11 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.signal import lfilter, lfilter_zi
 
-from .core import (
-    CVResult,
-    EqSpec,
-    Prepared,
-    base_design,
-    cross_validate,
-    cross_validate_grid,
-    effect_column,
-    force_form,
-    jackknife_std,
-    spring_columns,
-    springs,
-    target,
-    to_physical,
-    window_stats,
-)
+from ..chain import spring_columns, spring_deformation, spring_sides, springs
+from .equations import base_design, effect_column, target, to_physical
+from .gram import CVResult, EqSpec, cross_validate, cross_validate_grid, jackknife_std, window_stats
 from .linear import LinearFit
+from .windows import Prepared
 
 EFFECTS = (
     "coulomb_friction",
@@ -175,29 +163,6 @@ def coupled(P: Prepared, i: int) -> list[tuple[int, int]]:
     return out
 
 
-def spring_sides(P: Prepared, j: int) -> list[tuple[int, float]]:
-    """(equation, sign) pairs where a force of spring j enters: DOF j (+), DOF j-1 (-)."""
-    n = P.n
-    if n == 1:
-        return [(0, 1.0)]
-    out = []
-    if j - 1 < n:
-        out.append((j - 1, 1.0))
-    if j - 2 >= 0:
-        out.append((j - 2, -1.0))
-    return out
-
-
-def deformation(P: Prepared, x: np.ndarray, j: int) -> np.ndarray:
-    """d_j = x_j - x_{j-1} (walls at 0); for n = 1, x_1 (both springs in parallel)."""
-    n = P.n
-    if n == 1:
-        return x[:, 0]
-    right = x[:, j - 1] if j - 1 < n else 0.0
-    left = x[:, j - 2] if j - 2 >= 0 else 0.0
-    return right - left
-
-
 def lowpass(x: np.ndarray, cutoff_hz: float, dt: float) -> np.ndarray:
     """First-order low-pass ``y' = 2 pi fc (x - y)`` of sampled columns (axis 0).
 
@@ -237,7 +202,7 @@ def _fit_linear_effect(ctx: Context, effect: str, location: dict, eq_forces: lis
                        names: list[str], transform=None, signals: tuple | None = None) -> CandidateFit:
     """Linear model plus one shared effect parameter: ``eq_forces`` gives, per equation,
     the effect force per unit parameter ``g`` (eq. 1 read as ``m a + c v + k x + g = u``,
-    :func:`.core.effect_column`); ``signals = (a, A1, A2)`` replaces the measured
+    :func:`.equations.effect_column`); ``signals = (a, A1, A2)`` replaces the measured
     acceleration and its integrals (e.g. bias-corrected)."""
     P = ctx.P
     specs = []
@@ -325,10 +290,10 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
 def fit_amplitude_damping(ctx: Context, j: int) -> CandidateFit:
     """Amplitude-dependent (micro-slip) damping in the joint of spring j (1-based)."""
     P = ctx.P
-    d = deformation(P, ctx.x, j)
-    dd = deformation(P, ctx.v, j)
+    d = spring_deformation(ctx.x, j, P.n)
+    dd = spring_deformation(ctx.v, j, P.n)
     g = np.abs(d) * dd
-    return _fit_linear_effect(ctx, "amplitude_damping", {"spring": j}, [(e, s * g) for e, s in spring_sides(P, j)],
+    return _fit_linear_effect(ctx, "amplitude_damping", {"spring": j}, [(e, s * g) for e, s in spring_sides(P.n, j)],
                               ["c_amp"])
 
 
@@ -345,18 +310,18 @@ def spring_k(P: Prepared, thetas: list[np.ndarray], eqs: list[int], j: int) -> f
 def fit_spring_linear(ctx: Context, effect: str, j: int) -> CandidateFit:
     """Cubic stiffness or parameter drift on spring j (1-based)."""
     P = ctx.P
-    d = deformation(P, ctx.x, j)
+    d = spring_deformation(ctx.x, j, P.n)
     if effect == "cubic_stiffness":
         f = d**3
         transform = None
     else:  # parameter_drift: coefficient k_j * rel_change
         f = (P.t / P.duration) * d
-        sides = [e for e, _ in spring_sides(P, j)]
+        sides = [e for e, _ in spring_sides(P.n, j)]
 
         def transform(gam, thetas):
             return np.atleast_1d(gam) / spring_k(P, thetas, sides, j)
 
-    return _fit_linear_effect(ctx, effect, {"spring": j}, [(e, s * f) for e, s in spring_sides(P, j)],
+    return _fit_linear_effect(ctx, effect, {"spring": j}, [(e, s * f) for e, s in spring_sides(P.n, j)],
                               [MAIN_PARAM[effect]], transform)
 
 
@@ -402,11 +367,11 @@ def _fit_grid(ctx: Context, effect: str, location: dict, build, grid: np.ndarray
 def fit_clearance(ctx: Context, j: int) -> CandidateFit:
     """Symmetric clearance (dead zone of half-width ``gap``) on spring j."""
     P = ctx.P
-    d = deformation(P, ctx.x, j)
+    d = spring_deformation(ctx.x, j, P.n)
     ad = np.abs(d)
     grid = np.quantile(ad, np.linspace(0.05, 0.95, N_GRID))
     grid = np.unique(grid[grid > 0])
-    sides = spring_sides(P, j)
+    sides = spring_sides(P.n, j)
     base = {e: base_design(P, e, P.A1, P.A2) for e, _ in sides}
 
     def build(g):

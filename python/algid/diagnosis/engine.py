@@ -4,7 +4,7 @@
    half the lowest natural period (from a first fit on 0.5 s windows); the first
    ``max(0.1 s, 100 samples)`` are kept out of the windows as lead-in for delays and
    filters.
-2. The signal band of the recording (:func:`.core.signal_band`, from the forces, the
+2. The signal band of the recording (:func:`.band.signal_band`, from the forces, the
    accelerations and the natural frequencies of the first fit), the linear chain, cross-validated
    (``gap_before``, in-band; ``gap_before_fullband``), and the states it reconstructs.
 3. Every candidate effect at every location (:mod:`.candidates`), cross-validated, scored
@@ -28,6 +28,7 @@ from ..chain import Chain
 from ..noise import channel, white_floor, without_hum
 from ..recording import Recording, accelerations, derivative
 from ..recording import motion as recording_motion
+from .band import Band, signal_band
 from .candidates import (
     ADDITIVE,
     EFFECTS,
@@ -40,23 +41,13 @@ from .candidates import (
     physical,
     raw_residual,
 )
-from .core import (
-    METRIC,
-    Band,
-    Prepared,
-    base_design,
-    detrend,
-    integrals,
-    parseval_weights,
-    prepare,
-    force_form,
-    signal_band,
-    target,
-    window_length,
-)
+from .core import METRIC
+from .equations import base_design, force_form, target
+from .integrals import integrals
 from .linear import LinearFit, fit_linear, force_scale, reconstruct_states
 from .locate import locate, noise_floor
 from .model import ModelVerdict, inertia, model_verdict, physical_uncertainty
+from .windows import Prepared, detrend, parseval_weights, prepare, window_length
 
 #: Threshold on the noise-referenced z score of the withheld error reduction (see
 #: :func:`noise_z`).

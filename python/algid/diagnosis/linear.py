@@ -6,22 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .core import (
-    CVResult,
-    EqSpec,
-    Prepared,
-    base_design,
-    cross_validate,
-    force_form,
-    detrend,
-    param_names,
-    solve_gram,
-    spring_columns,
-    target,
-    to_physical,
-    window_lines,
-    window_stats,
-)
+from ..chain import equation_parameter_names, spring_columns
+from .equations import base_design, force_form, target, to_physical
+from .gram import CVResult, EqSpec, cross_validate, solve_gram, window_stats
+from .windows import Prepared, detrend, window_lines
 
 
 @dataclass
@@ -39,7 +27,7 @@ class LinearFit:
     cv : cross-validated stacked fit (all equations, acceleration units).
     x, v : (N, n) reconstructed displacements [m] and velocities [m/s].
     resid : (N, n) in-sample detrended equation errors in the units of each equation's
-        target (:func:`.core.target`: m/s^2, or N for a force-form equation).
+        target (:func:`.equations.target`: m/s^2, or N for a force-form equation).
     resid_force : the same in force units [N] (per unit mass for an unforced DOF).
     """
 
@@ -137,7 +125,8 @@ def fit_linear(P: Prepared) -> LinearFit:
     x, v = reconstruct_states(P, theta_a, raw)
     theta = [to_physical(P, e, th) for e, th in enumerate(theta_a)]
     resid = detrend(P, raw).reshape(raw.shape)
-    return LinearFit(theta_a=theta_a, theta=theta, names=[param_names(P.n, P.boundary, e) for e in range(P.n)],
+    names = [equation_parameter_names(P.n, P.boundary, e) for e in range(P.n)]
+    return LinearFit(theta_a=theta_a, theta=theta, names=names,
                      forced=P.forced.copy(), cv=cv, x=x, v=v, resid=resid,
                      resid_force=resid * force_scale(P, theta)[None, :])
 

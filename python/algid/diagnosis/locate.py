@@ -11,11 +11,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import welch
 
+from ..chain import spring_deformation, spring_sides, springs
 from ..noise import white_floor
-
-from .candidates import deformation, spring_sides
-from .core import Prepared, springs
 from .linear import LinearFit, per_window_fits
+from .windows import Prepared
 
 #: Quantile bins of the amplitude scatter (restoring-force / damping-force curves).
 N_BINS = 24
@@ -95,9 +94,9 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
     force_resid = lin.resid_force
     amp_springs = []
     for j in springs(n, P.boundary):
-        d = deformation(P, lin.x, j)
-        z = np.concatenate([d for _ in spring_sides(P, j)])
-        r = np.concatenate([s * force_resid[:, e] for e, s in spring_sides(P, j)])
+        d = spring_deformation(lin.x, j, P.n)
+        z = np.concatenate([d for _ in spring_sides(P.n, j)])
+        r = np.concatenate([s * force_resid[:, e] for e, s in spring_sides(P.n, j)])
         amp_springs.append({"spring": j, "explained": binned_r2(z, r)})
     amp_masses = []
     for i in range(n):

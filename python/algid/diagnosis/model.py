@@ -27,8 +27,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .core import Prepared, jackknife_std, to_physical
+from ..chain import spring_columns
+from .equations import to_physical
+from .gram import jackknife_std
 from .linear import LinearFit
+from .windows import Prepared
 
 MODEL_VERDICTS = ("chain", "inertia_not_identifiable", "more_modes_than_dof", "not_a_chain")
 #: Inertia force over force, in the band, below which a DOF's mass is not determined.
@@ -143,8 +146,6 @@ def admissibility(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float
     zero by three sigma and standing for at least :data:`NEGLIGIBLE` of the force in the
     band (a spring of -0.4 N/m on an axis that moves 50 mm under tens of newtons is no
     evidence against the chain); ``states = (x, v)`` on the analysed samples."""
-    from .core import spring_columns
-
     u_rms = band_rms(P.u, P.dt, f_hi)
     x, v = states
     v_rms = band_rms(v, P.dt, f_hi)

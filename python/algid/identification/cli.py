@@ -9,7 +9,6 @@ their reasons), 3 when nothing in the recording is identifiable, 2 on bad input.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path

@@ -32,6 +32,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
+from ..chain import stiffness_matrix
 from ..noise import NoiseModel
 
 #: In-band SNR [dB] of every channel above which a record counts as noise-free.
@@ -95,7 +96,7 @@ def natural_frequencies_hz(theta: np.ndarray, n: int, boundary: str) -> np.ndarr
         k[-1] = 0.0
     if not (np.all(np.isfinite(m)) and np.all(m > 0) and np.all(np.isfinite(k)) and np.all(k >= 0)):
         return np.array([])
-    K = np.diag(k[:-1] + k[1:]) - np.diag(k[1:-1], 1) - np.diag(k[1:-1], -1)
+    K = stiffness_matrix(k)
     lam = np.linalg.eigvals(K / m[:, None]).real
     return np.sort(np.sqrt(np.clip(lam, 0.0, None))) / (2 * np.pi)
 

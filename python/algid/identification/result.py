@@ -9,10 +9,11 @@ from typing import Optional
 
 import numpy as np
 
+from ..chain import parameter_names
 from ..continuous import PackedParameters, unpack
 from ..noise import NoiseModel
 from .plan import Plan
-from .verdicts import Verdict, dof_validity, parameter_names
+from .verdicts import Verdict, dof_validity
 
 
 def _num(v: float):

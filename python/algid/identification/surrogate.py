@@ -40,6 +40,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from ..chain import stiffness_matrix
 from ..noise import NoiseModel
 from ..recording import derivative, second_derivative
 from .plan import Plan
@@ -130,7 +131,7 @@ def chain_forces(theta: np.ndarray, n: int, boundary: str, mo: Motion) -> np.nda
         k = np.array([k[0], 0.0])
     if boundary == "free":
         k[-1] = 0.0
-    K = np.diag(k[:-1] + k[1:]) - np.diag(k[1:-1], 1) - np.diag(k[1:-1], -1)
+    K = stiffness_matrix(k)
     return mo.a * m + mo.v * c + mo.x @ K.T
 
 

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..chain import dof_parameter_names, parameter_names, spring_deformation
 from ..noise import NoiseModel
 from .surrogate import Motion
 
@@ -76,19 +77,6 @@ class Verdict:
         return self.status in VALID
 
 
-def parameter_names(n: int) -> list[str]:
-    return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
-
-
-def _deformation(x: np.ndarray, j: int, n: int, boundary: str) -> np.ndarray:
-    """Deformation of spring ``j`` (0-based; joins DOF j-1 and j, walls fixed)."""
-    if n == 1 and boundary == "fixed":
-        return x[:, 0]
-    right = x[:, j] if j < n else 0.0
-    left = x[:, j - 1] if j >= 1 else 0.0
-    return right - left
-
-
 def accel_noise_in_band(nm: NoiseModel, i: int) -> float:
     """Standard deviation of the noise the estimator sees on acceleration i in the band
     ``[0, f_hi]`` [m/s^2]: a white floor for a measured acceleration, the differentiated
@@ -118,7 +106,7 @@ def scales(n: int, boundary: str, mo: Motion, u: np.ndarray, forced: np.ndarray)
         fam, idx = name[0], int(name[1:]) - 1
         if fam == "k":
             near = [i for i in (idx - 1, idx) if 0 <= i < n]
-            reg = np.std(_deformation(mo.x, idx, n, boundary))
+            reg = np.std(spring_deformation(mo.x, idx + 1, n))
         else:
             near = [idx]
             reg = np.std(mo.a[:, idx] if fam == "m" else mo.v[:, idx])
@@ -197,5 +185,4 @@ def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm) -> Verdict:
 def dof_validity(verdicts: list[Verdict], n: int) -> np.ndarray:
     """(n,) a DOF is valid when its m, c and both springs are valid (module docstring)."""
     by = {v.name: v for v in verdicts}
-    return np.array([all(by[k].valid for k in (f"m{i + 1}", f"c{i + 1}", f"k{i + 1}", f"k{i + 2}"))
-                     for i in range(n)])
+    return np.array([all(by[k].valid for k in dof_parameter_names(i)) for i in range(n)])

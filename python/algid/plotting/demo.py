@@ -20,51 +20,53 @@ from typing import Any
 
 import numpy as np
 
+from ..chain import parameter_names
 from . import subplots
 
-__all__ = ["write_figures"]
+__all__ = ["FIGURES", "estimates_figure", "estimation_error_figure", "forces_figure", "positions_figure",
+           "write_figures"]
 
-_FAMILIES = (("mass", "m", "mass [kg]"), ("damping", "c", "damping [N s/m]"),
-             ("stiffness", "k", "stiffness [N/m]"))
+_FAMILIES = (("mass", "mass [kg]"), ("damping", "damping [N s/m]"), ("stiffness", "stiffness [N/m]"))
 
 
 def _families(res: Any) -> list[tuple[str, np.ndarray, np.ndarray, list[str]]]:
+    """Per family (masses, dampings, stiffnesses): axis label, estimates (T, p), true
+    values (p,) and names of the parameters that are estimated."""
     chain = res.chain
     true_all = chain.identifiable()
     n = chain.n
+    names_all = parameter_names(n)
     out = []
     sl = {"mass": slice(0, n), "damping": slice(n, 2 * n), "stiffness": slice(2 * n, 3 * n + 1)}
-    for key, sym, label in _FAMILIES:
+    for key, label in _FAMILIES:
         est = np.asarray(res.estimates[key], dtype=float)
         true = true_all[sl[key]]
         keep = np.isfinite(true)
         if key == "stiffness" and chain.boundary == "free":
             keep[-1] = False  # k_{n+1} = 0 is known
-        names = [f"{sym}{j + 1}" for j in range(true.size)]
+        names = names_all[sl[key]]
         if key == "stiffness" and n == 1 and chain.boundary == "fixed":
             names[0] = "k1+k2"
         out.append((label, est[:, keep], true[keep], [nm for nm, k in zip(names, keep) if k]))
     return out
 
 
-def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
-    """Write the demo's PNG figures into ``out``; returns their paths."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    t = res.t
-    t_sw = summary["switch_time_s"]
+def _title(res: Any, summary: dict[str, Any]) -> str:
+    """What ran: DOF, mode, noise, estimator (and whether the estimates were substituted)."""
     title = (f"n = {res.chain.n}, {res.mode} mode, "
              + ("noise-free" if summary["noise_db"] is None else f"accel SNR {summary['noise_db']:.0f} dB")
              + (f", {summary['estimator']} estimator" if summary.get("estimator") else ""))
     if summary.get("estimates_substituted_s", 0.0) is None:
         title += "; estimates never substituted"
-    paths = []
-    fams = _families(res)
+    return title
 
-    # ---- estimates (fig. 2)
+
+def estimates_figure(res: Any, summary: dict[str, Any]) -> Any:
+    """Fig. 2: the on-line estimates against time with the true values."""
+    t, t_sw = res.t, summary["switch_time_s"]
     fig, axes = subplots(3, 2, figsize=(12, 9), sharex="col")
     zoom = t <= min(0.25, t[-1])
-    for row, (label, est, true, names) in enumerate(fams):
+    for row, (label, est, true, names) in enumerate(_families(res)):
         for col, mask in enumerate((zoom, np.ones_like(zoom))):
             ax = axes[row, col]
             for q in range(true.size):
@@ -81,12 +83,14 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     axes[0, 1].set_title("whole run (y range: true values +-10 %)")
     axes[-1, 0].set_xlabel("time [s]")
     axes[-1, 1].set_xlabel("time [s]")
-    fig.suptitle(f"On-line estimates, eq. 7 ({title})")
+    fig.suptitle(f"On-line estimates, eq. 7 ({_title(res, summary)})")
     fig.tight_layout()
-    paths.append(out / "estimates.png")
-    fig.savefig(paths[-1], dpi=110)
+    return fig
 
-    # ---- positions (fig. 3)
+
+def positions_figure(res: Any, summary: dict[str, Any]) -> Any:
+    """Fig. 3: reference against actual positions, and the tracking error."""
+    t, t_sw = res.t, summary["switch_time_s"]
     fig, (ax1, ax2) = subplots(2, 1, figsize=(10, 7), sharex=True)
     for i in range(res.chain.n):
         line, = ax1.plot(t, 1e3 * res.x[:, i], lw=1.4, label=f"x{i + 1} actual")
@@ -101,13 +105,16 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
     ax2.set_ylabel("tracking error [um]")
     ax2.set_xlabel("time [s]")
     tr = summary["tracking"]
-    ax1.set_title(f"Reference tracking ({title})\npeak error after 1 s "
+    ax1.set_title(f"Reference tracking ({_title(res, summary)})\npeak error after 1 s "
                   f"{1e6 * tr['peak_after_1s_m']:.3g} um = {tr['peak_after_1s_pct_stroke']:.2g} % of stroke")
     fig.tight_layout()
-    paths.append(out / "positions.png")
-    fig.savefig(paths[-1], dpi=110)
+    return fig
 
-    # ---- forces (fig. 4)
+
+def forces_figure(res: Any, summary: dict[str, Any]) -> Any:
+    """Fig. 4: the control forces, and around the substitution their deviation from the
+    force an exact model needs along the reference."""
+    t, t_sw = res.t, summary["switch_time_s"]
     chain = res.chain
     M, C, K = chain.matrices()
     log = res.controller_log
@@ -124,22 +131,25 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
         ax.legend(fontsize=8, ncol=3, loc="upper right")
     ax1.set_ylabel("force [N]")
     ax1.set_xlabel("time [s]")
-    ax1.set_title(f"Control forces ({title})")
+    ax1.set_title(f"Control forces ({_title(res, summary)})")
     ax2.set_ylabel("force deviation [mN]")
     ax2.set_xlabel("time [s]")
     ax2.set_title("deviation from the force an exact model needs along the reference, "
                   "around the substitution (dotted line)", fontsize=10)
     fig.tight_layout()
-    paths.append(out / "forces.png")
-    fig.savefig(paths[-1], dpi=110)
+    return fig
 
-    # ---- estimation error (log scale)
+
+def estimation_error_figure(res: Any, summary: dict[str, Any]) -> Any:
+    """Relative error of every estimate on a log scale, and with the drift table
+    (``res.drift``) the largest error of both estimators open loop."""
+    t, t_sw = res.t, summary["switch_time_s"]
     drift = getattr(res, "drift", None)
     rows = 4 if drift is not None else 3
     fig, axes = subplots(rows, 1, figsize=(10, 3 * rows), sharex=True)
     tpos = np.maximum(t, t[1])
     y_lo = 1e-10 if summary["noise_db"] is None else 1e-5
-    for ax, (label, est, true, names) in zip(axes[:3], fams):
+    for ax, (label, est, true, names) in zip(axes[:3], _families(res)):
         with np.errstate(invalid="ignore", divide="ignore"):
             rel = np.abs(est / true - 1.0)
         for q in range(true.size):
@@ -153,26 +163,45 @@ def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8, ncol=5, loc="upper right")
     if drift is not None:
-        ax = axes[3]
-        with np.errstate(invalid="ignore"):
-            for key, lab in (("single_history", "single growing window"),
-                             ("continuous_history", "continuous (running estimate from "
-                              + (f"{drift['running_from_s']:.2f} s)" if drift["running_from_s"] is not None
-                                 else "-)"))):
-                h = np.asarray(drift[key], dtype=float)
-                worst = np.where(np.all(np.isnan(h), axis=1), np.nan, np.nanmax(np.where(np.isnan(h), np.inf, h), axis=1))
-                ax.plot(tpos, worst, lw=1.2, label=lab)
-        ax.axhline(0.01, color="k", ls="--", lw=0.9, label="1 %")
-        ax.axvline(t_sw, color="k", ls=":", lw=1.0)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_ylim(y_lo, 100)
-        ax.set_ylabel("largest |relative\nerror|, open loop")
-        ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=8, loc="upper right")
+        _drift_panel(axes[3], drift, tpos, t_sw, y_lo)
     axes[-1].set_xlabel("time [s] (log scale)")
-    axes[0].set_title(f"Estimation error ({title})")
+    axes[0].set_title(f"Estimation error ({_title(res, summary)})")
     fig.tight_layout()
-    paths.append(out / "estimation_error.png")
-    fig.savefig(paths[-1], dpi=110)
+    return fig
+
+
+def _drift_panel(ax: Any, drift: dict[str, Any], tpos: np.ndarray, t_sw: float, y_lo: float) -> None:
+    """Largest relative error of the single growing window and of the continuous running
+    estimate, both open loop on the recorded samples."""
+    running = (f"{drift['running_from_s']:.2f} s)" if drift["running_from_s"] is not None else "-)")
+    with np.errstate(invalid="ignore"):
+        for key, lab in (("single_history", "single growing window"),
+                         ("continuous_history", "continuous (running estimate from " + running)):
+            h = np.asarray(drift[key], dtype=float)
+            worst = np.where(np.all(np.isnan(h), axis=1), np.nan, np.nanmax(np.where(np.isnan(h), np.inf, h), axis=1))
+            ax.plot(tpos, worst, lw=1.2, label=lab)
+    ax.axhline(0.01, color="k", ls="--", lw=0.9, label="1 %")
+    ax.axvline(t_sw, color="k", ls=":", lw=1.0)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_ylim(y_lo, 100)
+    ax.set_ylabel("largest |relative\nerror|, open loop")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, loc="upper right")
+
+
+#: The demo's figures: file name -> ``make(res, summary)``.
+FIGURES = {"estimates.png": estimates_figure, "positions.png": positions_figure, "forces.png": forces_figure,
+           "estimation_error.png": estimation_error_figure}
+
+
+def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:
+    """Write the demo's PNG figures into ``out``; returns their paths."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, make in FIGURES.items():
+        fig = make(res, summary)
+        paths.append(out / name)
+        fig.savefig(paths[-1], dpi=110)
     return paths

@@ -27,8 +27,7 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import welch
 
-from ..diagnosis.candidates import deformation, spring_sides
-from ..diagnosis.core import springs
+from ..chain import spring_deformation, spring_sides, springs
 from ..diagnosis.locate import window_parameters
 from . import subplots
 
@@ -152,10 +151,10 @@ def fig_restoring_force(d):
     kfit = lin.stiffness()
     items = []
     for j in springs(P.n, P.boundary):
-        dj = deformation(P, lin.x, j)
+        dj = spring_deformation(lin.x, j, P.n)
         k = kfit[0] if P.n == 1 else kfit[j - 1]
         # Unexplained force attributed to the spring: + in eq. j, - in eq. j-1 (mean of sides).
-        r = np.mean([-s * force_resid[:, e] for e, s in spring_sides(P, j)], axis=0)
+        r = np.mean([-s * force_resid[:, e] for e, s in spring_sides(P.n, j)], axis=0)
         name = f"spring {j}" + (" (k1+k2)" if P.n == 1 else "")
         items.append((f"{name}: binned law explains {expl.get(j, 0):.0%}", dj, k * dj, r, f"linear k = {k:.4g} N/m"))
     return _force_panels("Restoring force per spring against its deformation", items, "deformation [mm]", 1e3,

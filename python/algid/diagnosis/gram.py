@@ -1,0 +1,237 @@
+"""Per-window Gram matrices of stacked equations and the fits and cross-validation
+built on them (a fit on any set of windows is a sum of Grams and a small solve)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .windows import N_SUB, Prepared, band_filter, detrend
+
+__all__ = ["CVResult", "EqSpec", "WindowStats", "cross_validate", "cross_validate_grid", "jackknife_std",
+           "refine_min", "solve_gram", "sse", "window_stats"]
+
+
+@dataclass
+class EqSpec:
+    """One equation of a (possibly augmented) model.
+
+    X : (N, p) own columns; y : (N,) target (:func:`target`); E : (N, q) columns of the
+    shared effect parameters (None if none); w : weight of the equation.
+    """
+
+    e: int
+    X: np.ndarray
+    y: np.ndarray
+    E: np.ndarray | None
+    w: float = 1.0
+    key: object = None  # when set, the detrended X and its Gram are cached under it
+
+
+@dataclass
+class WindowStats:
+    """Per-window Gram matrices of a stacked model ``[theta_e1 .. theta_eE, gamma | y]``.
+
+    G : (nw, P+1, P+1); the last row/column is the target. ``slices[k]`` are the
+    parameter indices of equation k; ``shared`` those of the shared effect parameters.
+    ``per_sub`` : (nw, S, E, P+1, P+1) contribution of each sub-block and equation;
+    ``per_eq`` : (nw, E, P+1, P+1) its sum over sub-blocks; ``per_sub_band`` : the same
+    for the band-projected columns (:func:`band_filter`; the scoring Grams; ``per_sub``
+    itself when the band is the whole spectrum).
+    """
+
+    G: np.ndarray
+    slices: list[slice]
+    shared: slice
+    eqs: list[int]
+    per_sub: np.ndarray
+    per_sub_band: np.ndarray
+
+    @property
+    def per_eq(self) -> np.ndarray:
+        return self.per_sub.sum(axis=1)
+
+
+def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
+    """Detrend and accumulate the per-window Grams of a stacked model."""
+    q = 0 if specs[0].E is None else specs[0].E.shape[1]
+    sizes = [s.X.shape[1] for s in specs]
+    Ptot = sum(sizes) + q
+    slices, off = [], 0
+    for p in sizes:
+        slices.append(slice(off, off + p))
+        off += p
+    shared = slice(off, off + q)
+    S = N_SUB
+    band = not P.full_band
+    per_sub = np.zeros((P.nw, S, len(specs), Ptot + 1, Ptot + 1))
+    per_sub_band = np.zeros_like(per_sub) if band else per_sub
+
+    def sub(Z):  # (nw, L, c) -> (nw, S, L/S, c)
+        return Z.reshape(P.nw, S, P.L // S, Z.shape[-1])
+
+    def fill(blk, ix, ir, gxx, gxr, grr):
+        blk[:, :, ix[:, None], ix[None, :]] = gxx
+        blk[:, :, ix[:, None], ir[None, :]] = gxr
+        blk[:, :, ir[:, None], ix[None, :]] = gxr.swapaxes(-1, -2)
+        blk[:, :, ir[:, None], ir[None, :]] = grr
+
+    for k, s in enumerate(specs):
+        rest = np.concatenate(([s.E] if q else []) + [s.y[:, None]], axis=1) * s.w
+        Zr_w = detrend(P, rest)  # (nw, L, q+1)
+        Zr = sub(Zr_w)  # (nw, S, L/S, q+1)
+        cached = P._cache.get((s.key, s.w)) if s.key is not None else None
+        if cached is None:
+            Zx_w = detrend(P, s.X * s.w)
+            Zx = sub(Zx_w)
+            Zxb = sub(band_filter(P, Zx_w)) if band else Zx
+            cached = (Zx, np.matmul(Zx.swapaxes(-1, -2), Zx), Zxb,
+                      np.matmul(Zxb.swapaxes(-1, -2), Zxb) if band else None)
+            if s.key is not None:
+                P._cache[(s.key, s.w)] = cached
+        Zx, gxx, Zxb, gxxb = cached
+        ix = np.arange(slices[k].start, slices[k].stop)
+        ir = np.r_[np.arange(shared.start, shared.stop), Ptot]
+        fill(per_sub[:, :, k], ix, ir, gxx, np.matmul(Zx.swapaxes(-1, -2), Zr), np.matmul(Zr.swapaxes(-1, -2), Zr))
+        if band:
+            Zrb = sub(band_filter(P, Zr_w))
+            fill(per_sub_band[:, :, k], ix, ir, gxxb, np.matmul(Zxb.swapaxes(-1, -2), Zrb),
+                 np.matmul(Zrb.swapaxes(-1, -2), Zrb))
+    return WindowStats(G=(per_sub_band if P.fit_band else per_sub).sum(axis=(1, 2)), slices=slices, shared=shared,
+                       eqs=[s.e for s in specs], per_sub=per_sub, per_sub_band=per_sub_band)
+
+
+def solve_gram(G: np.ndarray) -> np.ndarray:
+    """Least-squares parameters from Gram(s) (..., P+1, P+1) (target last), column-scaled,
+    with a 1e-12 relative ridge against exactly collinear columns -> (..., P)."""
+    A = G[..., :-1, :-1]
+    b = G[..., :-1, -1]
+    d = np.sqrt(np.clip(np.diagonal(A, axis1=-2, axis2=-1), 1e-300, None))
+    As = A / d[..., :, None] / d[..., None, :]
+    eye = np.eye(A.shape[-1])
+    z = np.linalg.solve(As + 1e-12 * eye, (b / d)[..., None])[..., 0]
+    return z / d
+
+
+def sse(G: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Squared error of ``theta`` under Gram(s) ``G`` (..., P+1, P+1) -> (...)."""
+    th = np.append(theta, -1.0)
+    return np.einsum("...i,i->...", np.einsum("...ij,j->...i", G, th), th)
+
+
+@dataclass
+class CVResult:
+    """Cross-validated fit of a stacked model.
+
+    theta : (P,) fit on all windows; theta_folds : (K, P) fits with fold k withheld;
+    test_sub : (nw, S, E) in-band squared error (the metric of :mod:`.core`)
+    of every sub-block and equation under the fit that withheld its window;
+    test_sub_full : the same over the whole band; fit_sse : (nw,) in-sample error of
+    ``theta``; extra : model-specific values (e.g. the nonlinear parameter).
+    """
+
+    theta: np.ndarray
+    theta_folds: np.ndarray
+    test_sub: np.ndarray
+    fit_sse: np.ndarray
+    stats: WindowStats
+    extra: dict = field(default_factory=dict)
+    test_sub_full: np.ndarray | None = None
+
+    @property
+    def test_sse_eq(self) -> np.ndarray:
+        """(nw, E) withheld squared error per window and equation."""
+        return self.test_sub.sum(axis=1)
+
+    @property
+    def test_sse(self) -> np.ndarray:
+        """(nw,) withheld (in-band) squared error per window."""
+        return self.test_sub.sum(axis=(1, 2))
+
+    @property
+    def test_sse_eq_full(self) -> np.ndarray:
+        """(nw, E) withheld full-band squared error per window and equation."""
+        return self.test_sub_full.sum(axis=1)
+
+
+def cross_validate(P: Prepared, st: WindowStats) -> CVResult:
+    """Fit on all windows and, for every fold, on the others; score withheld windows."""
+    K = P.nfolds
+    Gsum = st.G.sum(axis=0)
+    theta = solve_gram(Gsum)
+    thetas = np.zeros((K, theta.size))
+    test = np.zeros(st.per_sub.shape[:3])
+    full = np.zeros_like(test)
+    for k in range(K):
+        mask = P.folds == k
+        th = solve_gram(Gsum - st.G[mask].sum(axis=0))
+        thetas[k] = th
+        full[mask] = sse(st.per_sub[mask], th)
+        test[mask] = full[mask] if st.per_sub_band is st.per_sub else sse(st.per_sub_band[mask], th)
+    return CVResult(theta=theta, theta_folds=thetas, test_sub=test, fit_sse=sse(st.G, theta), stats=st,
+                    test_sub_full=full)
+
+
+def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray) -> CVResult:
+    """Cross-validation of a model with one nonlinear parameter known on ``grid``.
+
+    For every fold the grid value is chosen by the (full-band) error on the training
+    windows, as the fit itself (refined
+    by a parabola through the three best neighbours, reported in ``extra["g_folds"]``),
+    and the withheld windows are scored at the chosen grid point. The all-window fit is
+    reported at the best grid point (``extra["g"]`` refined, ``extra["g_index"]``).
+    """
+    K = P.nfolds
+    G = np.stack([s.G for s in stats])  # (ng, nw, P+1, P+1)
+    Gsum = G.sum(axis=1)
+    ng = len(grid)
+    thetas_all = solve_gram(Gsum)
+    fit_all = np.array([sse(Gsum[g], thetas_all[g]) for g in range(ng)])
+    best = int(np.argmin(fit_all))
+    res = cross_validate(P, stats[best])
+    test = np.zeros(stats[best].per_sub.shape[:3])
+    full = np.zeros_like(test)
+    thetas = np.zeros((K, thetas_all.shape[1]))
+    g_folds = np.zeros(K)
+    gb_folds = np.zeros(K, dtype=int)
+    for k in range(K):
+        mask = P.folds == k
+        Gtr = Gsum - G[:, mask].sum(axis=1)
+        ths = solve_gram(Gtr)
+        tr = np.array([sse(Gtr[g], ths[g]) for g in range(ng)])
+        gb = int(np.argmin(tr))
+        gb_folds[k] = gb
+        thetas[k] = ths[gb]
+        g_folds[k] = refine_min(grid, tr, gb)
+        test[mask] = sse(stats[gb].per_sub_band[mask], ths[gb])
+        full[mask] = sse(stats[gb].per_sub[mask], ths[gb])
+    res.theta_folds = thetas
+    res.test_sub = test
+    res.test_sub_full = full
+    res.extra = {"g": refine_min(grid, fit_all, best), "g_index": best, "g_folds": g_folds,
+                 "g_index_folds": gb_folds, "grid_sse": fit_all}
+    return res
+
+
+def refine_min(grid: np.ndarray, f: np.ndarray, i: int) -> float:
+    """Vertex of the parabola through the grid minimum and its neighbours."""
+    if i == 0 or i == len(grid) - 1:
+        return float(grid[i])
+    x0, x1, x2 = grid[i - 1 : i + 2]
+    y0, y1, y2 = f[i - 1 : i + 2]
+    den = (x0 - x1) * (x0 - x2) * (x1 - x2)
+    A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den
+    B = (x2**2 * (y0 - y1) + x1**2 * (y2 - y0) + x0**2 * (y1 - y2)) / den
+    if A <= 0:
+        return float(grid[i])
+    return float(np.clip(-B / (2 * A), x0, x2))
+
+
+def jackknife_std(estimates: np.ndarray) -> np.ndarray:
+    """Delete-a-group jackknife standard deviation from the K fold-withheld estimates."""
+    est = np.asarray(estimates, dtype=float)
+    K = est.shape[0]
+    if K < 2:
+        return np.full(est.shape[1:], np.nan)
+    return np.sqrt((K - 1) / K * ((est - est.mean(axis=0)) ** 2).sum(axis=0))

@@ -1,0 +1,165 @@
+"""The unmodelled effects the simulator can switch on: their names, locations and
+parameters (:class:`Effect`), validated when an effect is made."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping, Optional, Union
+
+from ..chain import Chain
+
+__all__ = ["COULOMB_V_EPS", "EFFECT_NAMES", "Effect", "as_effect"]
+
+#: Smallest velocity scale [m/s] of the dry-friction regularisation ``F tanh(v / v_eps)``
+#: (the default is ``max(COULOMB_V_EPS, F / (m_i f_sub))``, see :mod:`algid.simulator`).
+COULOMB_V_EPS = 1e-4
+
+#: ``name -> (location key, required params, optional params)``.
+_EFFECT_SPECS: dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]] = {
+    "coulomb_friction": ("dof", ("force",), ("v_eps",)),
+    "quadratic_damping": ("dof", ("c2",), ()),
+    "cubic_stiffness": ("spring", ("k3",), ()),
+    "clearance": ("spring", ("gap", "stiffness"), ()),
+    "input_delay": ("dof", ("delay",), ()),
+    "sensor_bias": ("dof", ("bias",), ()),
+    "sensor_lowpass": ("dof", ("cutoff_hz",), ()),
+    "parameter_drift": ("spring", ("rel_change",), ()),
+    "force_offset": ("dof", ("offset",), ()),
+    "stribeck_friction": ("dof", ("force", "static", "v_stribeck"), ("v_eps",)),
+    "amplitude_damping": ("spring", ("c_amp",), ()),
+}
+
+#: The effect names the simulator knows (part of the public interface).
+EFFECT_NAMES: tuple[str, ...] = tuple(_EFFECT_SPECS)
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One unmodelled effect switched on in the plant or its sensors.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`EFFECT_NAMES`:
+
+        ``coulomb_friction``  location ``{"dof": i}``, params ``{"force": F [N]}``
+            (optional ``"v_eps"`` [m/s]): a force ``-F tanh(v_i / v_eps)`` on mass i
+            (smooth, steep dry friction; default ``v_eps`` in :mod:`algid.simulator`).
+        ``quadratic_damping``  ``{"dof": i}``, ``{"c2": [N s^2/m^2]}``: ``-c2 v_i |v_i|``.
+        ``cubic_stiffness``  ``{"spring": j}``, ``{"k3": [N/m^3]}``: spring force
+            ``k3 d_j^3`` added to spring j (negative ``k3`` softens).
+        ``clearance``  ``{"spring": j}``, ``{"gap": [m], "stiffness": [N/m]}``: a contact
+            in parallel with spring j, force ``stiffness (|d_j| - gap) sign(d_j)`` when
+            ``|d_j| > gap``, zero otherwise.
+        ``input_delay``  ``{"dof": i}``, ``{"delay": [s]}``: the force reaching mass i lags
+            the recorded one by ``delay``.
+        ``sensor_bias``  ``{"dof": i}``, ``{"bias": [m/s^2]}``: accelerometer i reads
+            ``bias`` more than the truth.
+        ``sensor_lowpass``  ``{"dof": i}``, ``{"cutoff_hz": [Hz]}``: accelerometer i is a
+            first-order low-pass ``a_meas' = 2 pi f_c (a - a_meas)``, starting settled
+            (``a_meas(0) = a(0+)``).
+        ``parameter_drift``  ``{"spring": j}``, ``{"rel_change": r}``: stiffness of spring j
+            becomes ``k_j (1 + r t / duration)`` (linear over the record).
+        ``force_offset``  ``{"dof": i}``, ``{"offset": [N]}``: a constant force on mass i
+            that the force sensor does not see (gravity on an inclined axis, a preload,
+            a drive's current-sensor offset).
+        ``stribeck_friction``  ``{"dof": i}``, ``{"force": F_c [N], "static": F_s [N],
+            "v_stribeck": v_s [m/s]}`` (optional ``"v_eps"``): dry friction that breaks
+            away at ``F_s`` and falls to ``F_c`` with speed,
+            ``-(F_c + (F_s - F_c) exp(-(v_i / v_s)^2)) tanh(v_i / v_eps)``.
+        ``amplitude_damping``  ``{"spring": j}``, ``{"c_amp": [N s/m^2]}``: micro-slip in
+            the joint of spring j, a damping force ``c_amp |d_j| d_j'`` whose equivalent
+            viscous damping grows with the deformation amplitude.
+    location : dict
+        ``{"dof": i}`` with ``1 <= i <= n`` or ``{"spring": j}`` with ``1 <= j <= n+1``
+        (``j <= n`` for a free right end); 1-based as in the paper.
+    params : dict
+        Effect parameters in SI units as listed above.
+    """
+
+    name: str
+    location: Mapping[str, int]
+    params: Mapping[str, float]
+
+    def __post_init__(self) -> None:
+        if self.name not in _EFFECT_SPECS:
+            raise ValueError(f"unknown effect {self.name!r}; known: {', '.join(EFFECT_NAMES)}")
+        key, required, optional = _EFFECT_SPECS[self.name]
+        loc = dict(self.location) if self.location is not None else {}
+        if set(loc) != {key}:
+            raise ValueError(f"effect {self.name!r} takes location {{{key!r}: index}}, got {loc!r}")
+        idx = loc[key]
+        if isinstance(idx, bool) or not float(idx).is_integer():
+            raise ValueError(f"effect {self.name!r}: {key} index must be an integer, got {idx!r}")
+        params = dict(self.params) if self.params is not None else {}
+        missing = [p for p in required if p not in params]
+        unknown = [p for p in params if p not in required + optional]
+        if missing or unknown:
+            raise ValueError(f"effect {self.name!r} takes params {required}"
+                             + (f" (optional {optional})" if optional else "")
+                             + f"; missing {missing}, unknown {unknown}")
+        clean = {}
+        for p, val in params.items():
+            try:
+                val = float(val)
+            except (TypeError, ValueError):
+                raise ValueError(f"effect {self.name!r}: param {p!r} must be a number, got {val!r}") from None
+            if not math.isfinite(val):
+                raise ValueError(f"effect {self.name!r}: param {p!r} must be finite, got {val}")
+            clean[p] = val
+        _check_param_ranges(self.name, clean)
+        object.__setattr__(self, "location", {key: int(idx)})
+        object.__setattr__(self, "params", clean)
+
+    @property
+    def dof(self) -> Optional[int]:
+        """0-based DOF index, or None for a spring effect."""
+        return self.location["dof"] - 1 if "dof" in self.location else None
+
+    @property
+    def spring(self) -> Optional[int]:
+        """1-based spring index, or None for a DOF effect."""
+        return self.location.get("spring")
+
+    def check(self, chain: Chain) -> None:
+        """Raise ``ValueError`` if the location does not exist on ``chain``."""
+        n = chain.n
+        if "dof" in self.location:
+            i = self.location["dof"]
+            if not 1 <= i <= n:
+                raise ValueError(f"effect {self.name!r}: dof {i} outside 1..{n}")
+        else:
+            j = self.location["spring"]
+            top = n + 1 if chain.boundary == "fixed" else n
+            if not 1 <= j <= top:
+                raise ValueError(f"effect {self.name!r}: spring {j} outside 1..{top} "
+                                 f"({chain.boundary} right end)")
+
+    def to_dict(self) -> dict:
+        """JSON-friendly ``{"effect", "location", "params"}``."""
+        return {"effect": self.name, "location": dict(self.location), "params": dict(self.params)}
+
+
+def _check_param_ranges(name: str, p: dict) -> None:
+    positive = {"cutoff_hz", "v_eps", "v_stribeck"}
+    nonneg = {"force", "c2", "gap", "stiffness", "delay", "static", "c_amp"}
+    for key, val in p.items():
+        if key in positive and not val > 0:
+            raise ValueError(f"effect {name!r}: {key} must be > 0, got {val}")
+        if key in nonneg and val < 0:
+            raise ValueError(f"effect {name!r}: {key} must be >= 0, got {val}")
+    if name == "stribeck_friction" and p["static"] < p["force"]:
+        raise ValueError(f"effect 'stribeck_friction': static ({p['static']}) must be >= force ({p['force']})")
+    if name == "parameter_drift" and not p["rel_change"] > -1.0:
+        raise ValueError(f"effect 'parameter_drift': rel_change must be > -1, got {p['rel_change']}")
+
+
+def as_effect(e: Union[Effect, Mapping[str, Any]]) -> Effect:
+    """``e`` as an :class:`Effect` (dicts ``{"name" or "effect", "location", "params"}``)."""
+    if isinstance(e, Effect):
+        return e
+    if isinstance(e, Mapping):
+        name = e.get("name", e.get("effect"))
+        return Effect(name, e.get("location", {}), e.get("params", {}))
+    raise ValueError(f"effects must be Effect instances or dicts, got {type(e).__name__}")
