@@ -403,7 +403,7 @@ def main() -> None:
                 print_block(sname, key, block, fam)
         # tracking
         js, jd = tracking_params(sname, n)
-        names = algid.continuous.parameter_names(n)
+        names = algid.chain.parameter_names(n)
         print(f"\n--- {sname}: tracking ({names[js]} -20 % at {STEP_AT:g} s, {names[jd]} -10 % over 60 s), "
               f"noise on accelerations and forces ---", flush=True)
         trecs = [C.simulate(chain, DURATION, seed=100 + s, schedule=schedule_for(chain, sname)) for s in range(args.seeds)]

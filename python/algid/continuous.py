@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _core
+from .chain import parameter_names
 from .estimator import Status, as_record, as_sample, config_fields, dofs, estimator_class, make_config
 
 ChangeKind = _core.ChangeKind
@@ -48,11 +49,6 @@ class ChangeEvent:
     kind: str        #: ``"step"`` or ``"drift"``
     before: float    #: running estimate before [kg, N s/m or N/m]
     after: float     #: running estimate right after
-
-
-def parameter_names(n: int) -> list[str]:
-    """``m1..mn, c1..cn, k1..k{n+1}``: the order of every estimate vector."""
-    return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
 
 
 def unpack(vec: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
