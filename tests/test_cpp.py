@@ -16,11 +16,11 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 BUILD = REPO / "build" / "cpp-tests"
-BINARIES = ["test_quadrature", "test_cramer", "test_lanes", "test_estimator", "test_block", "test_realtime",
+BINARIES = ["test_quadrature", "test_cramer", "test_lanes", "test_estimator", "test_sizes", "test_realtime",
             "test_no_exceptions", "firmware_loop", "test_continuous"]
 # The same tests built for the wider instruction sets the wheel ships (x86-64 only; skipped
 # where the CPU cannot run them, exit code 77).
-WIDE_BINARIES = [f"{name}_{level}" for level in ("v3", "v4") for name in ("test_lanes", "test_block")]
+WIDE_BINARIES = [f"{name}_{level}" for level in ("v3", "v4") for name in ("test_lanes", "test_sizes")]
 
 
 @pytest.fixture(scope="session")

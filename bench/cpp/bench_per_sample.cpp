@@ -1,5 +1,6 @@
-// Per-sample cost of ChainEstimator<N, Scalar> and of an RLS baseline of the same parameter
-// count, measured in the same run on the same closed-form multisine signals (1 kHz).
+// Per-sample cost of ChainEstimator<N, Scalar> (and of ChainEstimator<Dynamic, Scalar>, the
+// same chain with its size given at run time) and of an RLS baseline of the same parameter count,
+// measured in the same run on the same closed-form multisine signals (1 kHz).
 //
 //   bench_per_sample [--windows W] [--samples T]      timing, one JSON object per line
 //   bench_per_sample --callgrind SUBJECT N SCALAR S   S updates between callgrind client
@@ -9,16 +10,19 @@
 //   bench_per_sample --dump N T PATH                  write the n = N signals (T samples): accel
 //                                                     then force, row-major float64
 //
-// Configurations: "default" = ChainEstimator<N, Scalar> (one window from t0, reseeded between
-// timing windows); "continuous" = ContinuousEstimator<N, Scalar> with its default configuration
-// (K = 4 staggered reseeded 0.3 s windows, block-median aggregation, change detection), fed one
-// uninterrupted signal (never reset between timing windows); "rls" = the baseline; "batch" =
-// ChainEstimator::record() (what the Python run() calls: blocks of 8 instants for n <= 2,
-// update() sample by sample in the lane layout of n >= 3), in 16-sample chunks and whole
-// windows, writing the estimate history of every sample into arrays.
+// Configurations (SUBJECT): "default" = ChainEstimator<N, Scalar> (one window from t0, reseeded
+// between timing windows); "dynamic" = ChainEstimator<Dynamic, Scalar>(config, N), the same
+// protocol; "continuous" = ContinuousEstimator<N, Scalar> with its default configuration (K = 4
+// staggered reseeded 0.3 s windows, block-median aggregation, change detection), fed one
+// uninterrupted signal (never reset between timing windows); "continuous_dynamic" = the same
+// with ContinuousEstimator<Dynamic, Scalar>(config, N); "rls" = the baseline; "batch" =
+// ChainEstimator<N, Scalar>::record() (what the Python run() calls: update() sample by sample,
+// the DOF side by side in SIMD lanes), in 16-sample chunks and whole windows, writing the
+// estimate history of every sample into arrays. Every chain row reports its lane layout: "lanes"
+// per register and "lane_slots" (lanes in all, the padding included).
 //
 // Timing protocol, per configuration: one untimed warm-up window, then W windows of T samples
-// each (default and rls: each starting from reset()/reseed(), not timed):
+// each (default, dynamic and rls: each starting from reset()/reseed(), not timed):
 //   batch  pass: steady_clock around 16 consecutive updates; median and p99 of the mean;
 //   single pass: steady_clock around every update minus the clock's own median overhead;
 //                max = raw worst single sample (includes whatever the OS did meanwhile),
@@ -94,11 +98,15 @@ double clock_overhead_ns() {
   return percentile(d, 0.5);
 }
 
+// The chain estimator of a configuration: N fixed, or Dynamic with N given at run time.
+template <int N, class Scalar, bool Dyn>
+using ChainOf = algid::ChainEstimator<Dyn ? algid::Dynamic : N, Scalar>;
+
 // A subject is timed on segments of its signals: begin(segment) prepares segment `segment`
 // (untimed), step(k) consumes its k-th sample.
-template <int N, class Scalar>
+template <int N, class Scalar, bool Dyn = false>
 struct EstimatorSubject {
-  using Est = algid::ChainEstimator<N, Scalar>;
+  using Est = ChainOf<N, Scalar, Dyn>;
   static constexpr int kDofs = N;
   static constexpr bool kContinuous = false;
   static constexpr bool kChunked = false;
@@ -108,7 +116,7 @@ struct EstimatorSubject {
   explicit EstimatorSubject(const algid_bench::Signals<Scalar>& sig) : s(&sig) {
     typename Est::Config cfg;
     cfg.dt = static_cast<Scalar>(algid_bench::kDt);
-    est = std::make_unique<Est>(cfg);
+    est = std::make_unique<Est>(cfg, N);
   }
   void begin(int) noexcept { est->reseed(); }
   void step(int k) noexcept {
@@ -119,8 +127,8 @@ struct EstimatorSubject {
 };
 
 // The batch path: ChainEstimator::record() over the same samples, called on chunks of kBatch
-// samples (two blocks), writing the estimate histories the Python run() returns (masses,
-// dampings, springs, validity and status of every sample) into arrays.
+// samples, writing the estimate histories the Python run() returns (masses, dampings, springs,
+// validity and status of every sample) into arrays.
 template <int N, class Scalar>
 struct BatchSubject : EstimatorSubject<N, Scalar> {  // the same estimator, fed through record()
   using EstimatorSubject<N, Scalar>::s;
@@ -152,9 +160,9 @@ struct BatchSubject : EstimatorSubject<N, Scalar> {  // the same estimator, fed 
 };
 
 #if ALGID_BENCH_HAVE_CONTINUOUS
-template <int N, class Scalar>
+template <int N, class Scalar, bool Dyn = false>
 struct ContinuousSubject {
-  using Est = algid::ContinuousEstimator<N, Scalar>;
+  using Est = algid::ContinuousEstimator<Dyn ? algid::Dynamic : N, Scalar>;
   static constexpr int kDofs = N;
   static constexpr bool kContinuous = true;
   static constexpr bool kChunked = false;
@@ -167,7 +175,7 @@ struct ContinuousSubject {
   ContinuousSubject(const algid_bench::Signals<Scalar>& sig, int segment) : s(&sig), segment_samples(segment) {
     typename Est::Config cfg;
     cfg.dt = static_cast<Scalar>(algid_bench::kDt);
-    est = std::make_unique<Est>(cfg);
+    est = std::make_unique<Est>(cfg, N);
   }
   explicit ContinuousSubject(const algid_bench::Signals<Scalar>& sig) : ContinuousSubject(sig, sig.samples) {}
   // Never reset: consecutive segments are consecutive stretches of one signal.
@@ -250,9 +258,9 @@ Result measure(Subject& subject, int samples, int windows, double overhead) {
   return r;
 }
 
-// Batch timing: kBatch-sample chunks through run() (median / p99 per chunk, as the per-sample
-// protocol's batches) and whole windows in one run() call (window_min). No single-sample times:
-// a block is the unit of work; max is the slowest chunk.
+// Batch timing: kBatch-sample chunks through record() (median / p99 per chunk, as the
+// per-sample protocol's batches) and whole windows in one record() call (window_min). No
+// single-sample times: a chunk is the unit of work; max is the slowest chunk.
 template <class Subject>
 Result measure_batch(Subject& subject, int samples, int windows) {
   std::vector<double> batch;
@@ -289,20 +297,14 @@ Result measure_batch(Subject& subject, int samples, int windows) {
   return r;
 }
 
-// The SIMD layout of ChainEstimator<N, Scalar> in this build: "lanes" (one DOF per lane, `lanes`
-// lanes per register, `slots` lanes in all, the padding included) or "per_dof".
-template <int N, class Scalar>
+// The SIMD layout of a chain estimator in this build: one DOF per lane, `lanes` lanes per
+// register, `slots` lanes in all (the padding included).
+template <int N, class Scalar, bool Dyn = false>
 struct LayoutInfo {
-  using Est = algid::ChainEstimator<N, Scalar>;
-  static const char* name() { return Est::kLaneLayout ? "lanes" : "per_dof"; }
-  static int lanes() {
-    if constexpr (Est::kLaneLayout) return Est::kLanes;
-    return 0;
-  }
-  static int slots() {
-    if constexpr (Est::kLaneLayout) return Est::kLanes * Est::kRegisters;
-    return N;
-  }
+  using Est = ChainOf<N, Scalar, Dyn>;
+  static const char* name() { return "lanes"; }
+  static int lanes() { return Est::kLanes; }
+  static int slots() { return (N + Est::kLanes - 1) / Est::kLanes * Est::kLanes; }
 };
 
 void print(const char* config, int n, const char* scalar, const Result& r, double overhead, const char* layout = "",
@@ -329,6 +331,11 @@ void bench_n(const char* scalar, int samples, int windows, double overhead) {
             LayoutInfo<N, Scalar>::lanes(), LayoutInfo<N, Scalar>::slots());
     }
     {
+      EstimatorSubject<N, Scalar, true> subject(sig);
+      print("dynamic", N, scalar, measure(subject, samples, windows, overhead), overhead,
+            LayoutInfo<N, Scalar, true>::name(), LayoutInfo<N, Scalar, true>::lanes(), LayoutInfo<N, Scalar, true>::slots());
+    }
+    {
       BatchSubject<N, Scalar> subject(sig);
       print("batch", N, scalar, measure_batch(subject, samples, windows), overhead, LayoutInfo<N, Scalar>::name(),
             LayoutInfo<N, Scalar>::lanes(), LayoutInfo<N, Scalar>::slots());
@@ -347,8 +354,14 @@ void bench_n(const char* scalar, int samples, int windows, double overhead) {
     const int period = static_cast<int>(std::lround(cfg.window_s / static_cast<Scalar>(algid_bench::kDt))) / cfg.stagger;
     const int segment = (samples + period - 1) / period * period;
     const auto sig = algid_bench::make_signals<N, Scalar>(2 * (windows + 1) * segment, 7, algid_bench::kDt, false);
-    ContinuousSubject<N, Scalar> subject(sig, segment);
-    print("continuous", N, scalar, measure(subject, segment, windows, overhead), overhead);
+    {
+      ContinuousSubject<N, Scalar> subject(sig, segment);
+      print("continuous", N, scalar, measure(subject, segment, windows, overhead), overhead);
+    }
+    {
+      ContinuousSubject<N, Scalar, true> subject(sig, segment);
+      print("continuous_dynamic", N, scalar, measure(subject, segment, windows, overhead), overhead);
+    }
   }
 #endif
 }
@@ -378,6 +391,8 @@ template <int N>
 int callgrind_dispatch(const std::string& subject, const std::string& scalar, int updates) {
   if (subject == "default" && scalar == "double") return callgrind_run<EstimatorSubject<N, double>, double>(updates);
   if (subject == "default" && scalar == "float") return callgrind_run<EstimatorSubject<N, float>, float>(updates);
+  if (subject == "dynamic" && scalar == "double") return callgrind_run<EstimatorSubject<N, double, true>, double>(updates);
+  if (subject == "dynamic" && scalar == "float") return callgrind_run<EstimatorSubject<N, float, true>, float>(updates);
   if (subject == "batch" && scalar == "double") return callgrind_run<BatchSubject<N, double>, double>(updates);
   if (subject == "batch" && scalar == "float") return callgrind_run<BatchSubject<N, float>, float>(updates);
   if (subject == "rls" && scalar == "double") return callgrind_run<RlsSubject<N, double>, double>(updates);
@@ -385,6 +400,10 @@ int callgrind_dispatch(const std::string& subject, const std::string& scalar, in
 #if ALGID_BENCH_HAVE_CONTINUOUS
   if (subject == "continuous" && scalar == "double") return callgrind_run<ContinuousSubject<N, double>, double>(updates);
   if (subject == "continuous" && scalar == "float") return callgrind_run<ContinuousSubject<N, float>, float>(updates);
+  if (subject == "continuous_dynamic" && scalar == "double")
+    return callgrind_run<ContinuousSubject<N, double, true>, double>(updates);
+  if (subject == "continuous_dynamic" && scalar == "float")
+    return callgrind_run<ContinuousSubject<N, float, true>, float>(updates);
 #endif
   std::fprintf(stderr, "unknown subject/scalar %s/%s\n", subject.c_str(), scalar.c_str());
   return 2;

@@ -7,8 +7,9 @@
 //   flop_count            one JSON object per (subject, n) on stdout
 //
 // Cross-check of the hand count in docs/performance.md; the same counter measures the RLS
-// baseline. Phases are separated by counting the parts of one update through the public
-// IntegratorLanes (the estimator's chains) and signal_rows with the same inputs.
+// baseline and ChainEstimator<Dynamic, Counted> ("dynamic"). Phases are separated by counting the
+// parts of one update through the public IntegratorLanes (the estimator's chains, one lane) and
+// signal_row() on one lane with the same inputs.
 // Counted and its std overloads must be declared before the core headers: the core calls
 // std::isfinite / std::abs / std::sqrt by qualified name.
 #include <cmath>
@@ -121,13 +122,13 @@ void print(const char* subject, int n, long samples, const algid_bench::OpCount&
 constexpr int kWarm = 64;
 constexpr int kCounted = 512;
 
-template <int N>
+template <int N, bool Dyn = false>
 void count_estimator() {
   const auto sig = algid_bench::make_signals<N, double>(kWarm + kCounted);
-  using Est = algid::ChainEstimator<N, Counted>;
+  using Est = algid::ChainEstimator<Dyn ? algid::Dynamic : N, Counted>;
   typename Est::Config cfg;
   cfg.dt = Counted(algid_bench::kDt);
-  Est est(cfg);
+  Est est(cfg, N);
   Counted a[N], u[N];
   auto feed = [&](int k) {
     for (int i = 0; i < N; ++i) {
@@ -139,27 +140,29 @@ void count_estimator() {
   for (int k = 0; k < kWarm; ++k) feed(k);
   g_ops = {};
   for (int k = kWarm; k < kWarm + kCounted; ++k) feed(k);
-  print("default", N, kCounted, g_ops);
+  print(Dyn ? "dynamic" : "default", N, kCounted, g_ops);
 }
 
-// The phases of one DOF-sample of a 3-DOF chain in the lane layout (here one lane: the
-// counting scalar has no SIMD packets, so this counts the useful work, without the padding
-// lanes of the SIMD builds): the integrator chains of the accelerations and forces, the time
-// scaling and the eq. 5 rows, and the rest of update() (systems, Cramer, Hadamard ratio,
-// validity, eq. 7, estimates, spring fusion) as the total minus both.
+// The phases of one DOF-sample of a 3-DOF chain (here one lane per register: the counting
+// scalar has no SIMD packets, so this counts the useful work, without the padding lanes of the
+// SIMD builds): the integrator chains of the accelerations and forces, the time scaling and the
+// eq. 5 rows (signal_row(), as ChainEstimator forms them: mass, damping and spring rows of each
+// acceleration, the rows of each force, q = 0..3), and the rest of update() (systems, Cramer,
+// Hadamard ratio, validity, eq. 7, estimates, spring fusion) as the total minus both.
 void count_phases() {
   constexpr int N = 3;
   constexpr int P = 8;
   using Est = algid::ChainEstimator<N, Counted>;
-  static_assert(Est::kLaneLayout, "phases of the lane layout");
+  static_assert(Est::kLanes == 1, "the counting scalar has no packets: one lane");
+  using L1 = algid::detail::Lanes<Counted, 1>;
   const auto sig = algid_bench::make_signals<N, double>(kWarm + kCounted);
   typename Est::Rule rule(Counted(algid_bench::kDt));
   algid::LaneWeights<P, algid::kAccelOrders, Counted, 1> weights;
   weights.configure(rule);
   algid::IntegratorLanes<P, algid::kAccelOrders, Counted, 1, N> ya;
   algid::IntegratorLanes<P, algid::kForceOrders, Counted, 1, N> fa;
-  ya.reset();
-  fa.reset();
+  ya.configure(N);
+  fa.configure(N);
   typename Est::Config cfg;
   cfg.dt = Counted(algid_bench::kDt);
   Est est(cfg);
@@ -188,16 +191,15 @@ void count_phases() {
     for (int r = 1; r <= algid::kAccelOrders; ++r) inv_pow[r] = Counted(inv_pow[r - 1].value() / tau);
     g_ops = {};
     for (int g = 0; g < N; ++g) {
-      algid::detail::Lanes<Counted, 1> JA[algid::kAccelOrders + 1], JF[algid::kForceOrders + 1];
+      L1 JA[algid::kAccelOrders + 1], JF[algid::kForceOrders + 1];
       ya.scaled(g, inv_pow, JA);
       fa.scaled(g, inv_pow, JF);
-      Counted ja[algid::kAccelOrders + 1], jf[algid::kForceOrders + 1];
-      for (int r = 0; r <= algid::kAccelOrders; ++r) ja[r] = JA[r](0);
-      for (int r = 0; r <= algid::kForceOrders; ++r) jf[r] = JF[r](0);
-      algid::Matrix<Counted, 4, 3> arows;
-      algid::Matrix<Counted, 4, 1> frows;
-      algid::signal_rows(ja, arows);  // the recurrence of the lane rows, the same operations
-      algid::signal_rows(jf, frows);
+      for (int q = 0; q < 4; ++q) {  // the counted operations happen whether or not a row is used
+        (void)algid::signal_row(JA, q, q);
+        (void)algid::signal_row(JA, q, q + 1);
+        (void)algid::signal_row(JA, q, q + 2);
+        (void)algid::signal_row(JF, q, q);
+      }
     }
     if (counting) add(rows, N);
   }
@@ -248,6 +250,9 @@ int main() {
   count_estimator<3>();
   count_estimator<10>();
   count_estimator<50>();
+  count_estimator<1, true>();
+  count_estimator<3, true>();
+  count_estimator<50, true>();
   count_rls<3>();
   count_phases();
   return 0;

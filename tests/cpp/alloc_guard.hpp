@@ -2,7 +2,9 @@
 // Allocation guards for the real-time tests. Include FIRST in a test binary (before any Eigen
 // header), once per executable: it replaces the global operator new.
 //  - eigen_assert throws (so EIGEN_RUNTIME_NO_MALLOC's check fires even under NDEBUG);
-//  - a counting global operator new sees every heap allocation, Eigen's or not;
+//  - a counting global operator new (plain and over-aligned: the run-time sized storage of the
+//    estimators holds SIMD registers and uses C++17 aligned new) sees every heap allocation,
+//    Eigen's or not (new[] forwards to them);
 //  - NoAllocationScope switches Eigen's guard off-limits and counts allocations in its scope.
 #include <stdexcept>
 
@@ -52,9 +54,20 @@ inline void guards_fire() {
   long allocations = 0;
   {
     NoAllocationScope scope;
-    int* p = new int(3);
+    int* volatile p = new int(3);
     allocations = scope.allocations();
     delete p;
+  }
+  CHECK(allocations == 1);
+  // ...and an over-aligned one (aligned new, as the Dynamic estimators' storage uses).
+  struct alignas(64) Wide {
+    double x[8];
+  };
+  {
+    NoAllocationScope scope;
+    Wide* volatile w = new Wide[3];  // volatile: the new/delete pair may not be elided
+    allocations = scope.allocations();
+    delete[] w;
   }
   CHECK(allocations == 1);
 }
@@ -65,8 +78,17 @@ void* operator new(std::size_t size) {
   if (void* p = std::malloc(size ? size : 1)) return p;
   throw std::bad_alloc();
 }
+void* operator new(std::size_t size, std::align_val_t align) {
+  ++algid_test::g_allocations;
+  const std::size_t a = static_cast<std::size_t>(align);
+  const std::size_t rounded = ((size ? size : 1) + a - 1) / a * a;  // aligned_alloc: a multiple of a
+  if (void* p = std::aligned_alloc(a, rounded)) return p;
+  throw std::bad_alloc();
+}
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 #pragma GCC diagnostic pop

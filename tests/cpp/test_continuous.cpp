@@ -1,7 +1,9 @@
 // ContinuousEstimator: the firmware contract (no allocation in update()/reset(), noexcept; the
-// guards' negative controls), the window schedule against a hand-reseeded ChainEstimator, the
-// aggregation against an independent median / block-median computation, tracking of a 20 %
-// stiffness step, and no alarm on a constant system under 40 dB noise.
+// guards' negative controls), fixed N and N = Dynamic; ContinuousEstimator<Dynamic>(config, 3)
+// equal to ContinuousEstimator<3> to the bit over a record with a step change; the window
+// schedule against a hand-reseeded ChainEstimator, the aggregation against an independent
+// median / block-median computation, tracking of a 20 % stiffness step, and no alarm on a
+// constant system under 40 dB noise.
 #include "alloc_guard.hpp"  // first: before any Eigen header
 
 #include <algid/algid.hpp>
@@ -14,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <random>
 #include <vector>
@@ -121,33 +124,33 @@ struct Record {
   }
 };
 
-template <int N, class Scalar>
+// update() and reset() under the guard, for ContinuousEstimator<N> and (kDynamic)
+// ContinuousEstimator<Dynamic>(config, N), whose construction allocates.
+template <int N, class Scalar, bool kDynamic = false>
 void no_allocation_in_hot_path() {
-  using Est = algid::ContinuousEstimator<N, Scalar>;
+  using Est = algid::ContinuousEstimator<kDynamic ? algid::Dynamic : N, Scalar>;
   typename Est::Config cfg;
   cfg.dt = Scalar(kDt);
-  auto est = std::make_unique<Est>(cfg);  // configuration phase: may allocate
+  auto est = std::make_unique<Est>(cfg, N);  // configuration phase: may allocate
   static_assert(noexcept(est->update(std::declval<const Scalar*>(), std::declval<const Scalar*>())), "update noexcept");
-  static_assert(noexcept(est->update(std::declval<const algid::Vector<Scalar, N>&>(),
-                                     std::declval<const algid::Vector<Scalar, N>&>())),
-                "update noexcept");
   static_assert(noexcept(est->reset()), "reset noexcept");
+  if constexpr (!kDynamic) {
+    static_assert(noexcept(est->update(std::declval<const algid::Vector<Scalar, N>&>(),
+                                       std::declval<const algid::Vector<Scalar, N>&>())),
+                  "update noexcept");
+  }
   // A closed-form 20 % step of spring 1 at 6 s: exercises warm-up, blocks, the step test,
   // the restart and (at 9 s) the bad-sample path, all inside the guard.
   const Record<N> rec(5, 12000, 6000, 1, 0.8, 0.0);
+  std::vector<Scalar> accel(rec.accel.begin(), rec.accel.end()), force(rec.force.begin(), rec.force.end());
+  accel[9000 * N] = Scalar(NAN);
   bool threw = false;
   long allocations = -1;
   long events = 0;
   try {
     NoAllocationScope scope;
     for (long s = 0; s < rec.T; ++s) {
-      algid::Vector<Scalar, N> a, u;
-      for (int i = 0; i < N; ++i) {
-        a(i) = static_cast<Scalar>(rec.a(s)[i]);
-        u(i) = static_cast<Scalar>(rec.u(s)[i]);
-      }
-      if (s == 9000) a(0) = Scalar(NAN);
-      est->update(a, u);
+      est->update(accel.data() + s * N, force.data() + s * N);
       events += est->events();
       volatile Scalar sink = est->estimate()(0) + est->sigma()(N) + est->mass()(0) + est->stiffness()(N);
       (void)sink;
@@ -157,11 +160,57 @@ void no_allocation_in_hot_path() {
   } catch (const algid_test::EigenAssertion&) {
     threw = true;
   }
+  std::printf("  %s N=%d %s: %ld allocations in update()/reset(), %ld events\n", kDynamic ? "Dynamic" : "fixed", N,
+              sizeof(Scalar) == 4 ? "float" : "double", allocations, events);
   CHECK(!threw);
   CHECK(allocations == 0);
   CHECK(events >= 1);  // the restart path did run under the guard
 }
 
+// ContinuousEstimator<Dynamic>(config, 3) and ContinuousEstimator<3> on a record with a 20 %
+// step of k_2 (40 dB noise, a bad sample, default configuration: prefilter, detector,
+// amortized aggregation): the same bits after every sample, in every output (statuses,
+// estimates, sigmas, window results, events and their contents, per-parameter tracks).
+void dynamic_equals_fixed() {
+  constexpr int N = 3;
+  using Fixed = algid::ContinuousEstimator<N>;
+  using Dyn = algid::ContinuousEstimator<algid::Dynamic>;
+  const auto same = [](double a, double b) {
+    return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof(double)) == 0;
+  };
+  Record<N> rec(31, 30000, 20000, 1, 0.8, 40.0);
+  rec.accel[static_cast<std::size_t>(12345 * N + 1)] = NAN;
+  auto fixed = std::make_unique<Fixed>(Fixed::Config{});
+  auto dyn = std::make_unique<Dyn>(Dyn::Config{}, N);
+  CHECK(dyn->dofs() == N && dyn->params() == Fixed::kParams && dyn->estimate().size() == Fixed::kParams);
+  long differences = 0, events = 0, step_events = 0;
+  for (long s = 0; s < rec.T; ++s) {
+    differences += fixed->update(rec.a(s), rec.u(s)) != dyn->update(rec.a(s), rec.u(s));
+    differences += fixed->ready() != dyn->ready() || fixed->samples() != dyn->samples();
+    differences += fixed->window_results() != dyn->window_results() || fixed->total_events() != dyn->total_events();
+    for (int j = 0; j < Fixed::kParams; ++j) {
+      differences += !same(fixed->estimate()(j), dyn->estimate()(j)) + !same(fixed->sigma()(j), dyn->sigma()(j));
+      differences += !same(fixed->last_window()(j), dyn->last_window()(j));
+      differences += !same(fixed->window_spread(j), dyn->window_spread(j)) + (fixed->since_restart(j) != dyn->since_restart(j));
+    }
+    for (int i = 0; i < N; ++i) differences += !same(fixed->mass()(i), dyn->mass()(i)) + !same(fixed->damping()(i), dyn->damping()(i));
+    for (int j = 0; j <= N; ++j) differences += !same(fixed->stiffness()(j), dyn->stiffness()(j));
+    differences += fixed->events() != dyn->events();
+    for (int e = 0; e < std::min(fixed->events(), dyn->events()); ++e) {
+      const auto &a = fixed->event(e), &b = dyn->event(e);
+      differences += a.sample != b.sample || a.param != b.param || a.kind != b.kind || !same(a.before, b.before) ||
+                     !same(a.after, b.after);
+      ++events;
+      step_events += a.kind == algid::ChangeKind::kStep && a.param == 2 * N + 1 && s >= 20000;
+    }
+  }
+  std::printf("  Dynamic n=3 against ContinuousEstimator<3>, 30 s with a 20 %% step and a bad sample: %ld differing "
+              "values, %ld events (%ld step events on k_2 after the step), %ld window results\n",
+              differences, events, step_events, fixed->window_results());
+  CHECK(differences == 0);
+  CHECK(step_events >= 1);
+  CHECK(fixed->window_results() > 300);
+}
 
 void configuration_is_validated() {
   using Est = algid::ContinuousEstimator<3>;
@@ -394,6 +443,11 @@ int main() {
   no_allocation_in_hot_path<3, double>();
   no_allocation_in_hot_path<10, double>();
   no_allocation_in_hot_path<3, float>();
+  no_allocation_in_hot_path<1, double, true>();
+  no_allocation_in_hot_path<3, double, true>();
+  no_allocation_in_hot_path<10, double, true>();
+  no_allocation_in_hot_path<3, float, true>();
+  dynamic_equals_fixed();
   configuration_is_validated();
   schedule_and_aggregation_match_oracle();
   constant_system_no_alarm_and_accuracy();
