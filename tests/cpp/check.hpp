@@ -12,7 +12,6 @@
 namespace algid_test {
 inline int& passed() { static int n = 0; return n; }
 inline int& failed() { static int n = 0; return n; }
-inline int& known_bugs() { static int n = 0; return n; }
 inline void record(bool ok, const char* what, const char* file, int line) {
   if (ok) {
     ++passed();
@@ -21,20 +20,7 @@ inline void record(bool ok, const char* what, const char* file, int line) {
     std::printf("FAIL %s:%d: %s\n", file, line, what);
   }
 }
-// A check that fails because of a known bug in code the tests may not change (reported with a
-// reproducer): printed as KNOWN BUG and not counted as a failure; once it holds it counts as
-// passed and says so, so that it can become a plain CHECK.
-inline void known_bug(bool ok, const char* what, const char* bug, const char* file, int line) {
-  if (ok) {
-    ++passed();
-    std::printf("NOTE %s:%d: known bug no longer reproduced (%s): make it a plain CHECK: %s\n", file, line, bug, what);
-  } else {
-    ++known_bugs();
-    std::printf("KNOWN BUG %s:%d: %s: %s\n", file, line, bug, what);
-  }
-}
 inline int finish(const char* name) {
-  if (known_bugs() > 0) std::printf("%s: %d checks fail on known bugs (KNOWN BUG above)\n", name, known_bugs());
   std::printf("%s: %d passed, %d failed\n", name, passed(), failed());
   return failed() == 0 ? 0 : 1;
 }
@@ -53,7 +39,6 @@ inline const bool kCpuRunsThisBuild = [] {
 }  // namespace algid_test
 
 #define CHECK(cond) ::algid_test::record(static_cast<bool>(cond), #cond, __FILE__, __LINE__)
-#define CHECK_KNOWN_BUG(cond, bug) ::algid_test::known_bug(static_cast<bool>(cond), #cond, bug, __FILE__, __LINE__)
 #define CHECK_NEAR(a, b, tol)                                                                          \
   do {                                                                                                 \
     const double check_a_ = static_cast<double>(a), check_b_ = static_cast<double>(b);                \
