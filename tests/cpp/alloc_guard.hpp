@@ -3,8 +3,8 @@
 // header), once per executable: it replaces the global operator new.
 //  - eigen_assert throws (so EIGEN_RUNTIME_NO_MALLOC's check fires even under NDEBUG);
 //  - a counting global operator new (plain and over-aligned: the run-time sized storage of the
-//    estimators holds SIMD registers and uses C++17 aligned new) sees every heap allocation,
-//    Eigen's or not (new[] forwards to them);
+//    estimators holds SIMD registers and uses C++17 aligned new; the array forms too, which the
+//    sanitizers' runtimes would otherwise take over) sees every heap allocation, Eigen's or not;
 //  - NoAllocationScope switches Eigen's guard off-limits and counts allocations in its scope.
 #include <stdexcept>
 
@@ -59,6 +59,13 @@ inline void guards_fire() {
     delete p;
   }
   CHECK(allocations == 1);
+  {
+    NoAllocationScope scope;
+    double* volatile a = new double[5];
+    allocations = scope.allocations();
+    delete[] a;
+  }
+  CHECK(allocations == 1);
   // ...and an over-aligned one (aligned new, as the Dynamic estimators' storage uses).
   struct alignas(64) Wide {
     double x[8];
@@ -85,10 +92,16 @@ void* operator new(std::size_t size, std::align_val_t align) {
   if (void* p = std::aligned_alloc(a, rounded)) return p;
   throw std::bad_alloc();
 }
+void* operator new[](std::size_t size) { return ::operator new(size); }
+void* operator new[](std::size_t size, std::align_val_t align) { return ::operator new(size, align); }
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 #pragma GCC diagnostic pop

@@ -178,8 +178,8 @@ void dynamic_equals_fixed() {
   const auto same = [](double a, double b) {
     return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof(double)) == 0;
   };
-  Record<N> rec(31, 30000, 20000, 1, 0.8, 40.0);
-  rec.accel[static_cast<std::size_t>(12345 * N + 1)] = NAN;
+  Record<N> rec(31, 10000, 6000, 1, 0.8, 40.0);
+  rec.accel[static_cast<std::size_t>(4321 * N + 1)] = NAN;
   auto fixed = std::make_unique<Fixed>(Fixed::Config{});
   auto dyn = std::make_unique<Dyn>(Dyn::Config{}, N);
   CHECK(dyn->dofs() == N && dyn->params() == Fixed::kParams && dyn->estimate().size() == Fixed::kParams);
@@ -201,15 +201,15 @@ void dynamic_equals_fixed() {
       differences += a.sample != b.sample || a.param != b.param || a.kind != b.kind || !same(a.before, b.before) ||
                      !same(a.after, b.after);
       ++events;
-      step_events += a.kind == algid::ChangeKind::kStep && a.param == 2 * N + 1 && s >= 20000;
+      step_events += a.kind == algid::ChangeKind::kStep && a.param == 2 * N + 1 && s >= 6000;
     }
   }
-  std::printf("  Dynamic n=3 against ContinuousEstimator<3>, 30 s with a 20 %% step and a bad sample: %ld differing "
+  std::printf("  Dynamic n=3 against ContinuousEstimator<3>, 10 s with a 20 %% step at 6 s and a bad sample: %ld differing "
               "values, %ld events (%ld step events on k_2 after the step), %ld window results\n",
               differences, events, step_events, fixed->window_results());
   CHECK(differences == 0);
   CHECK(step_events >= 1);
-  CHECK(fixed->window_results() > 300);
+  CHECK(fixed->window_results() > 100);
 }
 
 void configuration_is_validated() {
@@ -443,10 +443,8 @@ int main() {
   no_allocation_in_hot_path<3, double>();
   no_allocation_in_hot_path<10, double>();
   no_allocation_in_hot_path<3, float>();
-  no_allocation_in_hot_path<1, double, true>();
+  no_allocation_in_hot_path<1, double, true>();  // (n = 10 and float: test_realtime)
   no_allocation_in_hot_path<3, double, true>();
-  no_allocation_in_hot_path<10, double, true>();
-  no_allocation_in_hot_path<3, float, true>();
   dynamic_equals_fixed();
   configuration_is_validated();
   schedule_and_aggregation_match_oracle();
