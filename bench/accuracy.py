@@ -26,11 +26,10 @@ from scipy.special import erf
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
-from signals import multisine, relative_errors, simulate_chain  # noqa: E402
-
 import algid  # noqa: E402
 from algid import reference  # noqa: E402
 from algid.chain import TABLE1, Chain  # noqa: E402
+from signals import multisine, relative_errors, simulate_chain  # noqa: E402
 
 FS = 1000.0
 CHECK_TIMES = (0.02, 0.05, 0.1, 0.5)
@@ -81,8 +80,12 @@ def scenario(name: str, chain: Chain, force, breaks=(), duration_s: float = 0.5)
     elapsed = time.perf_counter() - t_start
     err = error_history(chain, out)
     t_window = t - d / FS  # the window end each row describes
-    row = {"scenario": name, "n": chain.n, "boundary": chain.boundary,
-           "parameters": int(np.isfinite(chain.identifiable()).sum() - (chain.boundary == "free"))}
+    row = {
+        "scenario": name,
+        "n": chain.n,
+        "boundary": chain.boundary,
+        "parameters": int(np.isfinite(chain.identifiable()).sum() - (chain.boundary == "free")),
+    }
     for tc in CHECK_TIMES:
         k = int(round(tc * FS)) + d
         row[f"max_rel_error_at_{tc:g}s"] = float(err[k]) if k < err.size else None
@@ -101,14 +104,23 @@ def quadrature_comparison() -> list[dict]:
         err = np.full(t.size, np.inf)
         for k in range(t.size):
             m, c = th[k, :, 0], th[k, :, 1]
-            k_fused = np.array([th[k, 0, 2], 0.5 * (th[k, 0, 3] + th[k, 1, 2]), 0.5 * (th[k, 1, 3] + th[k, 2, 2]), th[k, 2, 3]])
+            k_fused = np.array(
+                [th[k, 0, 2], 0.5 * (th[k, 0, 3] + th[k, 1, 2]), 0.5 * (th[k, 1, 3] + th[k, 2, 2]), th[k, 2, 3]]
+            )
             e = relative_errors(TABLE1, m, c, k_fused)
             if np.all(np.isfinite(e)):
                 err[k] = e.max()
-        rows.append({"points": points, "order": points, "delay_samples": max(points - 2, 0),
-                     "time_to_1pct_s": first_time_below(err, 1e-2, t),
-                     "time_to_1e-6_s": first_time_below(err, 1e-6, t),
-                     "max_rel_error_at_0.1s": float(err[100]), "max_rel_error_at_0.5s": float(err[-1])})
+        rows.append(
+            {
+                "points": points,
+                "order": points,
+                "delay_samples": max(points - 2, 0),
+                "time_to_1pct_s": first_time_below(err, 1e-2, t),
+                "time_to_1e-6_s": first_time_below(err, 1e-6, t),
+                "max_rel_error_at_0.1s": float(err[100]),
+                "max_rel_error_at_0.5s": float(err[-1]),
+            }
+        )
     return rows
 
 
@@ -134,17 +146,24 @@ def main(argv=None) -> int:
         rows.append(scenario(f"free_end_n{n}_multisine", chain, multisine(n, args.seed + 10 * n)))
     quad = quadrature_comparison()
 
-    print(f"{'scenario':28s} {'n':>3s} {'err@0.02s':>10s} {'err@0.05s':>10s} {'err@0.1s':>10s} {'err@0.5s':>10s} "
-          f"{'t(1%) s':>8s} {'t(1e-6) s':>9s}")
+    print(
+        f"{'scenario':28s} {'n':>3s} {'err@0.02s':>10s} {'err@0.05s':>10s} {'err@0.1s':>10s} {'err@0.5s':>10s} "
+        f"{'t(1%) s':>8s} {'t(1e-6) s':>9s}"
+    )
     fmt = lambda v: f"{v:10.2e}" if v is not None else f"{'-':>10s}"  # noqa: E731
     ft = lambda v: f"{v:8.3f}" if v is not None else f"{'never':>8s}"  # noqa: E731
     for r in rows:
-        print(f"{r['scenario']:28s} {r['n']:3d} " + " ".join(fmt(r[f'max_rel_error_at_{tc:g}s']) for tc in CHECK_TIMES)
-              + f" {ft(r['time_to_1pct_s'])} {ft(r['time_to_1e-6_s']):>9s}")
+        print(
+            f"{r['scenario']:28s} {r['n']:3d} "
+            + " ".join(fmt(r[f"max_rel_error_at_{tc:g}s"]) for tc in CHECK_TIMES)
+            + f" {ft(r['time_to_1pct_s'])} {ft(r['time_to_1e-6_s']):>9s}"
+        )
     print("\nquadrature (numpy reference, Table 1 multisine):")
     for q in quad:
-        print(f"  P = {q['points']}: time to 1 % {ft(q['time_to_1pct_s'])} s, to 1e-6 {ft(q['time_to_1e-6_s'])} s, "
-              f"error at 0.1 s {q['max_rel_error_at_0.1s']:.2e}")
+        print(
+            f"  P = {q['points']}: time to 1 % {ft(q['time_to_1pct_s'])} s, to 1e-6 {ft(q['time_to_1e-6_s'])} s, "
+            f"error at 0.1 s {q['max_rel_error_at_0.1s']:.2e}"
+        )
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"fs_hz": FS, "seed": args.seed, "scenarios": rows, "quadrature": quad}, indent=2))
     print(f"\nwrote {args.json}")

@@ -29,11 +29,11 @@ measurement function is filterpy's per-point loop.
 
 from __future__ import annotations
 
-import numpy as np
-from scipy.signal import lfilter
-
 import sys
 from pathlib import Path
+
+import numpy as np
+from scipy.signal import lfilter
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 from algid import reference  # noqa: E402
@@ -61,8 +61,9 @@ def _window_integrals(F: np.ndarray, h: float, W: np.ndarray, orders: int = 2) -
     return out
 
 
-def rls_rows(a: np.ndarray, u: np.ndarray, dt: float, window_s: float, skip: int = 16,
-             boundary: str = "fixed") -> tuple[np.ndarray, np.ndarray]:
+def rls_rows(
+    a: np.ndarray, u: np.ndarray, dt: float, window_s: float, skip: int = 16, boundary: str = "fixed"
+) -> tuple[np.ndarray, np.ndarray]:
     """Regressor rows Phi (T, n, 3n+1) and targets Y (T, n) of row 1 of eqs. 3-4 divided by
     Delta^2 on reseeded windows (zero rows in the first ``skip`` samples of each window and in a
     partial last one). Iterated integrals by the estimator's 8-point interpolatory rule."""
@@ -104,8 +105,16 @@ def rls_rows(a: np.ndarray, u: np.ndarray, dt: float, window_s: float, skip: int
     return Phi, Y
 
 
-def rls(a: np.ndarray, u: np.ndarray, dt: float, read: np.ndarray, *, window_s: float = 0.3,
-        memory_s=np.inf, boundary: str = "fixed") -> np.ndarray | list[np.ndarray]:
+def rls(
+    a: np.ndarray,
+    u: np.ndarray,
+    dt: float,
+    read: np.ndarray,
+    *,
+    window_s: float = 0.3,
+    memory_s=np.inf,
+    boundary: str = "fixed",
+) -> np.ndarray | list[np.ndarray]:
     """RLS-with-forgetting estimates (len(read), 3n+1) at the sample indices ``read``; a list
     of them when ``memory_s`` is a sequence (the regressors are shared).
 
@@ -170,15 +179,28 @@ def _ukf_class():
 
 def _accel(X: np.ndarray, V: np.ndarray, th: np.ndarray, u: np.ndarray, n: int) -> np.ndarray:
     """Accelerations of eq. 1 for a batch: X, V (B, n), th (B, 3n+1) physical, u (n,)."""
-    m, c, k = th[:, :n], th[:, n:2 * n], th[:, 2 * n:]
+    m, c, k = th[:, :n], th[:, n : 2 * n], th[:, 2 * n :]
     Xp = np.concatenate([np.zeros((X.shape[0], 1)), X, np.zeros((X.shape[0], 1))], axis=1)
     spring = k[:, :n] * (X - Xp[:, :-2]) + k[:, 1:] * (X - Xp[:, 2:])
     return (u[None, :] - c * V - spring) / m
 
 
-def ukf(a: np.ndarray, u: np.ndarray, dt: float, read: np.ndarray, *, truth0: np.ndarray, sigma_a: np.ndarray,
-        sigma_u: np.ndarray, q_param: float = 1e-3, prior: float = 0.3, seed: int = 0,
-        boundary: str = "fixed", alpha: float = 0.3, decimate: int = 4) -> tuple[np.ndarray, bool]:
+def ukf(
+    a: np.ndarray,
+    u: np.ndarray,
+    dt: float,
+    read: np.ndarray,
+    *,
+    truth0: np.ndarray,
+    sigma_a: np.ndarray,
+    sigma_u: np.ndarray,
+    q_param: float = 1e-3,
+    prior: float = 0.3,
+    seed: int = 0,
+    boundary: str = "fixed",
+    alpha: float = 0.3,
+    decimate: int = 4,
+) -> tuple[np.ndarray, bool]:
     """UKF estimates (len(read), 3n+1) at the sample indices ``read`` (the latest UKF update
     at or before each; NaN after a divergence); returns (estimates, diverged).
 
@@ -227,7 +249,7 @@ def ukf(a: np.ndarray, u: np.ndarray, dt: float, read: np.ndarray, *, truth0: np
 
     def fx(S, h, k0):
         """Propagate the sigma points from sample k0 to k0 + D (D RK4 steps of dt)."""
-        X, V, th = S[:, :n].copy(), S[:, n:2 * n].copy(), physical(S[:, 2 * n:])
+        X, V, th = S[:, :n].copy(), S[:, n : 2 * n].copy(), physical(S[:, 2 * n :])
         for k in range(k0, k0 + D):
             u0, u1 = up[k + 1], up[k + 2]
             um = (-up[k] + 9 * u0 + 9 * u1 - up[k + 3]) / 16
@@ -238,11 +260,11 @@ def ukf(a: np.ndarray, u: np.ndarray, dt: float, read: np.ndarray, *, truth0: np
             X = X + dt / 6 * (k1x + 2 * k2x + 2 * k3x + k4x)
             V = V + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
         out = S.copy()
-        out[:, :n], out[:, n:2 * n] = X, V
+        out[:, :n], out[:, n : 2 * n] = X, V
         return out
 
     def hx(s, uk):
-        return _accel(s[None, :n], s[None, n:2 * n], physical(s[None, 2 * n:]), uk, n)[0]
+        return _accel(s[None, :n], s[None, n : 2 * n], physical(s[None, 2 * n :]), uk, n)[0]
 
     points = MerweScaledSigmaPoints(L, alpha=alpha, beta=2.0, kappa=0.0)
     filt = _ukf_class()(dim_x=L, dim_z=n, dt=dt * D, fx=fx, hx=hx, points=points)
@@ -272,7 +294,7 @@ def ukf(a: np.ndarray, u: np.ndarray, dt: float, read: np.ndarray, *, truth0: np
         if not np.all(np.isfinite(filt.x)):
             diverged = True
             break
-        latest = physical(filt.x[None, 2 * n:])[0]
+        latest = physical(filt.x[None, 2 * n :])[0]
         while r < len(read) and read[r] < k + D:
             out[r] = latest
             r += 1

@@ -61,14 +61,31 @@ ROOT = Path(__file__).resolve().parents[1]
 from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402
 
-EFFECTS = ("coulomb_friction", "quadratic_damping", "cubic_stiffness", "clearance", "input_delay",
-           "sensor_bias", "sensor_lowpass", "parameter_drift")
+EFFECTS = (
+    "coulomb_friction",
+    "quadratic_damping",
+    "cubic_stiffness",
+    "clearance",
+    "input_delay",
+    "sensor_bias",
+    "sensor_lowpass",
+    "parameter_drift",
+)
 #: Effects the generator can also draw (the realistic check, bench/realistic_blind.py).
 MORE_EFFECTS = ("stribeck_friction", "amplitude_damping")
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
-MAIN = {"coulomb_friction": "force", "quadratic_damping": "c2", "cubic_stiffness": "k3", "clearance": "gap",
-        "input_delay": "delay", "sensor_bias": "bias", "sensor_lowpass": "cutoff_hz",
-        "parameter_drift": "rel_change", "stribeck_friction": "force", "amplitude_damping": "c_amp"}
+MAIN = {
+    "coulomb_friction": "force",
+    "quadratic_damping": "c2",
+    "cubic_stiffness": "k3",
+    "clearance": "gap",
+    "input_delay": "delay",
+    "sensor_bias": "bias",
+    "sensor_lowpass": "cutoff_hz",
+    "parameter_drift": "rel_change",
+    "stribeck_friction": "force",
+    "amplitude_damping": "c_amp",
+}
 CLASSES = ("none",) + EFFECTS + MORE_EFFECTS + ("unknown",)
 P_NONE = 0.2
 #: Visibility range of the hidden effect ("barely visible" to "strong"), see draw_case.
@@ -196,10 +213,20 @@ def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -
     effect = "none" if rng.uniform() < P_NONE else effects[int(rng.integers(len(effects)))]
     noise_rel = 10 ** (-snr_db / 20)
     rho = float(math.exp(rng.uniform(math.log(RHO_MIN), math.log(RHO_MAX))))
-    label: dict = {"seed": seed, "n": n, "boundary": boundary, "snr_db": snr_db, "visibility": rho,
-                   "chain": {"mass": chain.mass.tolist(), "damping": chain.damping.tolist(),
-                             "stiffness": chain.stiffness.tolist()},
-                   "duration_s": duration, "fs_hz": fs}
+    label: dict = {
+        "seed": seed,
+        "n": n,
+        "boundary": boundary,
+        "snr_db": snr_db,
+        "visibility": rho,
+        "chain": {
+            "mass": chain.mass.tolist(),
+            "damping": chain.damping.tolist(),
+            "stiffness": chain.stiffness.tolist(),
+        },
+        "duration_s": duration,
+        "fs_hz": fs,
+    }
     if effect == "none":
         label.update(effect="none", location=None, params={}, visibility=0.0)
         return {"chain": chain, "u": u, "label": label, "effects": []}
@@ -237,12 +264,18 @@ def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -
         sides = _sides(n, j)
         dofs = [i for i, _ in sides]
         gap = float(rng.uniform(0.3, 1.5) * _rms(d))
-        shape = {"cubic_stiffness": d**3,
-                 "clearance": np.sign(d) * np.maximum(np.abs(d) - gap, 0.0),
-                 "parameter_drift": (np.arange(len(u)) / fs / duration) * chain.stiffness[j - 1] * d,
-                 "amplitude_damping": np.abs(d) * _deformation(v, j)}[effect]
-        key = {"cubic_stiffness": "k3", "clearance": "stiffness", "parameter_drift": "rel_change",
-               "amplitude_damping": "c_amp"}[effect]
+        shape = {
+            "cubic_stiffness": d**3,
+            "clearance": np.sign(d) * np.maximum(np.abs(d) - gap, 0.0),
+            "parameter_drift": (np.arange(len(u)) / fs / duration) * chain.stiffness[j - 1] * d,
+            "amplitude_damping": np.abs(d) * _deformation(v, j),
+        }[effect]
+        key = {
+            "cubic_stiffness": "k3",
+            "clearance": "stiffness",
+            "parameter_drift": "rel_change",
+            "amplitude_damping": "c_amp",
+        }[effect]
 
         def errors(p):
             return {i: sgn * p[key] * shape / m[i] for i, sgn in sides}
@@ -265,8 +298,10 @@ def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -
         dofs = [i]
         ui, ai = u[:, i], a[:, i]
         if effect == "coulomb_friction":
+
             def errors(p):
                 return {i: -p["force"] * np.sign(v[:, i]) / m[i]}
+
             params = {"force": solve_linear(errors({"force": 1.0}), dofs)}
         elif effect == "stribeck_friction":
             peak = float(rng.uniform(1.5, 3.0))
@@ -275,23 +310,32 @@ def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -
             def errors(p):
                 level = p["force"] * (1.0 + (peak - 1.0) * np.exp(-((v[:, i] / vs) ** 2)))
                 return {i: -level * np.sign(v[:, i]) / m[i]}
+
             fc = solve_linear(errors({"force": 1.0}), dofs)
             params = {"force": fc, "static": peak * fc, "v_stribeck": vs}
         elif effect == "quadratic_damping":
+
             def errors(p):
                 return {i: -p["c2"] * v[:, i] * np.abs(v[:, i]) / m[i]}
+
             params = {"c2": solve_linear(errors({"c2": 1.0}), dofs)}
         elif effect == "input_delay":
+
             def errors(p):
                 return {i: (_delayed(ui, p["delay"], fs) - ui) / m[i]}
+
             params = {"delay": solve_nonlinear(lambda dd: errors({"delay": dd}), 1e-6, 0.05, dofs)}
         elif effect == "sensor_bias":
+
             def errors(p):  # the sensor error itself (see the docstring)
                 return {i: np.full(len(u), p["bias"])}
+
             params = {"bias": float(sign * min(rho * sigma[i], 0.3 * a_rms[i]))}
         else:  # sensor_lowpass: the error of the sensor, LP(a) - a, in equation i
+
             def errors(p):
                 return {i: _lowpass(ai, p["cutoff_hz"], fs) - ai}
+
             tau = solve_nonlinear(lambda c: errors({"cutoff_hz": 1.0 / c}), 1.0 / (0.45 * fs), 1.0, dofs)
             params = {"cutoff_hz": 1.0 / tau}
     # The visibility actually reached (clipping, caps and the lowest visible cutoff change it).
@@ -317,8 +361,16 @@ def generate(seed: int, work: Path, duration: float, fs: float) -> Path:
         return rec_path
     case = draw_case(seed, duration, fs)
     lab = case["label"]
-    res = simulate(case["chain"], case["u"], duration, fs, effects=case["effects"], noise_db=lab["snr_db"],
-                   noise_on=("accel",), seed=seed)
+    res = simulate(
+        case["chain"],
+        case["u"],
+        duration,
+        fs,
+        effects=case["effects"],
+        noise_db=lab["snr_db"],
+        noise_on=("accel",),
+        seed=seed,
+    )
     rec_path.parent.mkdir(parents=True, exist_ok=True)
     lab_path.parent.mkdir(parents=True, exist_ok=True)
     save_recording(rec_path, Recording(t=res.t, u=res.u, a=res.a))
@@ -355,7 +407,7 @@ def diagnose_case(seed: int, work: Path, boundary: str, plots: bool = False) -> 
 def _loc_key(loc) -> str:
     if not loc:
         return "-"
-    (k, v), = loc.items()
+    ((k, v),) = loc.items()
     return f"{k} {v}"
 
 
@@ -371,14 +423,25 @@ def score_case(lab: dict, res: dict) -> dict:
             params_true["rel_change"] *= k[j - 1] / (k[0] + k[1])
         loc_true = {"spring": 1}
     pred = res["effect"]
-    out = {"seed": lab["seed"], "truth": truth, "pred": pred, "n": lab["n"], "snr_db": lab["snr_db"],
-           "visibility": lab.get("visibility"), "loc_true": _loc_key(loc_true), "loc_pred": _loc_key(res["location"]),
-           "gap_before": res["gap_before"], "gap_after": res["gap_after"], "wall_s": res.get("_wall_s"),
-           "noise_floor": res.get("analysis", {}).get("noise_floor"),
-           "gap_before_fullband": res.get("gap_before_fullband"), "gap_after_fullband": res.get("gap_after_fullband"),
-           "noise_floor_fullband": res.get("analysis", {}).get("noise_floor_fullband"),
-           "band_hz": (res.get("band") or {}).get("band_hz", [None, None])[1],
-           "band_white_noise_fraction": (res.get("band") or {}).get("white_noise_fraction")}
+    out = {
+        "seed": lab["seed"],
+        "truth": truth,
+        "pred": pred,
+        "n": lab["n"],
+        "snr_db": lab["snr_db"],
+        "visibility": lab.get("visibility"),
+        "loc_true": _loc_key(loc_true),
+        "loc_pred": _loc_key(res["location"]),
+        "gap_before": res["gap_before"],
+        "gap_after": res["gap_after"],
+        "wall_s": res.get("_wall_s"),
+        "noise_floor": res.get("analysis", {}).get("noise_floor"),
+        "gap_before_fullband": res.get("gap_before_fullband"),
+        "gap_after_fullband": res.get("gap_after_fullband"),
+        "noise_floor_fullband": res.get("analysis", {}).get("noise_floor_fullband"),
+        "band_hz": (res.get("band") or {}).get("band_hz", [None, None])[1],
+        "band_white_noise_fraction": (res.get("band") or {}).get("white_noise_fraction"),
+    }
     out["effect_ok"] = pred == truth
     out["loc_ok"] = bool(out["effect_ok"] and (truth == "none" or out["loc_true"] == out["loc_pred"]))
     out["shrink"] = res["gap_before"] / res["gap_after"] if res["gap_after"] > 0 else float("inf")
@@ -435,27 +498,42 @@ def summarize(rows: list[dict]) -> dict:
         "median_gap_shrink_real": float(np.median(shrink)) if shrink else None,
         "median_gap_shrink_real_fullband": float(np.median(shrink_full)) if shrink_full else None,
         "median_band_hz": float(np.median([r["band_hz"] for r in rows if r.get("band_hz") is not None]))
-        if any(r.get("band_hz") is not None for r in rows) else None,
-        "median_band_white_noise_fraction": float(np.median(
-            [r["band_white_noise_fraction"] for r in rows if r.get("band_white_noise_fraction") is not None]))
-        if any(r.get("band_white_noise_fraction") is not None for r in rows) else None,
+        if any(r.get("band_hz") is not None for r in rows)
+        else None,
+        "median_band_white_noise_fraction": float(
+            np.median([r["band_white_noise_fraction"] for r in rows if r.get("band_white_noise_fraction") is not None])
+        )
+        if any(r.get("band_white_noise_fraction") is not None for r in rows)
+        else None,
         # The most any model can shrink the gap: down to the sensor-noise floor the
         # diagnosis estimates (the gap is measured against noisy accelerations).
-        "median_gap_before_over_noise_floor_real": float(np.median(
-            [r["gap_before"] / r["noise_floor"] for r in real if r.get("noise_floor")])) if real else None,
-        "median_gap_after_over_noise_floor_correct": float(np.median(
-            [r["gap_after"] / r["noise_floor"] for r in correct if r.get("noise_floor")])) if correct else None,
-        "median_gap_before_over_noise_floor_real_fullband": float(np.median(
-            [r["gap_before_fullband"] / r["noise_floor_fullband"] for r in real if r.get("noise_floor_fullband")]))
-        if any(r.get("noise_floor_fullband") for r in real) else None,
+        "median_gap_before_over_noise_floor_real": float(
+            np.median([r["gap_before"] / r["noise_floor"] for r in real if r.get("noise_floor")])
+        )
+        if real
+        else None,
+        "median_gap_after_over_noise_floor_correct": float(
+            np.median([r["gap_after"] / r["noise_floor"] for r in correct if r.get("noise_floor")])
+        )
+        if correct
+        else None,
+        "median_gap_before_over_noise_floor_real_fullband": float(
+            np.median(
+                [r["gap_before_fullband"] / r["noise_floor_fullband"] for r in real if r.get("noise_floor_fullband")]
+            )
+        )
+        if any(r.get("noise_floor_fullband") for r in real)
+        else None,
         "median_gap_shrink_by_visibility": {
             f"{lo:g}-{hi:g}": float(np.median([sh for sh, r in zip(shrink, real) if lo <= r["visibility"] < hi]))
             for lo, hi in ((0.5, 2.0), (2.0, 10.0), (10.0, 50.0))
-            if any(lo <= r["visibility"] < hi for r in real)},
+            if any(lo <= r["visibility"] < hi for r in real)
+        },
         "top1_by_visibility": {
             f"{lo:g}-{hi:g}": float(np.mean([r["effect_ok"] for r in real if lo <= r["visibility"] < hi]))
             for lo, hi in ((0.5, 2.0), (2.0, 10.0), (10.0, 50.0))
-            if any(lo <= r["visibility"] < hi for r in real)},
+            if any(lo <= r["visibility"] < hi for r in real)
+        },
         "false_alarm_rate_none": float(np.mean([not r["effect_ok"] for r in none])) if none else None,
         "wall_s_median": float(np.median(walls)) if walls else None,
         "wall_s_max": float(np.max(walls)) if walls else None,
@@ -465,9 +543,20 @@ def summarize(rows: list[dict]) -> dict:
 
 
 def confusion_table(conf: dict) -> str:
-    short = {"none": "none", "coulomb_friction": "coul", "quadratic_damping": "quad", "cubic_stiffness": "cubic",
-             "clearance": "clear", "input_delay": "delay", "sensor_bias": "bias", "sensor_lowpass": "lowp",
-             "parameter_drift": "drift", "stribeck_friction": "strib", "amplitude_damping": "ampd", "unknown": "unkn"}
+    short = {
+        "none": "none",
+        "coulomb_friction": "coul",
+        "quadratic_damping": "quad",
+        "cubic_stiffness": "cubic",
+        "clearance": "clear",
+        "input_delay": "delay",
+        "sensor_bias": "bias",
+        "sensor_lowpass": "lowp",
+        "parameter_drift": "drift",
+        "stribeck_friction": "strib",
+        "amplitude_damping": "ampd",
+        "unknown": "unkn",
+    }
     head = "true \\ pred        " + " ".join(f"{short[c]:>6s}" for c in CLASSES)
     lines = [head]
     for t, row in conf.items():
@@ -489,8 +578,15 @@ def confusion_png(conf: dict, path: Path, title: str) -> None:
     for r in range(M.shape[0]):
         for c in range(M.shape[1]):
             if M[r, c]:
-                ax.text(c, r, f"{int(M[r, c])}", ha="center", va="center",
-                        color="white" if frac[r, c] > 0.6 else "black", fontsize=9)
+                ax.text(
+                    c,
+                    r,
+                    f"{int(M[r, c])}",
+                    ha="center",
+                    va="center",
+                    color="white" if frac[r, c] > 0.6 else "black",
+                    fontsize=9,
+                )
     ax.set_xticks(range(len(CLASSES)), [c.replace("_", "\n") for c in CLASSES], fontsize=7)
     ax.set_yticks(range(len(rows)), rows, fontsize=8)
     ax.set_xlabel("diagnosed effect")
@@ -509,16 +605,27 @@ def timing_check(repeats: int = 3) -> dict:
 
     rng = np.random.default_rng(12345)
     u = multisine(3, 20.0, 1000.0, rng)
-    res = simulate(TABLE1, u, 20.0, 1000.0, effects=[{"name": "cubic_stiffness", "location": {"spring": 2},
-                                                      "params": {"k3": 3e5}}], noise_db=50.0, seed=1)
+    res = simulate(
+        TABLE1,
+        u,
+        20.0,
+        1000.0,
+        effects=[{"name": "cubic_stiffness", "location": {"spring": 2}, "params": {"k3": 3e5}}],
+        noise_db=50.0,
+        seed=1,
+    )
     rec = Recording(t=res.t, u=res.u, a=res.a)
     walls = []
     for _ in range(repeats):
         t0 = time.perf_counter()
         d = diagnose(rec)
         walls.append(time.perf_counter() - t0)
-    return {"recording": "20 s, 3 DOF, 1 kHz (Table 1, cubic_stiffness k3 = 3e5 on spring 2, 50 dB)",
-            "wall_s": walls, "wall_s_median": float(np.median(walls)), "diagnosed": d.effect}
+    return {
+        "recording": "20 s, 3 DOF, 1 kHz (Table 1, cubic_stiffness k3 = 3e5 on spring 2, 50 dB)",
+        "wall_s": walls,
+        "wall_s_median": float(np.median(walls)),
+        "diagnosed": d.effect,
+    }
 
 
 def _parse_seeds(text: str) -> list[int]:
@@ -535,7 +642,9 @@ def _parse_seeds(text: str) -> list[int]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", default="0:150", help="seed list, e.g. 0:150 or 3,7,11:20")
-    ap.add_argument("--work", type=Path, default=Path("/tmp/algid-blind"), help="folder for recordings/labels/diagnoses")
+    ap.add_argument(
+        "--work", type=Path, default=Path("/tmp/algid-blind"), help="folder for recordings/labels/diagnoses"
+    )
     ap.add_argument("--duration", type=float, default=10.0, help="record length [s]")
     ap.add_argument("--fs", type=float, default=1000.0, help="sample rate [Hz]")
     ap.add_argument("--stage", choices=("all", "generate", "diagnose", "score"), default="all")
@@ -549,16 +658,22 @@ def main(argv: list[str] | None = None) -> int:
         for k, seed in enumerate(seeds):
             t0 = time.perf_counter()
             generate(seed, work, args.duration, args.fs)
-            print(f"[generate {k + 1}/{len(seeds)}] seed {seed} ({time.perf_counter() - t0:.1f} s)", file=sys.stderr,
-                  flush=True)
+            print(
+                f"[generate {k + 1}/{len(seeds)}] seed {seed} ({time.perf_counter() - t0:.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
     if args.stage in ("all", "diagnose"):
         for k, seed in enumerate(seeds):
             # The diagnosis is told the boundary, as a user would tell it; never the label.
             lab = json.loads((work / "labels" / f"case{seed:05d}.json").read_text())
             res = diagnose_case(seed, work, lab["boundary"], args.plots)
             (work / "diagnoses" / f"case{seed:05d}.json").write_text(json.dumps(res, indent=1))
-            print(f"[diagnose {k + 1}/{len(seeds)}] seed {seed}: {res['effect']} ({res['_wall_s']:.1f} s)",
-                  file=sys.stderr, flush=True)
+            print(
+                f"[diagnose {k + 1}/{len(seeds)}] seed {seed}: {res['effect']} ({res['_wall_s']:.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
     if args.stage in ("all", "score"):
         rows = score_all(work, seeds, score_case)
         summary = summarize(rows)
@@ -567,20 +682,35 @@ def main(argv: list[str] | None = None) -> int:
             out["timing"] = timing_check()
         table = confusion_table(summary["confusion"])
         print(table)
-        for key in ("cases", "top1_accuracy", "location_accuracy_among_correct", "param_within_20pct_among_correct",
-                    "median_gap_shrink_real", "median_gap_shrink_real_fullband", "median_band_hz",
-                    "median_band_white_noise_fraction", "median_gap_before_over_noise_floor_real",
-                    "median_gap_before_over_noise_floor_real_fullband",
-                    "median_gap_after_over_noise_floor_correct", "median_gap_shrink_by_visibility", "top1_by_visibility",
-                    "false_alarm_rate_none", "wall_s_median", "wall_s_max"):
+        for key in (
+            "cases",
+            "top1_accuracy",
+            "location_accuracy_among_correct",
+            "param_within_20pct_among_correct",
+            "median_gap_shrink_real",
+            "median_gap_shrink_real_fullband",
+            "median_band_hz",
+            "median_band_white_noise_fraction",
+            "median_gap_before_over_noise_floor_real",
+            "median_gap_before_over_noise_floor_real_fullband",
+            "median_gap_after_over_noise_floor_correct",
+            "median_gap_shrink_by_visibility",
+            "top1_by_visibility",
+            "false_alarm_rate_none",
+            "wall_s_median",
+            "wall_s_max",
+        ):
             print(f"{key:36s} {summary[key]}")
         if args.timing:
             print(f"{'timing 20 s 3-DOF 1 kHz [s]':36s} {out['timing']['wall_s_median']:.2f}")
         args.results.parent.mkdir(parents=True, exist_ok=True)
         args.results.write_text(json.dumps(out, indent=1))
         png = args.results.with_suffix(".png")
-        confusion_png(summary["confusion"], png, f"blind diagnosis, seeds {args.seeds}: top-1 "
-                      f"{summary['top1_accuracy']:.0%} over {summary['cases']} cases")
+        confusion_png(
+            summary["confusion"],
+            png,
+            f"blind diagnosis, seeds {args.seeds}: top-1 {summary['top1_accuracy']:.0%} over {summary['cases']} cases",
+        )
         print(f"wrote {args.results} and {png}", file=sys.stderr)
     return 0
 

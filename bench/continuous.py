@@ -63,9 +63,9 @@ TUNE_SEED = 1000
 
 #: Baseline settings from ``--tune`` (Table 1, seed 1000, 40 dB on accelerations and forces).
 TUNED = {
-    "rls-inf": {"window_s": 0.1, "memory_s": float("inf")},   # windows 0.1/0.3/1 s: best at 10 s
-    "rls-fair": {"window_s": 0.1, "memory_s": 0.3},           # score 1.27 (step tracked in 1.2 s)
-    "ukf": {"q_param": 3e-3},                                  # score 0.64 (q = 0: 0.027-0.17 % but no tracking)
+    "rls-inf": {"window_s": 0.1, "memory_s": float("inf")},  # windows 0.1/0.3/1 s: best at 10 s
+    "rls-fair": {"window_s": 0.1, "memory_s": 0.3},  # score 1.27 (step tracked in 1.2 s)
+    "ukf": {"q_param": 3e-3},  # score 0.64 (q = 0: 0.027-0.17 % but no tracking)
 }
 
 
@@ -138,7 +138,7 @@ def rls_prefiltered(a, u, read, **kw):
     af, uf = prefilter(a, u)
     read = np.asarray(read)
     res = baselines.rls(af[SETTLE:], uf[SETTLE:], DT, np.maximum(read - SETTLE, 0), **kw)
-    for r in (res if isinstance(res, list) else [res]):
+    for r in res if isinstance(res, list) else [res]:
         r[read < SETTLE] = np.nan
     return res
 
@@ -166,8 +166,18 @@ def run_ukf(a, u, chain: Chain, rec_clean_a, rec_clean_u, snr, config, seconds, 
     sigma_a = ratio * C.rms(rec_clean_a)
     sigma_u = ratio * C.rms(rec_clean_u) if config == "accel+force" else np.zeros(chain.n)
     t0 = time.perf_counter()
-    est, diverged = baselines.ukf(a[:T], u[:T], DT, read, truth0=C.params_of(chain), sigma_a=sigma_a,
-                                  sigma_u=sigma_u, q_param=q_param, seed=seed, boundary=chain.boundary)
+    est, diverged = baselines.ukf(
+        a[:T],
+        u[:T],
+        DT,
+        read,
+        truth0=C.params_of(chain),
+        sigma_a=sigma_a,
+        sigma_u=sigma_u,
+        q_param=q_param,
+        seed=seed,
+        boundary=chain.boundary,
+    )
     cost = (time.perf_counter() - t0) / T
     return est, diverged, cost
 
@@ -216,8 +226,10 @@ def summarise(errs: list[np.ndarray], fam: dict[str, np.ndarray]) -> dict:
         for i, t in enumerate(TIMES):
             v = E[:, i, cols].ravel()
             v = v[np.isfinite(v)] if np.isfinite(v).any() else v
-            out[f][f"{t:g}s"] = {"median": float(np.median(v)) if v.size and np.isfinite(v).all() else None,
-                                 "p95": float(np.percentile(v, 95)) if v.size and np.isfinite(v).all() else None}
+            out[f][f"{t:g}s"] = {
+                "median": float(np.median(v)) if v.size and np.isfinite(v).all() else None,
+                "p95": float(np.percentile(v, 95)) if v.size and np.isfinite(v).all() else None,
+            }
     return out
 
 
@@ -236,8 +248,9 @@ def crlb_multiple(errs: list[np.ndarray], bounds: list[np.ndarray], fam) -> dict
 def score(errs10: np.ndarray, fam, step_delay: float | None = None) -> float:
     """Worst ratio to the issue's targets: m and k 0.5 %, c 2 % at 10 s (worst parameter), and
     the step tracked to 2 % in 1 s (a step never tracked counts as 10 s); < 1 meets them all."""
-    acc = max(np.nanmax(errs10[fam["m"]]) / 0.005, np.nanmax(errs10[fam["c"]]) / 0.02,
-              np.nanmax(errs10[fam["k"]]) / 0.005)
+    acc = max(
+        np.nanmax(errs10[fam["m"]]) / 0.005, np.nanmax(errs10[fam["c"]]) / 0.02, np.nanmax(errs10[fam["k"]]) / 0.005
+    )
     if step_delay is None:
         return acc
     return max(acc, (step_delay if np.isfinite(step_delay) else 10.0) / 1.0)
@@ -265,29 +278,61 @@ def tune(which=("rls", "ukf")) -> dict:
         for mem, e, et in zip(mems, ests, estt):
             e10 = errors_at(e, th, 10.0)
             d = settle_delay(et, truth_t, js, STEP_AT)
-            report["rls"].append({"window_s": w, "memory_s": mem, "score": score(e10, fam, d),
-                                  "err10": {f: float(np.max(e10[c])) for f, c in fam.items()}, "step_delay_s": d})
-            print(f"rls window {w:g} s memory {mem:g} s: score {report['rls'][-1]['score']:.2f} "
-                  f"(m {100 * np.max(e10[fam['m']]):.3f} c {100 * np.max(e10[fam['c']]):.3f} "
-                  f"k {100 * np.max(e10[fam['k']]):.3f} %, step {d:.2f} s)", flush=True)
+            report["rls"].append(
+                {
+                    "window_s": w,
+                    "memory_s": mem,
+                    "score": score(e10, fam, d),
+                    "err10": {f: float(np.max(e10[c])) for f, c in fam.items()},
+                    "step_delay_s": d,
+                }
+            )
+            print(
+                f"rls window {w:g} s memory {mem:g} s: score {report['rls'][-1]['score']:.2f} "
+                f"(m {100 * np.max(e10[fam['m']]):.3f} c {100 * np.max(e10[fam['c']]):.3f} "
+                f"k {100 * np.max(e10[fam['k']]):.3f} %, step {d:.2f} s)",
+                flush=True,
+            )
     sa, su = 0.01 * C.rms(const.a), 0.01 * C.rms(const.u)
     for q in (0.0, 3e-4, 1e-3, 3e-3, 1e-2) if "ukf" in which else ():
-        e, _ = baselines.ukf(a[:10000], u[:10000], DT, read_index(10000), truth0=th, sigma_a=sa, sigma_u=su,
-                             q_param=q, seed=TUNE_SEED)
-        et, _ = baselines.ukf(at[:33000], ut[:33000], DT, read_index(at.shape[0]), truth0=th, sigma_a=0.01 * C.rms(track.a),
-                              sigma_u=0.01 * C.rms(track.u), q_param=q, seed=TUNE_SEED + 1)
+        e, _ = baselines.ukf(
+            a[:10000], u[:10000], DT, read_index(10000), truth0=th, sigma_a=sa, sigma_u=su, q_param=q, seed=TUNE_SEED
+        )
+        et, _ = baselines.ukf(
+            at[:33000],
+            ut[:33000],
+            DT,
+            read_index(at.shape[0]),
+            truth0=th,
+            sigma_a=0.01 * C.rms(track.a),
+            sigma_u=0.01 * C.rms(track.u),
+            q_param=q,
+            seed=TUNE_SEED + 1,
+        )
         e10 = errors_at(e, th, 10.0)
         d = settle_delay(et, truth_t, js, STEP_AT)
-        report["ukf"].append({"q_param": q, "score": score(e10, fam, d),
-                              "err10": {f: float(np.max(e10[c])) for f, c in fam.items()}, "step_delay_s": d})
-        print(f"ukf q {q:g}: score {report['ukf'][-1]['score']:.2f} (m {100 * np.max(e10[fam['m']]):.3f} "
-              f"c {100 * np.max(e10[fam['c']]):.3f} k {100 * np.max(e10[fam['k']]):.3f} %, step {d:.2f} s)",
-              flush=True)
+        report["ukf"].append(
+            {
+                "q_param": q,
+                "score": score(e10, fam, d),
+                "err10": {f: float(np.max(e10[c])) for f, c in fam.items()},
+                "step_delay_s": d,
+            }
+        )
+        print(
+            f"ukf q {q:g}: score {report['ukf'][-1]['score']:.2f} (m {100 * np.max(e10[fam['m']]):.3f} "
+            f"c {100 * np.max(e10[fam['c']]):.3f} k {100 * np.max(e10[fam['k']]):.3f} %, step {d:.2f} s)",
+            flush=True,
+        )
     report["chosen"] = {}
     if report["rls"]:
         best_rls = min(report["rls"], key=lambda r: r["score"])
-        best_inf = min((r for r in report["rls"] if not np.isfinite(r["memory_s"])),
-                       key=lambda r: score(np.array([r["err10"][f] for f in ("m", "m", "m", "c", "c", "c", "k", "k", "k", "k")]), fam))
+        best_inf = min(
+            (r for r in report["rls"] if not np.isfinite(r["memory_s"])),
+            key=lambda r: score(
+                np.array([r["err10"][f] for f in ("m", "m", "m", "c", "c", "c", "k", "k", "k", "k")]), fam
+            ),
+        )
         report["chosen"]["rls-inf"] = {"window_s": best_inf["window_s"], "memory_s": best_inf["memory_s"]}
         report["chosen"]["rls-fair"] = {"window_s": best_rls["window_s"], "memory_s": best_rls["memory_s"]}
     if report["ukf"]:
@@ -311,12 +356,18 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=3, help="seeds per system (0 .. seeds-1)")
     ap.add_argument("--snr", type=str, nargs="+", default=["none", "60", "40", "20"])
     ap.add_argument("--ukf-seconds", type=float, default=10.0, help="UKF record length on constant systems [s]")
-    ap.add_argument("--ukf-snr", type=float, nargs="*", default=[40.0],
-                    help="SNRs the UKF runs at (accel noise); the docs add 20")
+    ap.add_argument(
+        "--ukf-snr", type=float, nargs="*", default=[40.0], help="SNRs the UKF runs at (accel noise); the docs add 20"
+    )
     ap.add_argument("--ukf-track-seeds", type=int, default=1, help="seeds of the UKF tracking runs (33 s each)")
     ap.add_argument("--no-ukf", action="store_true")
-    ap.add_argument("--tune", nargs="*", choices=["rls", "ukf"], default=None,
-                    help="re-tune the baselines (seed 1000) and exit; default both")
+    ap.add_argument(
+        "--tune",
+        nargs="*",
+        choices=["rls", "ukf"],
+        default=None,
+        help="re-tune the baselines (seed 1000) and exit; default both",
+    )
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--markdown", type=Path, default=None, help="print the doc tables of a results JSON and exit")
     args = ap.parse_args()
@@ -330,11 +381,22 @@ def main() -> None:
         return
     snrs = [None if s == "none" else float(s) for s in args.snr]
     t_start = time.perf_counter()
-    results = {"config": {"fs_hz": FS, "duration_s": DURATION, "seeds": args.seeds, "snr_db": args.snr,
-                          "band_hz": 20.0, "continuous_defaults": algid.continuous.config_dict(algid.continuous.ContinuousConfig()),
-                          "baselines": TUNED, "ukf_seconds": args.ukf_seconds, "ukf_snr": args.ukf_snr,
-                          "ukf_decimation": 4},
-               "constant": {}, "tracking": {}}
+    results = {
+        "config": {
+            "fs_hz": FS,
+            "duration_s": DURATION,
+            "seeds": args.seeds,
+            "snr_db": args.snr,
+            "band_hz": 20.0,
+            "continuous_defaults": algid.continuous.config_dict(algid.continuous.ContinuousConfig()),
+            "baselines": TUNED,
+            "ukf_seconds": args.ukf_seconds,
+            "ukf_snr": args.ukf_snr,
+            "ukf_decimation": 4,
+        },
+        "constant": {},
+        "tracking": {},
+    }
     for sname, chain in systems().items():
         n = chain.n
         fam = families(n)
@@ -345,11 +407,20 @@ def main() -> None:
         for rec in recs:
             b = C.crlb(rec, 40.0, TIMES)
             bounds40.append(np.stack([b[t] for t in TIMES]))
-        results["constant"][sname] = {"crlb_40db_accel": {f: {f"{t:g}s": float(np.median(np.stack(bounds40)[:, i, c]))
-                                                              for i, t in enumerate(TIMES)} for f, c in fam.items()}}
-        print("CRLB at 40 dB on the accelerations (median over seeds and family) [%]: " + "  ".join(
-            f"{f}: " + "/".join(fmt(results['constant'][sname]['crlb_40db_accel'][f][f'{t:g}s'], width=0) for t in TIMES)
-            for f in fam))
+        results["constant"][sname] = {
+            "crlb_40db_accel": {
+                f: {f"{t:g}s": float(np.median(np.stack(bounds40)[:, i, c])) for i, t in enumerate(TIMES)}
+                for f, c in fam.items()
+            }
+        }
+        print(
+            "CRLB at 40 dB on the accelerations (median over seeds and family) [%]: "
+            + "  ".join(
+                f"{f}: "
+                + "/".join(fmt(results["constant"][sname]["crlb_40db_accel"][f][f"{t:g}s"], width=0) for t in TIMES)
+                for f in fam
+            )
+        )
         for config in ("accel", "accel+force"):
             for snr in snrs:
                 key = f"{config}@{'none' if snr is None else f'{snr:g}dB'}"
@@ -365,13 +436,15 @@ def main() -> None:
                     if snr is not None:  # |error| / reported sigma at 10 and 60 s (calibration)
                         r10, r60 = int(round(10.0 * FS / GRID)) - 1, int(round(60.0 * FS / GRID)) - 1
                         per["continuous"].setdefault("z", []).append(
-                            [np.abs(h[r] - th) / sig[0][r] for r in (r10, r60)])
+                            [np.abs(h[r] - th) / sig[0][r] for r in (r10, r60)]
+                        )
                     for k, v in run_rls(a, u, n, {k: TUNED[k] for k in ("rls-inf", "rls-fair")}).items():
                         hists[k] = v
                     run_u = not args.no_ukf and snr is not None and config == "accel" and snr in args.ukf_snr
                     if run_u:
-                        est, div, cost = run_ukf(a, u, chain, rec.a, rec.u, snr, config, args.ukf_seconds,
-                                                 TUNED["ukf"]["q_param"], seed=s)
+                        est, div, cost = run_ukf(
+                            a, u, chain, rec.a, rec.u, snr, config, args.ukf_seconds, TUNED["ukf"]["q_param"], seed=s
+                        )
                         hists["ukf"] = (est, cost)
                         per.setdefault("ukf", {}).setdefault("diverged", []).append(bool(div))
                     for k, (hist, cost) in hists.items():
@@ -383,18 +456,22 @@ def main() -> None:
                             d.setdefault("bounds", []).append(bounds40[s] * 10 ** (-(snr - 40.0) / 20))
                 block = {}
                 for k, d in per.items():
-                    entry = {"summary": summarise(d["errs"], fam),
-                             "t_within_1pct_s": {f: float(np.median([x[f] for x in d["t1"]])) for f in fam},
-                             "per_seed_errors": [e.tolist() for e in d["errs"]],
-                             "us_per_sample": float(1e6 * np.median(d["cost"]))}
+                    entry = {
+                        "summary": summarise(d["errs"], fam),
+                        "t_within_1pct_s": {f: float(np.median([x[f] for x in d["t1"]])) for f in fam},
+                        "per_seed_errors": [e.tolist() for e in d["errs"]],
+                        "us_per_sample": float(1e6 * np.median(d["cost"])),
+                    }
                     if "bounds" in d:
                         entry["x_crlb"] = crlb_multiple(d["errs"], d["bounds"], fam)
                     if "events" in d:
                         entry["events_per_run"] = d["events"]
                     if "z" in d:  # median |error| / sigma; 0.67 for a calibrated, unbiased Gaussian
                         Z = np.array(d["z"])  # seeds x 2 x P
-                        entry["median_abs_z"] = {f: {"10s": float(np.median(Z[:, 0, c])), "60s": float(np.median(Z[:, 1, c]))}
-                                                 for f, c in fam.items()}
+                        entry["median_abs_z"] = {
+                            f: {"10s": float(np.median(Z[:, 0, c])), "60s": float(np.median(Z[:, 1, c]))}
+                            for f, c in fam.items()
+                        }
                     if "diverged" in d:
                         entry["diverged"] = d["diverged"]
                     block[k] = entry
@@ -404,9 +481,14 @@ def main() -> None:
         # tracking
         js, jd = tracking_params(sname, n)
         names = algid.chain.parameter_names(n)
-        print(f"\n--- {sname}: tracking ({names[js]} -20 % at {STEP_AT:g} s, {names[jd]} -10 % over 60 s), "
-              f"noise on accelerations and forces ---", flush=True)
-        trecs = [C.simulate(chain, DURATION, seed=100 + s, schedule=schedule_for(chain, sname)) for s in range(args.seeds)]
+        print(
+            f"\n--- {sname}: tracking ({names[js]} -20 % at {STEP_AT:g} s, {names[jd]} -10 % over 60 s), "
+            f"noise on accelerations and forces ---",
+            flush=True,
+        )
+        trecs = [
+            C.simulate(chain, DURATION, seed=100 + s, schedule=schedule_for(chain, sname)) for s in range(args.seeds)
+        ]
         results["tracking"][sname] = {"step_param": names[js], "drift_param": names[jd]}
         for snr in snrs:
             key = f"accel+force@{'none' if snr is None else f'{snr:g}dB'}"
@@ -420,8 +502,18 @@ def main() -> None:
                 for k, v in run_rls(a, u, n, {k: TUNED[k] for k in ("rls-inf", "rls-fair")}).items():
                     hists[k] = v[0]
                 if not args.no_ukf and snr == 40.0 and s < args.ukf_track_seeds:
-                    est, div, _ = run_ukf(a, u, chain, rec.a, rec.u, snr, "accel+force", STEP_AT + 3.0,
-                                          TUNED["ukf"]["q_param"], seed=100 + s)
+                    est, div, _ = run_ukf(
+                        a,
+                        u,
+                        chain,
+                        rec.a,
+                        rec.u,
+                        snr,
+                        "accel+force",
+                        STEP_AT + 3.0,
+                        TUNED["ukf"]["q_param"],
+                        seed=100 + s,
+                    )
                     hists["ukf"] = est
                 for k, hist in hists.items():
                     d = per.setdefault(k, {"step_delay": [], "drift_max": [], "drift_within": []})
@@ -433,10 +525,10 @@ def main() -> None:
                     d["drift_max"].append(float(np.nanmax(rel)) if rel.size else None)
                     d["drift_within"].append(float(np.mean(rel <= 0.02)) if rel.size else None)
                     if k == "continuous":
-                        d.setdefault("false_alarms", []).append(
-                            sum(1 for e in events if e.param not in (js, jd)))
+                        d.setdefault("false_alarms", []).append(sum(1 for e in events if e.param not in (js, jd)))
                         d.setdefault("step_events", []).append(
-                            [round(e.time_s, 3) for e in events if e.param == js and e.time_s >= STEP_AT][:1])
+                            [round(e.time_s, 3) for e in events if e.param == js and e.time_s >= STEP_AT][:1]
+                        )
                         d.setdefault("drift_events", []).append(sum(1 for e in events if e.param == jd))
             results["tracking"][sname][key] = per
             print_tracking(key, per)
@@ -462,10 +554,14 @@ def markdown(results: dict) -> str:
     for sname, block in results["constant"].items():
         crlb40 = block["crlb_40db_accel"]
         lines.append(f"\n#### {sname}: constant parameters\n")
-        lines.append("CRLB at 40 dB on the accelerations (median over seeds and family, %), 1 / 10 / 60 s: "
-                     + "; ".join(f"{f} " + " / ".join(f"{100 * crlb40[f][f'{t:g}s']:.3f}" for t in TIMES) for f in crlb40))
+        lines.append(
+            "CRLB at 40 dB on the accelerations (median over seeds and family, %), 1 / 10 / 60 s: "
+            + "; ".join(f"{f} " + " / ".join(f"{100 * crlb40[f][f'{t:g}s']:.3f}" for t in TIMES) for f in crlb40)
+        )
         lines.append("")
-        lines.append("| noise | estimator | m: median (p95) at 1 / 10 / 60 s [%] | c | k | first within 1 % m / c / k [s] | x CRLB at 10 s m / c / k |")
+        lines.append(
+            "| noise | estimator | m: median (p95) at 1 / 10 / 60 s [%] | c | k | first within 1 % m / c / k [s] | x CRLB at 10 s m / c / k |"
+        )
         lines.append("|---|---|---|---|---|---|---|")
         for key, est in block.items():
             if key == "crlb_40db_accel" or "none" in key:
@@ -480,31 +576,51 @@ def markdown(results: dict) -> str:
                         v = e["summary"][f][f"{t:g}s"]
                         parts.append("-" if v["median"] is None else f"{100 * v['median']:.3f} ({100 * v['p95']:.3f})")
                     cells.append(" / ".join(parts))
-                t1 = " / ".join("-" if not np.isfinite(e["t_within_1pct_s"][f]) else f"{e['t_within_1pct_s'][f]:.2f}"
-                                for f in ("m", "c", "k"))
-                xc = " / ".join("-" if e.get("x_crlb", {}).get(f, {}).get("10s") is None else f"{e['x_crlb'][f]['10s']:.1f}"
-                                for f in ("m", "c", "k")) if "x_crlb" in e else "-"
+                t1 = " / ".join(
+                    "-" if not np.isfinite(e["t_within_1pct_s"][f]) else f"{e['t_within_1pct_s'][f]:.2f}"
+                    for f in ("m", "c", "k")
+                )
+                xc = (
+                    " / ".join(
+                        "-" if e.get("x_crlb", {}).get(f, {}).get("10s") is None else f"{e['x_crlb'][f]['10s']:.1f}"
+                        for f in ("m", "c", "k")
+                    )
+                    if "x_crlb" in e
+                    else "-"
+                )
                 ev = f" (events {sum(e['events_per_run'])})" if "events_per_run" in e else ""
                 lines.append(f"| {key} | {name}{ev} | " + " | ".join(cells) + f" | {t1} | {xc} |")
     for sname, block in results["tracking"].items():
-        lines.append(f"\n#### {sname}: tracking ({block['step_param']} -20 % at 30 s, {block['drift_param']} -10 % over 60 s)\n")
-        lines.append("| noise | estimator | step: within 2 % after [s] | drift: worst error 10-60 s [%] | drift: time within 2 % | false alarms |")
+        lines.append(
+            f"\n#### {sname}: tracking ({block['step_param']} -20 % at 30 s, {block['drift_param']} -10 % over 60 s)\n"
+        )
+        lines.append(
+            "| noise | estimator | step: within 2 % after [s] | drift: worst error 10-60 s [%] | drift: time within 2 % | false alarms |"
+        )
         lines.append("|---|---|---|---|---|---|")
         for key, per in block.items():
             if not isinstance(per, dict):
                 continue
             for name, d in per.items():
                 fa = ", ".join(str(x) for x in d["false_alarms"]) if "false_alarms" in d else "n/a"
-                lines.append(f"| {key} | {name} | " + ", ".join("never" if not np.isfinite(x) else f"{x:.2f}" for x in d["step_delay"])
-                             + " | " + ", ".join("-" if x is None else f"{100 * x:.2f}" for x in d["drift_max"])
-                             + " | " + ", ".join("-" if x is None else f"{100 * x:.0f} %" for x in d["drift_within"])
-                             + f" | {fa} |")
+                lines.append(
+                    f"| {key} | {name} | "
+                    + ", ".join("never" if not np.isfinite(x) else f"{x:.2f}" for x in d["step_delay"])
+                    + " | "
+                    + ", ".join("-" if x is None else f"{100 * x:.2f}" for x in d["drift_max"])
+                    + " | "
+                    + ", ".join("-" if x is None else f"{100 * x:.0f} %" for x in d["drift_within"])
+                    + f" | {fa} |"
+                )
     return "\n".join(lines)
 
 
 def print_block(sname, key, block, fam):
-    print(f"\n{sname} | noise {key} | median / p95 relative error [%] at 1, 10, 60 s; t1%: first time "
-          f"within 1 % [s]; xCRLB at 1/10/60 s", flush=True)
+    print(
+        f"\n{sname} | noise {key} | median / p95 relative error [%] at 1, 10, 60 s; t1%: first time "
+        f"within 1 % [s]; xCRLB at 1/10/60 s",
+        flush=True,
+    )
     for k, e in block.items():
         if k.startswith("_"):
             continue
@@ -514,13 +630,15 @@ def print_block(sname, key, block, fam):
             line += f" | {f}: " + " ".join(f"{fmt(s[f'{t:g}s']['median'])}/{fmt(s[f'{t:g}s']['p95'])}" for t in TIMES)
             line += f" t1% {e['t_within_1pct_s'][f]:5.2f}"
         if "x_crlb" in e:
-            line += " | xCRLB " + " ".join(f"{f}:" + "/".join(fmt(e['x_crlb'][f][f'{t:g}s'], pct=False, width=0)
-                                                           for t in TIMES) for f in fam)
+            line += " | xCRLB " + " ".join(
+                f"{f}:" + "/".join(fmt(e["x_crlb"][f][f"{t:g}s"], pct=False, width=0) for t in TIMES) for f in fam
+            )
         if "events_per_run" in e:
             line += f" | events {e['events_per_run']}"
         if "median_abs_z" in e:
             line += " | med|err|/sigma 10/60 s " + " ".join(
-                f"{f}:{e['median_abs_z'][f]['10s']:.2f}/{e['median_abs_z'][f]['60s']:.2f}" for f in fam)
+                f"{f}:{e['median_abs_z'][f]['10s']:.2f}/{e['median_abs_z'][f]['60s']:.2f}" for f in fam
+            )
         if e.get("diverged") and any(e["diverged"]):
             line += f" | diverged {e['diverged']}"
         print(line)
@@ -529,12 +647,16 @@ def print_block(sname, key, block, fam):
 def print_tracking(key, per):
     print(f"  noise {key}")
     for k, d in per.items():
-        line = (f"    {k:<10} step within 2 % after {', '.join(f'{x:.2f}' for x in d['step_delay'])} s | drift: worst "
-                f"{', '.join(fmt(x, width=0) for x in d['drift_max'])} %, within 2 % "
-                f"{', '.join(f'{100 * x:.0f}' for x in d['drift_within'])} % of 10-60 s")
+        line = (
+            f"    {k:<10} step within 2 % after {', '.join(f'{x:.2f}' for x in d['step_delay'])} s | drift: worst "
+            f"{', '.join(fmt(x, width=0) for x in d['drift_max'])} %, within 2 % "
+            f"{', '.join(f'{100 * x:.0f}' for x in d['drift_within'])} % of 10-60 s"
+        )
         if "false_alarms" in d:
-            line += (f" | step event at {d['step_events']} | drift events {d['drift_events']} | false alarms "
-                     f"{d['false_alarms']}")
+            line += (
+                f" | step event at {d['step_events']} | drift events {d['drift_events']} | false alarms "
+                f"{d['false_alarms']}"
+            )
         print(line, flush=True)
 
 

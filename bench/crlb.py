@@ -33,18 +33,16 @@ The bound on parameter j is sqrt((F^-1)_jj); the initial state is marginalised o
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from scipy.linalg import expm
 from scipy.signal import butter
 
-import sys
-from pathlib import Path
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 from algid.chain import TABLE1, Chain  # noqa: E402
-
 
 # ---------------------------------------------------------------------------------------------
 # model
@@ -104,13 +102,13 @@ def discretise(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.n
 class Record:
     """A simulated record sampled at t_k = k h, k = 0 .. T-1."""
 
-    t: np.ndarray                 #: (T,) sample times [s]
-    a: np.ndarray                 #: (T, n) clean accelerations [m/s^2]
-    u: np.ndarray                 #: (T, n) clean forces [N]
-    truth: np.ndarray             #: (T, 3n+1) true parameters m, c, k_1..k_{n+1} at each sample
-    y0: np.ndarray                #: (2n,) chain state at t = 0
-    z0: np.ndarray                #: full simulator state at t = 0 (filters then chain)
-    w: np.ndarray                 #: (T, n) ZOH white-noise input of the force filters
+    t: np.ndarray  #: (T,) sample times [s]
+    a: np.ndarray  #: (T, n) clean accelerations [m/s^2]
+    u: np.ndarray  #: (T, n) clean forces [N]
+    truth: np.ndarray  #: (T, 3n+1) true parameters m, c, k_1..k_{n+1} at each sample
+    y0: np.ndarray  #: (2n,) chain state at t = 0
+    z0: np.ndarray  #: full simulator state at t = 0 (filters then chain)
+    w: np.ndarray  #: (T, n) ZOH white-noise input of the force filters
     chain: Chain = field(repr=False, default=None)
     band_hz: float = 20.0
 
@@ -149,7 +147,7 @@ def params_of(chain: Chain) -> np.ndarray:
 def _plant(p: np.ndarray, n: int, Af, Bf, Cf, h: float):
     """Exact discretisation of (force filters -> chain) with parameters p = (m, c, k)."""
     nf = Af.shape[0]
-    A, B = chain_blocks(p[:n], p[n:2 * n], p[2 * n:])
+    A, B = chain_blocks(p[:n], p[n : 2 * n], p[2 * n :])
     nz = nf + 2 * n
     Az = np.zeros((nz, nz))
     Az[:nf, :nf] = Af
@@ -174,9 +172,18 @@ def _filter_gain(band_hz: float, h: float, force_rms: float) -> float:
     return force_rms / float(np.sqrt((Cf @ P @ Cf.T)[0, 0]))
 
 
-def simulate(chain: Chain, duration_s: float, fs_hz: float = 1000.0, *, seed: int = 0,
-             band_hz: float = 20.0, force_rms: float = 10.0, burn_in_s: float = 3.0,
-             schedule=None, drift_update: int = 10) -> Record:
+def simulate(
+    chain: Chain,
+    duration_s: float,
+    fs_hz: float = 1000.0,
+    *,
+    seed: int = 0,
+    band_hz: float = 20.0,
+    force_rms: float = 10.0,
+    burn_in_s: float = 3.0,
+    schedule=None,
+    drift_update: int = 10,
+) -> Record:
     """Simulate ``chain`` under broadband random forcing, exactly (see the module docstring).
 
     ``schedule(t) -> (3n+1,)`` gives time-varying parameters (m, c, k) at time t [s] (t >= 0);
@@ -209,8 +216,8 @@ def simulate(chain: Chain, duration_s: float, fs_hz: float = 1000.0, *, seed: in
         Z[k] = z
         z = Phi @ z + Gam @ w[B0 + k]
     u = Z[:, :nf] @ Cf.T
-    x, v = Z[:, nf:nf + n], Z[:, nf + n:]
-    m, c, kk = truth[:, :n], truth[:, n:2 * n], truth[:, 2 * n:]
+    x, v = Z[:, nf : nf + n], Z[:, nf + n :]
+    m, c, kk = truth[:, :n], truth[:, n : 2 * n], truth[:, 2 * n :]
     a = np.empty((T, n))
     for i in range(n):
         spring = (kk[:, i] + kk[:, i + 1]) * x[:, i]
@@ -219,8 +226,17 @@ def simulate(chain: Chain, duration_s: float, fs_hz: float = 1000.0, *, seed: in
         if i + 1 < n:
             spring -= kk[:, i + 1] * x[:, i + 1]
         a[:, i] = (u[:, i] - c[:, i] * v[:, i] - spring) / m[:, i]
-    return Record(t=np.arange(T) * h, a=a, u=u, truth=truth, y0=Z[0, nf:].copy(), z0=z0,
-                  w=w[B0:].copy(), chain=chain, band_hz=band_hz)
+    return Record(
+        t=np.arange(T) * h,
+        a=a,
+        u=u,
+        truth=truth,
+        y0=Z[0, nf:].copy(),
+        z0=z0,
+        w=w[B0:].copy(),
+        chain=chain,
+        band_hz=band_hz,
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -249,7 +265,7 @@ def sensitivities(rec: Record) -> tuple[np.ndarray, np.ndarray]:
     mask = identified_mask(chain)
     idx = np.nonzero(mask)[0]
     p = idx.size
-    A, B = chain_blocks(theta[:n], theta[n:2 * n], theta[2 * n:])
+    A, B = chain_blocks(theta[:n], theta[n : 2 * n], theta[2 * n :])
     dA, dB = [], []
     for j in idx:  # central differences: exact for c and k (A is linear in them), O(eps^2) for m
         e = np.zeros_like(theta)
@@ -264,20 +280,20 @@ def sensitivities(rec: Record) -> tuple[np.ndarray, np.ndarray]:
     dim = nf + ny + ny * q
     Abig = np.zeros((dim, dim))
     Abig[:nf, :nf] = Af
-    Abig[nf:nf + ny, nf:nf + ny] = A
-    Abig[nf:nf + ny, :nf] = B @ Cf
+    Abig[nf : nf + ny, nf : nf + ny] = A
+    Abig[nf : nf + ny, :nf] = B @ Cf
     for j in range(q):
         r = nf + ny + j * ny
-        Abig[r:r + ny, r:r + ny] = A
+        Abig[r : r + ny, r : r + ny] = A
         if j < p:
-            Abig[r:r + ny, nf:nf + ny] = dA[j]
-            Abig[r:r + ny, :nf] = dB[j] @ Cf
+            Abig[r : r + ny, nf : nf + ny] = dA[j]
+            Abig[r : r + ny, :nf] = dB[j] @ Cf
     Bbig = np.zeros((dim, n))
     Bbig[:nf] = Bf
     Phi, Gam = discretise(Abig, Bbig, h)
     Zs = np.zeros(dim)
     Zs[:nf] = rec.z0[:nf]
-    Zs[nf:nf + ny] = rec.y0
+    Zs[nf : nf + ny] = rec.y0
     for j in range(ny):  # d y / d y0 = I at t = 0
         Zs[nf + ny + (p + j) * ny + j] = 1.0
     states = np.empty((T, dim))
@@ -285,8 +301,8 @@ def sensitivities(rec: Record) -> tuple[np.ndarray, np.ndarray]:
         states[k] = Zs
         Zs = Phi @ Zs + Gam @ rec.w[k]
     uu = states[:, :nf] @ Cf.T
-    y = states[:, nf:nf + ny]
-    S = states[:, nf + ny:].reshape(T, q, ny)  # S[k, j] = d y / d col_j
+    y = states[:, nf : nf + ny]
+    S = states[:, nf + ny :].reshape(T, q, ny)  # S[k, j] = d y / d col_j
     low = slice(n, 2 * n)
     # J[k, i, j] = d a_i(t_k) / d col_j
     J = np.einsum("ab,kjb->kaj", A[low], S)
@@ -324,7 +340,7 @@ def main() -> None:
     rec = simulate(TABLE1, max(args.seconds), seed=args.seed)
     bound = crlb(rec, args.snr, args.seconds)
     n = rec.n
-    names = [f"m{i+1}" for i in range(n)] + [f"c{i+1}" for i in range(n)] + [f"k{i+1}" for i in range(n + 1)]
+    names = [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{i + 1}" for i in range(n + 1)]
     print(f"Table 1, {args.snr:g} dB on the accelerations, relative CRLB [%]")
     print("   t [s] " + " ".join(f"{s:>7}" for s in names))
     for t, rel in bound.items():

@@ -67,10 +67,16 @@ def headline(s: dict) -> dict:
         "estimates_substituted_s": s["estimates_substituted_s"],
         "accel_snr_achieved_db": s["accel_snr_achieved_db"],
         "rms_tracking_after_1s_pct_stroke": 100 * tr["rms_after_1s_m"] / s["stroke_m"],
-        "drift_max_rel_err": ({"times_s": s["drift"]["times_s"], "single": s["drift"]["single"],
-                               "continuous": s["drift"]["continuous"],
-                               "continuous_rel_sigma": s["drift"]["continuous_rel_sigma"]}
-                              if "drift" in s else None),
+        "drift_max_rel_err": (
+            {
+                "times_s": s["drift"]["times_s"],
+                "single": s["drift"]["single"],
+                "continuous": s["drift"]["continuous"],
+                "continuous_rel_sigma": s["drift"]["continuous_rel_sigma"],
+            }
+            if "drift" in s
+            else None
+        ),
     }
 
 
@@ -80,27 +86,39 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(Path(__file__).parent / "results" / "demo_report.json"))
     args = ap.parse_args(argv)
 
-    report: dict = {"scenarios": {}, "targets": {
-        "continuous_noise_free": "all within 1 % before 0.1 s; peak tracking < 10 % of stroke after "
-                                 "the switch, < 2 % after 1 s; report the force overshoot",
-        "sampled_noise_free": "all within 1 % before 0.2 s",
-        "noise_40dB": "still tracks (aim: peak error after 1 s < 2-5 % of stroke); report the "
-                      "drift of the estimates"}}
-    runs = [("continuous_noise_free", dict(mode="continuous")),
-            ("sampled_noise_free", dict(mode="sampled")),
-            ("continuous_noise_free_continuous_estimator", dict(mode="continuous", estimator="continuous"))]
-    runs += [(f"{m}_40dB_seed{sd}", dict(mode=m, noise_db=40.0, seed=sd))
-             for m in ("continuous", "sampled") for sd in args.seeds]
-    runs += [("continuous_40dB_seed0_single_estimator", dict(mode="continuous", noise_db=40.0, seed=0,
-                                                             estimator="single"))]
+    report: dict = {
+        "scenarios": {},
+        "targets": {
+            "continuous_noise_free": "all within 1 % before 0.1 s; peak tracking < 10 % of stroke after "
+            "the switch, < 2 % after 1 s; report the force overshoot",
+            "sampled_noise_free": "all within 1 % before 0.2 s",
+            "noise_40dB": "still tracks (aim: peak error after 1 s < 2-5 % of stroke); report the "
+            "drift of the estimates",
+        },
+    }
+    runs = [
+        ("continuous_noise_free", dict(mode="continuous")),
+        ("sampled_noise_free", dict(mode="sampled")),
+        ("continuous_noise_free_continuous_estimator", dict(mode="continuous", estimator="continuous")),
+    ]
+    runs += [
+        (f"{m}_40dB_seed{sd}", dict(mode=m, noise_db=40.0, seed=sd))
+        for m in ("continuous", "sampled")
+        for sd in args.seeds
+    ]
+    runs += [
+        ("continuous_40dB_seed0_single_estimator", dict(mode="continuous", noise_db=40.0, seed=0, estimator="single"))
+    ]
     for name, kw in runs:
         _, s = run_scenario(**kw)
         report["scenarios"][name] = {"headline": headline(s), "summary": s}
         print(f"== {name}")
         print(format_summary(s))
         print()
-    for name, kw in (("continuous_noise_free_eq10_product", dict(eq10="product")),
-                     ("continuous_noise_free_accept_valid", dict(accept="valid"))):
+    for name, kw in (
+        ("continuous_noise_free_eq10_product", dict(eq10="product")),
+        ("continuous_noise_free_accept_valid", dict(accept="valid")),
+    ):
         s = variant(**kw)
         report["scenarios"][name] = {"headline": headline(s), "summary": s}
         print(f"== {name}: " + json.dumps(jsonable(headline(s))))
@@ -120,29 +138,41 @@ def main(argv=None) -> int:
         theta = np.concatenate([est["mass"], est["damping"], est["stiffness"]], axis=1)
         rel = np.abs(theta / TABLE1.identifiable() - 1)
         probe["noise_free" if nd is None else f"{nd:.0f}dB"] = {
-            f"{tk:g}s": float(np.nanmax(rel[int(tk * 1000) - 1])) for tk in (0.2, 0.5, 1.0, 2.0, 5.0)}
+            f"{tk:g}s": float(np.nanmax(rel[int(tk * 1000) - 1])) for tk in (0.2, 0.5, 1.0, 2.0, 5.0)
+        }
     report["open_loop_multisine_estimator_max_rel_err"] = probe
     print("== estimator alone, open-loop multisine, largest relative error at t:")
     for k, v in probe.items():
         print(f"   {k:<11} " + "  ".join(f"{t}: {e:.2g}" for t, e in v.items()))
 
     print("\n== headline figures")
-    print(f"{'scenario':<44} {'1% first':>9} {'1% stays':>9} {'err@1s+':>9} {'trk>sw %':>9} "
-          f"{'trk>1s %':>9} {'rms>1s %':>9} {'jump N':>8} {'wall s':>7}")
+    print(
+        f"{'scenario':<44} {'1% first':>9} {'1% stays':>9} {'err@1s+':>9} {'trk>sw %':>9} "
+        f"{'trk>1s %':>9} {'rms>1s %':>9} {'jump N':>8} {'wall s':>7}"
+    )
     for name, sc in report["scenarios"].items():
         h = sc["headline"]
         f = lambda v, p=3: "never" if not np.isfinite(v) else f"{v:.{p}g}"  # noqa: E731
-        print(f"{name:<44} {f(h['all_first_within_1pct_s']):>9} {f(h['all_stay_within_1pct_s']):>9} "
-              f"{f(h['max_rel_err_after_1s']):>9} {f(h['peak_tracking_after_switch_pct_stroke']):>9} "
-              f"{f(h['peak_tracking_after_1s_pct_stroke']):>9} {f(h['rms_tracking_after_1s_pct_stroke']):>9} "
-              f"{f(h['force_jump_at_switch_N']):>8} {h['wall_s']:>7.1f}")
-    print("\n== drift: largest relative error [%] at " + ", ".join(f"{t:g}" for t in (0.1, 0.5, 1, 5))
-          + " s, both estimators open loop on each loop's recorded samples")
+        print(
+            f"{name:<44} {f(h['all_first_within_1pct_s']):>9} {f(h['all_stay_within_1pct_s']):>9} "
+            f"{f(h['max_rel_err_after_1s']):>9} {f(h['peak_tracking_after_switch_pct_stroke']):>9} "
+            f"{f(h['peak_tracking_after_1s_pct_stroke']):>9} {f(h['rms_tracking_after_1s_pct_stroke']):>9} "
+            f"{f(h['force_jump_at_switch_N']):>8} {h['wall_s']:>7.1f}"
+        )
+    print(
+        "\n== drift: largest relative error [%] at "
+        + ", ".join(f"{t:g}" for t in (0.1, 0.5, 1, 5))
+        + " s, both estimators open loop on each loop's recorded samples"
+    )
     for name, sc in report["scenarios"].items():
         d = sc["headline"].get("drift_max_rel_err")
         if d and sc["summary"]["noise_db"] is not None:
-            print(f"{name:<44} single " + " ".join(f"{100 * e:7.3g}" for e in d["single"])
-                  + "  | continuous " + " ".join(f"{100 * e:7.3g}" for e in d["continuous"]))
+            print(
+                f"{name:<44} single "
+                + " ".join(f"{100 * e:7.3g}" for e in d["single"])
+                + "  | continuous "
+                + " ".join(f"{100 * e:7.3g}" for e in d["continuous"])
+            )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(jsonable(report), indent=1))

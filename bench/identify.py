@@ -39,13 +39,13 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "tests"))
 import crlb as C  # noqa: E402
-from signals import multisine, simulate_chain  # noqa: E402
 
 import algid  # noqa: E402
 from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.recording import Recording  # noqa: E402
 from algid.scenarios import positioning_axis  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
+from signals import multisine, simulate_chain  # noqa: E402
 
 FS = 1000.0
 SNRS = (20, 30, 40, 50, 60)
@@ -55,8 +55,11 @@ SECTIONS = ("accuracy", "short", "slow", "calibration", "suites")
 
 
 def accuracy_systems() -> dict[str, Chain]:
-    return {"table1": TABLE1, "random5": Chain.random(5, np.random.default_rng(5)),
-            "free3": Chain.random(3, np.random.default_rng(7), boundary="free")}
+    return {
+        "table1": TABLE1,
+        "random5": Chain.random(5, np.random.default_rng(5)),
+        "free3": Chain.random(3, np.random.default_rng(7), boundary="free"),
+    }
 
 
 def families(n: int) -> dict[str, slice]:
@@ -72,12 +75,14 @@ def worst_per_family(chain: Chain, theta: np.ndarray) -> dict[str, float]:
 
 
 def multisine_record(chain: Chain, seed: int, duration: float = 10.0, snr: float = 40.0) -> Recording:
-    r = simulate(chain, multisine(chain.n, seed=seed), duration, FS, noise_db=snr, noise_on=("accel", "force"),
-                 seed=seed)
+    r = simulate(
+        chain, multisine(chain.n, seed=seed), duration, FS, noise_db=snr, noise_on=("accel", "force"), seed=seed
+    )
     return Recording(t=r.t, u=r.u, a=r.a)
 
 
 # ---------------------------------------------------------------------------------- sections
+
 
 def section_accuracy(seeds: int) -> dict:
     out = {}
@@ -89,15 +94,28 @@ def section_accuracy(seeds: int) -> dict:
             res = algid.identify(rec, boundary=chain.boundary)
             wall = time.perf_counter() - t0
             win = algid.identify(rec, boundary=chain.boundary, estimator="window", replicates=2)
-            rows.append({"seed": seed, "worst": worst_per_family(chain, res.theta),
-                         "worst_single_window": worst_per_family(chain, win.theta), "valid": res.valid,
-                         "window_s": res.plan.window_s, "prefilter_hz": res.plan.prefilter_hz, "wall_s": wall})
+            rows.append(
+                {
+                    "seed": seed,
+                    "worst": worst_per_family(chain, res.theta),
+                    "worst_single_window": worst_per_family(chain, win.theta),
+                    "valid": res.valid,
+                    "window_s": res.plan.window_s,
+                    "prefilter_hz": res.plan.prefilter_hz,
+                    "wall_s": wall,
+                }
+            )
         med = {f: float(np.median([r["worst"][f] for r in rows])) for f in "mck"}
         med_w = {f: float(np.median([r["worst_single_window"][f] for r in rows])) for f in "mck"}
         out[name] = {"median_worst": med, "median_worst_single_window": med_w, "runs": rows}
-        print(f"accuracy {name:8s} worst per family, median over {seeds} seeds: "
-              + " ".join(f"{f} {100 * v:.3f} %" for f, v in med.items())
-              + "   (single window: " + " ".join(f"{f} {100 * v:.3g} %" for f, v in med_w.items()) + ")", flush=True)
+        print(
+            f"accuracy {name:8s} worst per family, median over {seeds} seeds: "
+            + " ".join(f"{f} {100 * v:.3f} %" for f, v in med.items())
+            + "   (single window: "
+            + " ".join(f"{f} {100 * v:.3g} %" for f, v in med_w.items())
+            + ")",
+            flush=True,
+        )
     return out
 
 
@@ -106,10 +124,17 @@ def section_short() -> dict:
     res = algid.identify(Recording(t=t, u=u, a=a))
     truth = TABLE1.identifiable()
     at = int(np.searchsorted(res.time_s, 0.1))
-    out = {"estimator": res.plan.estimator, "max_rel_error_end": float(np.max(np.abs(res.theta / truth - 1))),
-           "max_rel_error_at_0.1s": float(np.max(np.abs(res.history[at] / truth - 1))), "valid": res.valid}
-    print(f"short    Table 1 0.2 s noise-free: {out['estimator']}, max error at 0.1 s "
-          f"{out['max_rel_error_at_0.1s']:.2e}, at the end {out['max_rel_error_end']:.2e}", flush=True)
+    out = {
+        "estimator": res.plan.estimator,
+        "max_rel_error_end": float(np.max(np.abs(res.theta / truth - 1))),
+        "max_rel_error_at_0.1s": float(np.max(np.abs(res.history[at] / truth - 1))),
+        "valid": res.valid,
+    }
+    print(
+        f"short    Table 1 0.2 s noise-free: {out['estimator']}, max error at 0.1 s "
+        f"{out['max_rel_error_at_0.1s']:.2e}, at the end {out['max_rel_error_end']:.2e}",
+        flush=True,
+    )
     return out
 
 
@@ -118,16 +143,31 @@ def section_slow(seeds: int) -> dict:
     for seed in range(seeds):
         sc = positioning_axis(seed=seed, duration_s=20.0)
         res = algid.identify(sc.recording)
-        bad = [v.name for p, v in enumerate(res.verdicts)
-               if v.valid and np.isfinite(res.theta[p]) and res.theta[p] < -3 * res.sigma[p]]
-        rows.append({"seed": seed, "mass_rel_error": float(res.mass[0] / 5.0 - 1),
-                     "damping_rel_error": float(res.damping[0] / 25.0 - 1), "spring": float(res.stiffness[0]),
-                     "spring_sigma": float(res.sigma_stiffness[0]), "spring_status": res.verdict("k1").status,
-                     "valid": res.valid, "valid_negative": bad, "window_s": res.plan.window_s})
-        print(f"slow     axis seed {seed}: m {100 * rows[-1]['mass_rel_error']:+.3f} %, c "
-              f"{100 * rows[-1]['damping_rel_error']:+.3f} %, k {rows[-1]['spring']:.3g} +- "
-              f"{rows[-1]['spring_sigma']:.2g} N/m ({rows[-1]['spring_status']}), valid {res.valid}, "
-              f"valid negative: {bad or 'none'}", flush=True)
+        bad = [
+            v.name
+            for p, v in enumerate(res.verdicts)
+            if v.valid and np.isfinite(res.theta[p]) and res.theta[p] < -3 * res.sigma[p]
+        ]
+        rows.append(
+            {
+                "seed": seed,
+                "mass_rel_error": float(res.mass[0] / 5.0 - 1),
+                "damping_rel_error": float(res.damping[0] / 25.0 - 1),
+                "spring": float(res.stiffness[0]),
+                "spring_sigma": float(res.sigma_stiffness[0]),
+                "spring_status": res.verdict("k1").status,
+                "valid": res.valid,
+                "valid_negative": bad,
+                "window_s": res.plan.window_s,
+            }
+        )
+        print(
+            f"slow     axis seed {seed}: m {100 * rows[-1]['mass_rel_error']:+.3f} %, c "
+            f"{100 * rows[-1]['damping_rel_error']:+.3f} %, k {rows[-1]['spring']:.3g} +- "
+            f"{rows[-1]['spring_sigma']:.2g} N/m ({rows[-1]['spring_status']}), valid {res.valid}, "
+            f"valid negative: {bad or 'none'}",
+            flush=True,
+        )
     return {"runs": rows}
 
 
@@ -150,19 +190,34 @@ def section_calibration(seeds: int, durations=(10.0, 60.0)) -> tuple[dict, list]
             res = algid.identify(rec)
             truth = C.params_of(chain)
             z = np.abs(res.theta - truth) / res.sigma
-            rows.append({"system": name, "snr_db": snr, "channels": chans, "seed": seed, "z": z.tolist(),
-                         "rel_error": (res.theta / truth - 1).tolist(), "n": chain.n})
+            rows.append(
+                {
+                    "system": name,
+                    "snr_db": snr,
+                    "channels": chans,
+                    "seed": seed,
+                    "z": z.tolist(),
+                    "rel_error": (res.theta / truth - 1).tolist(),
+                    "n": chain.n,
+                }
+            )
             masses.append(_suite_row(f"continuous/{name}/{duration:g}s/{snr}dB/{chans}/{seed}", res))
         table = {}
         for snr in SNRS:
             zs = np.concatenate([r["z"] for r in rows if r["snr_db"] == snr])
             fam = {}
             for f in "mck":
-                fam[f] = float(np.median(np.concatenate([np.asarray(r["z"])[families(r["n"])[f]]
-                                                         for r in rows if r["snr_db"] == snr])))
+                fam[f] = float(
+                    np.median(
+                        np.concatenate([np.asarray(r["z"])[families(r["n"])[f]] for r in rows if r["snr_db"] == snr])
+                    )
+                )
             table[str(snr)] = {"median_abs_z": float(np.median(zs)), "per_family": fam, "values": int(zs.size)}
-            print(f"calib    {duration:4.0f} s {snr} dB: median |error|/sigma {table[str(snr)]['median_abs_z']:.2f} "
-                  f"(m {fam['m']:.2f}, c {fam['c']:.2f}, k {fam['k']:.2f}; {zs.size} values)", flush=True)
+            print(
+                f"calib    {duration:4.0f} s {snr} dB: median |error|/sigma {table[str(snr)]['median_abs_z']:.2f} "
+                f"(m {fam['m']:.2f}, c {fam['c']:.2f}, k {fam['k']:.2f}; {zs.size} values)",
+                flush=True,
+            )
         out[f"{duration:g}s"] = {"table": table, "runs": rows}
     return out, masses
 
@@ -170,8 +225,11 @@ def section_calibration(seeds: int, durations=(10.0, 60.0)) -> tuple[dict, list]
 def _suite_row(label: str, res) -> dict:
     n = res.n
     bad_mass = [v.name for p, v in enumerate(res.verdicts[:n]) if v.valid and not res.theta[p] > 0]
-    bad_neg = [v.name for p, v in enumerate(res.verdicts[n:], start=n)
-               if v.valid and np.isfinite(res.theta[p]) and res.theta[p] < -3 * res.sigma[p]]
+    bad_neg = [
+        v.name
+        for p, v in enumerate(res.verdicts[n:], start=n)
+        if v.valid and np.isfinite(res.theta[p]) and res.theta[p] < -3 * res.sigma[p]
+    ]
     return {"record": label, "valid_nonpositive_mass": bad_mass, "valid_negative": bad_neg}
 
 
@@ -181,11 +239,15 @@ def section_suites(blind_seeds: list[int], calib_rows: list) -> dict:
 
     rows = list(calib_rows)
     rng = np.random.default_rng(1)
-    chains = [("table1", TABLE1)] + [(f"random_n{n}", Chain.random(n, rng)) for n in (1, 2, 5, 10)] + \
-             [(f"free_n{n}", Chain.random(n, rng, boundary="free")) for n in (1, 3, 5)]
+    chains = (
+        [("table1", TABLE1)]
+        + [(f"random_n{n}", Chain.random(n, rng)) for n in (1, 2, 5, 10)]
+        + [(f"free_n{n}", Chain.random(n, rng, boundary="free")) for n in (1, 3, 5)]
+    )
     for name, chain in chains:
-        forces = [("multisine", multisine(chain.n, 1), ())] + \
-                 [("step", *accuracy.step_force(chain.n, edge_s=0.002, seed=1))]
+        forces = [("multisine", multisine(chain.n, 1), ())] + [
+            ("step", *accuracy.step_force(chain.n, edge_s=0.002, seed=1))
+        ]
         for fname, force, breaks in forces:
             t, a, u, _ = simulate_chain(chain, force, 0.5, FS, breaks=breaks)
             res = algid.identify(Recording(t=t, u=u, a=a), boundary=chain.boundary)
@@ -193,14 +255,25 @@ def section_suites(blind_seeds: list[int], calib_rows: list) -> dict:
     for seed in blind_seeds:
         case = B.draw_case(seed, BLIND_DURATION_S, FS)
         lab = case["label"]
-        r = simulate(case["chain"], case["u"], lab["duration_s"], lab["fs_hz"], effects=case["effects"],
-                     noise_db=lab["snr_db"], noise_on=("accel",), seed=seed)
+        r = simulate(
+            case["chain"],
+            case["u"],
+            lab["duration_s"],
+            lab["fs_hz"],
+            effects=case["effects"],
+            noise_db=lab["snr_db"],
+            noise_on=("accel",),
+            seed=seed,
+        )
         res = algid.identify(Recording(t=r.t, u=r.u, a=r.a), boundary=lab["boundary"])
         rows.append(_suite_row(f"blind/{seed}/{lab['effect']}", res))
     nonpos = [r for r in rows if r["valid_nonpositive_mass"]]
     neg = [r for r in rows if r["valid_negative"]]
-    print(f"suites   {len(rows)} records: {len(nonpos)} with a valid mass <= 0, {len(neg)} with a valid damping or "
-          f"spring below -3 sigma", flush=True)
+    print(
+        f"suites   {len(rows)} records: {len(nonpos)} with a valid mass <= 0, {len(neg)} with a valid damping or "
+        f"spring below -3 sigma",
+        flush=True,
+    )
     return {"records": len(rows), "valid_nonpositive_mass": nonpos, "valid_negative": neg, "rows": rows}
 
 

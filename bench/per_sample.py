@@ -65,13 +65,24 @@ DT = 1e-3  # [s]
 def cmake_build(build_dir: Path, targets: list[str], extra_flags: str = "", source: Path = ROOT) -> Path:
     """Configure (Release, optional extra CXX flags) and build the given bench targets."""
     gen = ["-G", "Ninja"] if shutil.which("ninja") else []
-    cfg = ["cmake", "-S", str(source), "-B", str(build_dir), *gen, "-DCMAKE_BUILD_TYPE=Release",
-           "-DALGID_BUILD_BENCH=ON", "-DALGID_BUILD_TESTS=OFF", "-DALGID_BUILD_PYTHON=OFF",
-           f"-DCMAKE_CXX_FLAGS={extra_flags}"]
+    cfg = [
+        "cmake",
+        "-S",
+        str(source),
+        "-B",
+        str(build_dir),
+        *gen,
+        "-DCMAKE_BUILD_TYPE=Release",
+        "-DALGID_BUILD_BENCH=ON",
+        "-DALGID_BUILD_TESTS=OFF",
+        "-DALGID_BUILD_PYTHON=OFF",
+        f"-DCMAKE_CXX_FLAGS={extra_flags}",
+    ]
     subprocess.run(cfg, check=True, stdout=subprocess.DEVNULL)
     # -j2: the machine has 2 cores, shared; one build at a time.
-    subprocess.run(["cmake", "--build", str(build_dir), "-j2", "--target", *targets], check=True,
-                   stdout=subprocess.DEVNULL)
+    subprocess.run(
+        ["cmake", "--build", str(build_dir), "-j2", "--target", *targets], check=True, stdout=subprocess.DEVNULL
+    )
     return build_dir / "bench" / "cpp"
 
 
@@ -80,11 +91,19 @@ def baseline_source(ref: str, build_dir: Path) -> Path:
     current figures are compared with, built and timed in the same run."""
     path = build_dir / "baseline-src"
     if path.exists():
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(path)], check=False,
-                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(path)],
+            check=False,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         shutil.rmtree(path, ignore_errors=True)
-    subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(path), ref], check=True,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    subprocess.run(
+        ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(path), ref],
+        check=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     return path
 
 
@@ -98,8 +117,18 @@ def callgrind_instructions(binary: Path, subject: str, n: int, scalar: str) -> f
     updates = max(100, 3000 // n) if subject != "continuous" else max(600, 3000 // n)  # >= 8 harvests
     with tempfile.TemporaryDirectory() as tmp:
         out_file = Path(tmp) / "callgrind.out"
-        cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no", f"--callgrind-out-file={out_file}",
-               str(binary), "--callgrind", subject, str(n), scalar, str(updates)]
+        cmd = [
+            "valgrind",
+            "--tool=callgrind",
+            "--instr-atstart=no",
+            f"--callgrind-out-file={out_file}",
+            str(binary),
+            "--callgrind",
+            subject,
+            str(n),
+            scalar,
+            str(updates),
+        ]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0 or not out_file.exists():
             return None
@@ -161,9 +190,14 @@ def python_figures(a: np.ndarray, u: np.ndarray, reps: int, isa: str | None = No
                 if rep and j >= 16:
                     per_call.append(max(0.0, t1 - t0 - clock))
         per_call = np.asarray(per_call) / n
-        out["python_update"] = {"ns_per_dof_sample_median": float(np.median(per_call)),
-                                "p99": float(np.percentile(per_call, 99)), "max": float(per_call.max()),
-                                "samples": samples, "reps": reps, "isa": algid.ISA}
+        out["python_update"] = {
+            "ns_per_dof_sample_median": float(np.median(per_call)),
+            "p99": float(np.percentile(per_call, 99)),
+            "max": float(per_call.max()),
+            "samples": samples,
+            "reps": reps,
+            "isa": algid.ISA,
+        }
 
     # Batch run(): GIL released; includes filling the (T, n) output arrays. Whole record per call,
     # the same protocol as the C++ window_min figure (whole window / T, min over windows): on a
@@ -178,9 +212,16 @@ def python_figures(a: np.ndarray, u: np.ndarray, reps: int, isa: str | None = No
             if rep:
                 per_rep[key].append((t1 - t0) / (samples * n))
     for key, times in per_rep.items():
-        out[key] = {"ns_per_dof_sample_median": float(np.median(times)), "window_min": float(min(times)),
-                    "p99": None, "max": None, "samples": samples, "reps": len(times), "isa": isa or algid.ISA,
-                    "note": "one timing per whole-record call (T samples); median and min over calls"}
+        out[key] = {
+            "ns_per_dof_sample_median": float(np.median(times)),
+            "window_min": float(min(times)),
+            "p99": None,
+            "max": None,
+            "samples": samples,
+            "reps": len(times),
+            "isa": isa or algid.ISA,
+            "note": "one timing per whole-record call (T samples); median and min over calls",
+        }
     return out
 
 
@@ -200,8 +241,9 @@ def cached_quadrature_weights(enabled: bool = True):
         reference.quadrature_weights = original
 
 
-def numpy_reference_figures(a_all: np.ndarray, u_all: np.ndarray, samples: tuple[int, int], cached_weights: bool,
-                            reps: int = 3) -> dict:
+def numpy_reference_figures(
+    a_all: np.ndarray, u_all: np.ndarray, samples: tuple[int, int], cached_weights: bool, reps: int = 3
+) -> dict:
     """Whole-record numpy reference: total per DOF-sample at both lengths, and the marginal cost
     (difference of the two, which removes fixed per-call costs); min over `reps` calls."""
     n = a_all.shape[1]
@@ -217,10 +259,14 @@ def numpy_reference_figures(a_all: np.ndarray, u_all: np.ndarray, samples: tuple
                 best = dt_ns if best is None else min(best, dt_ns)
             times[T] = best
     t_short, t_long = samples
-    return {"ns_per_dof_sample_median": times[t_long] / (t_long * n),
-            "ns_per_dof_sample_at": {str(T): times[T] / (T * n) for T in samples},
-            "marginal_ns_per_dof_sample": (times[t_long] - times[t_short]) / ((t_long - t_short) * n),
-            "p99": None, "max": None, "cached_weights": cached_weights}
+    return {
+        "ns_per_dof_sample_median": times[t_long] / (t_long * n),
+        "ns_per_dof_sample_at": {str(T): times[T] / (T * n) for T in samples},
+        "marginal_ns_per_dof_sample": (times[t_long] - times[t_short]) / ((t_long - t_short) * n),
+        "p99": None,
+        "max": None,
+        "cached_weights": cached_weights,
+    }
 
 
 def interleaved_numpy_ratio(a_all: np.ndarray, u_all: np.ndarray, reps: int, run_samples: int = 2000) -> dict:
@@ -254,10 +300,16 @@ def interleaved_numpy_ratio(a_all: np.ndarray, u_all: np.ndarray, reps: int, run
             marginal.append(((t2 - t1) - (t1 - t0)) / (3000 * n))
             run.append(best / (run_samples * n))
             ratio.append(marginal[-1] / run[-1])
-    return {"isa": algid.ISA, "reps": reps, "numpy_marginal_ns_per_dof_sample": marginal,
-            "python_run_ns_per_dof_sample": run, "ratio_per_rep": ratio,
-            "ratio_median": float(statistics.median(ratio)), "ratio_min": float(min(ratio)),
-            "ratio_of_minima": float(min(marginal) / min(run))}
+    return {
+        "isa": algid.ISA,
+        "reps": reps,
+        "numpy_marginal_ns_per_dof_sample": marginal,
+        "python_run_ns_per_dof_sample": run,
+        "ratio_per_rep": ratio,
+        "ratio_median": float(statistics.median(ratio)),
+        "ratio_min": float(min(ratio)),
+        "ratio_of_minima": float(min(marginal) / min(run)),
+    }
 
 
 # ---------------------------------------------------------------------------------------------
@@ -279,8 +331,9 @@ def machine_info() -> dict:
     except (OSError, IndexError):
         pass
     try:
-        info["commit"] = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-                                        capture_output=True, text=True).stdout.strip()
+        info["commit"] = subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+        ).stdout.strip()
     except OSError:
         pass
     return info
@@ -294,8 +347,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-callgrind", action="store_true")
     ap.add_argument("--rounds", type=int, default=3, help="repetitions of the timing (best median kept)")
     ap.add_argument("--output", type=Path, default=RESULTS)
-    ap.add_argument("--baseline", metavar="REF", help="also build bench/cpp at git revision REF and time it in "
-                    "every round (configurations baseline_*): before/after figures from one run")
+    ap.add_argument(
+        "--baseline",
+        metavar="REF",
+        help="also build bench/cpp at git revision REF and time it in "
+        "every round (configurations baseline_*): before/after figures from one run",
+    )
     args = ap.parse_args(argv)
     windows = 3 if args.quick else 5
     if args.quick:
@@ -314,10 +371,16 @@ def main(argv: list[str] | None = None) -> int:
         for level in ("v3", "v4"):
             if not core.cpu_supports(f"x86-64-{level}"):
                 continue
-            print(f"building bench/cpp (Release, -O3 -march=x86-64-{level} -ffp-contract=off: algid._core_{level}'s "
-                  "flags) ...", flush=True)
-            wide_dirs[level] = cmake_build(args.build_dir / f"x86-64-{level}", ["bench_per_sample", "peak_flops"],
-                                           f"-march=x86-64-{level} -ffp-contract=off")
+            print(
+                f"building bench/cpp (Release, -O3 -march=x86-64-{level} -ffp-contract=off: algid._core_{level}'s "
+                "flags) ...",
+                flush=True,
+            )
+            wide_dirs[level] = cmake_build(
+                args.build_dir / f"x86-64-{level}",
+                ["bench_per_sample", "peak_flops"],
+                f"-march=x86-64-{level} -ffp-contract=off",
+            )
 
     # The baseline revision's C++ bench, built with the same flags: {"": dir, "v3": dir, ...}.
     baseline_dirs: dict[str, Path] = {}
@@ -326,8 +389,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"building bench/cpp of {args.baseline} (the baseline) ...", flush=True)
         baseline_dirs[""] = cmake_build(args.build_dir / "baseline-default", ["bench_per_sample"], source=source)
         for level in wide_dirs:
-            baseline_dirs[f"_{level}"] = cmake_build(args.build_dir / f"baseline-x86-64-{level}", ["bench_per_sample"],
-                                                     f"-march=x86-64-{level} -ffp-contract=off", source=source)
+            baseline_dirs[f"_{level}"] = cmake_build(
+                args.build_dir / f"baseline-x86-64-{level}",
+                ["bench_per_sample"],
+                f"-march=x86-64-{level} -ffp-contract=off",
+                source=source,
+            )
 
     configs: dict[str, dict[str, dict]] = {}
 
@@ -358,15 +425,25 @@ def main(argv: list[str] | None = None) -> int:
     for r in range(args.rounds):
         print(f"round {r + 1}/{args.rounds}: C++ (steady_clock), Python update()/run() ...", flush=True)
         for row in json_lines([str(bindir / "bench_per_sample"), "--windows", str(windows)]):
-            add(f"{row['config']}_{row['scalar']}", row["n"], {k: v for k, v in row.items() if k not in ("config", "n", "scalar")})
+            add(
+                f"{row['config']}_{row['scalar']}",
+                row["n"],
+                {k: v for k, v in row.items() if k not in ("config", "n", "scalar")},
+            )
         for level, wide_dir in wide_dirs.items():
             for row in json_lines([str(wide_dir / "bench_per_sample"), "--windows", str(windows)]):
-                add(f"{row['config']}_{row['scalar']}_{level}", row["n"],
-                    {k: v for k, v in row.items() if k not in ("config", "n", "scalar")})
+                add(
+                    f"{row['config']}_{row['scalar']}_{level}",
+                    row["n"],
+                    {k: v for k, v in row.items() if k not in ("config", "n", "scalar")},
+                )
         for suffix, base_dir in baseline_dirs.items():
             for row in json_lines([str(base_dir / "bench_per_sample"), "--windows", str(windows)]):
-                add(f"baseline_{row['config']}_{row['scalar']}{suffix}", row["n"],
-                    {k: v for k, v in row.items() if k not in ("config", "n", "scalar")})
+                add(
+                    f"baseline_{row['config']}_{row['scalar']}{suffix}",
+                    row["n"],
+                    {k: v for k, v in row.items() if k not in ("config", "n", "scalar")},
+                )
         for n in SIZES:
             a, u = signals[n]
             for key, f in python_figures(a[:2000], u[:2000], py_reps).items():
@@ -386,8 +463,8 @@ def main(argv: list[str] | None = None) -> int:
         put(config, n, best)
 
     have_valgrind = shutil.which("valgrind") is not None and not (args.quick or args.no_callgrind)
-    for config, by_n in configs.items():
-        for n_str, fig in by_n.items():
+    for by_n in configs.values():
+        for _n_str, fig in by_n.items():
             fig["instructions_per_dof_sample"] = None
     if have_valgrind:
         print("counting instructions (callgrind) ...", flush=True)
@@ -402,16 +479,21 @@ def main(argv: list[str] | None = None) -> int:
                     ipds = callgrind_instructions(wide_dirs["v3"] / "bench_per_sample", subject, n, "double")
                     configs[f"{subject}_double_v3"][str(n)]["instructions_per_dof_sample"] = ipds
 
-    continuous_note = ("ContinuousEstimator<N, Scalar> with its default configuration (K = 4 staggered 0.3 s "
-                       "windows, block-median aggregation, change detection on), one uninterrupted signal"
-                       if "continuous_double" in configs else
-                       "algid::ContinuousEstimator is not in the core (cpp/include/algid/continuous_estimator.hpp "
-                       "missing at build time): not measured")
+    continuous_note = (
+        "ContinuousEstimator<N, Scalar> with its default configuration (K = 4 staggered 0.3 s "
+        "windows, block-median aggregation, change detection on), one uninterrupted signal"
+        if "continuous_double" in configs
+        else "algid::ContinuousEstimator is not in the core (cpp/include/algid/continuous_estimator.hpp "
+        "missing at build time): not measured"
+    )
 
     print("timing the numpy reference ...", flush=True)
     for n in SIZES:
-        put("numpy_reference_cached_weights_double", n,
-            numpy_reference_figures(*signals[n], (1000, 4000), cached_weights=True, reps=2 if args.quick else 6))
+        put(
+            "numpy_reference_cached_weights_double",
+            n,
+            numpy_reference_figures(*signals[n], (1000, 4000), cached_weights=True, reps=2 if args.quick else 6),
+        )
     print("numpy reference and Python run() back to back ...", flush=True)
     interleaved = {str(n): interleaved_numpy_ratio(*signals[n], reps=3 if args.quick else 8) for n in SIZES}
     # As shipped (reference.quadrature_weights recomputed per signal: a fixed ~0.25 s x 6n).
@@ -439,22 +521,32 @@ def main(argv: list[str] | None = None) -> int:
         vals = [r["gflops"] for r in rows if r.get("scalar") == scalar and r.get("lanes") == 1]
         return vals[0] if vals else None
 
-    peak = {"default_flags": {"isa": next((r["isa"] for r in peak_default if "isa" in r), None),
-                              "double_gflops": best_peak(peak_default, "double"),
-                              "double_scalar_gflops": scalar_peak(peak_default, "double"),
-                              "float_gflops": best_peak(peak_default, "float"),
-                              "rows": [r for r in peak_default if "lanes" in r]}}
+    peak = {
+        "default_flags": {
+            "isa": next((r["isa"] for r in peak_default if "isa" in r), None),
+            "double_gflops": best_peak(peak_default, "double"),
+            "double_scalar_gflops": scalar_peak(peak_default, "double"),
+            "float_gflops": best_peak(peak_default, "float"),
+            "rows": [r for r in peak_default if "lanes" in r],
+        }
+    }
     for level, rows in peak_wide.items():
-        peak[f"x86-64-{level}"] = {"isa": next((r["isa"] for r in rows if "isa" in r), None),
-                                   "double_gflops": best_peak(rows, "double"),
-                                   "double_scalar_gflops": scalar_peak(rows, "double"),
-                                   "float_gflops": best_peak(rows, "float"),
-                                   "rows": [r for r in rows if "lanes" in r]}
+        peak[f"x86-64-{level}"] = {
+            "isa": next((r["isa"] for r in rows if "isa" in r), None),
+            "double_gflops": best_peak(rows, "double"),
+            "double_scalar_gflops": scalar_peak(rows, "double"),
+            "float_gflops": best_peak(rows, "float"),
+            "rows": [r for r in rows if "lanes" in r],
+        }
     bound = {}
     # The lane layout (n >= 3) computes whole registers: lane_slots lanes for n DOF, the padding
     # lanes included (n = 3 in 4 lanes: 4/3 of the useful flops). Counted flops are the useful
     # ones; the bound of a build uses what that build executes.
-    build_config = {"default_flags": "default_double", "x86-64-v3": "default_double_v3", "x86-64-v4": "default_double_v4"}
+    build_config = {
+        "default_flags": "default_double",
+        "x86-64-v3": "default_double_v3",
+        "x86-64-v4": "default_double_v4",
+    }
     for n in SIZES:
         f = flops_per_dof.get(n, {}).get("flops_per_dof_sample")
         measured = fig("default_double", n).get("ns_per_dof_sample_median")
@@ -482,125 +574,177 @@ def main(argv: list[str] | None = None) -> int:
     run3 = fig("python_run_double", 3)
     targets = {
         "median_ns_per_dof_sample_n3_le_100": {
-            "value": n3.get("ns_per_dof_sample_median"), "limit": 100,
-            "met": (n3.get("ns_per_dof_sample_median") or 1e9) <= 100},
+            "value": n3.get("ns_per_dof_sample_median"),
+            "limit": 100,
+            "met": (n3.get("ns_per_dof_sample_median") or 1e9) <= 100,
+        },
         "linear_in_n_n50_per_dof_le_n3": {
-            "n50": n50.get("ns_per_dof_sample_median"), "n3": n3.get("ns_per_dof_sample_median"),
-            "met": (n50.get("ns_per_dof_sample_median") or 1e9) <= (n3.get("ns_per_dof_sample_median") or 0)},
+            "n50": n50.get("ns_per_dof_sample_median"),
+            "n3": n3.get("ns_per_dof_sample_median"),
+            "met": (n50.get("ns_per_dof_sample_median") or 1e9) <= (n3.get("ns_per_dof_sample_median") or 0),
+        },
         # Python run() against the C++ loop it wraps, same build: ChainEstimator::record() blocks
         # in the wider builds (blocks for n = 1, the lane layout for n >= 3), update() sample by
         # sample in the baseline build.
         "python_run_within_1.5x_of_cpp": {
-            str(n): {"isa": algid.ISA, "cpp_config": run_cpp,
-                     "ratio": fig("python_run_double", n)["window_min"] / fig(run_cpp, n)["window_min"],
-                     "ratio_to_cpp_default_update_median": fig("python_run_double", n)["window_min"] /
-                     fig("default_double", n)["ns_per_dof_sample_median"],
-                     "met": fig("python_run_double", n)["window_min"] <= 1.5 * fig(run_cpp, n)["window_min"]}
-            for n in SIZES if fig(run_cpp, n)},
+            str(n): {
+                "isa": algid.ISA,
+                "cpp_config": run_cpp,
+                "ratio": fig("python_run_double", n)["window_min"] / fig(run_cpp, n)["window_min"],
+                "ratio_to_cpp_default_update_median": fig("python_run_double", n)["window_min"]
+                / fig("default_double", n)["ns_per_dof_sample_median"],
+                "met": fig("python_run_double", n)["window_min"] <= 1.5 * fig(run_cpp, n)["window_min"],
+            }
+            for n in SIZES
+            if fig(run_cpp, n)
+        },
         "python_run_at_least_50x_faster_than_numpy_reference": {
-            str(n): {"isa": algid.ISA,
-                     # the figure: numpy reference and run() timed back to back, median over repetitions
-                     "ratio_interleaved_median": interleaved[str(n)]["ratio_median"],
-                     "ratio_interleaved_min": interleaved[str(n)]["ratio_min"],
-                     # the same from the separate measurements (numpy timed after every round)
-                     "ratio_marginal_cached": fig("numpy_reference_cached_weights_double", n)["marginal_ns_per_dof_sample"] /
-                     fig("python_run_double", n)["window_min"],
-                     "ratio_whole_call_cached": fig("numpy_reference_cached_weights_double", n)["ns_per_dof_sample_median"] /
-                     fig("python_run_double", n)["window_min"],
-                     **({"ratio_marginal_cached_x86-64_build": fig("numpy_reference_cached_weights_double", n)[
-                         "marginal_ns_per_dof_sample"] / fig("python_run_double_x86-64", n)["window_min"]}
-                        if fig("python_run_double_x86-64", n) else {})} for n in SIZES},
+            str(n): {
+                "isa": algid.ISA,
+                # the figure: numpy reference and run() timed back to back, median over repetitions
+                "ratio_interleaved_median": interleaved[str(n)]["ratio_median"],
+                "ratio_interleaved_min": interleaved[str(n)]["ratio_min"],
+                # the same from the separate measurements (numpy timed after every round)
+                "ratio_marginal_cached": fig("numpy_reference_cached_weights_double", n)["marginal_ns_per_dof_sample"]
+                / fig("python_run_double", n)["window_min"],
+                "ratio_whole_call_cached": fig("numpy_reference_cached_weights_double", n)["ns_per_dof_sample_median"]
+                / fig("python_run_double", n)["window_min"],
+                **(
+                    {
+                        "ratio_marginal_cached_x86-64_build": fig("numpy_reference_cached_weights_double", n)[
+                            "marginal_ns_per_dof_sample"
+                        ]
+                        / fig("python_run_double_x86-64", n)["window_min"]
+                    }
+                    if fig("python_run_double_x86-64", n)
+                    else {}
+                ),
+            }
+            for n in SIZES
+        },
         "max_within_5x_of_median": {
-            str(n): {"max_over_median": fig("default_double", n)["max"] / fig("default_double", n)["ns_per_dof_sample_median"],
-                     "max_path_over_median": fig("default_double", n)["max_path"] /
-                     fig("default_double", n)["ns_per_dof_sample_median"]} for n in SIZES},
+            str(n): {
+                "max_over_median": fig("default_double", n)["max"]
+                / fig("default_double", n)["ns_per_dof_sample_median"],
+                "max_path_over_median": fig("default_double", n)["max_path"]
+                / fig("default_double", n)["ns_per_dof_sample_median"],
+            }
+            for n in SIZES
+        },
     }
     as_shipped = fig("numpy_reference_double", 3)
     if as_shipped and run3:
         targets["python_run_at_least_50x_faster_than_numpy_reference"]["3"]["ratio_whole_call_as_shipped"] = (
-            as_shipped["ns_per_dof_sample_median"] / run3["window_min"])
-    for n, t in targets["python_run_at_least_50x_faster_than_numpy_reference"].items():
+            as_shipped["ns_per_dof_sample_median"] / run3["window_min"]
+        )
+    for t in targets["python_run_at_least_50x_faster_than_numpy_reference"].values():
         t["met"] = t["ratio_interleaved_median"] >= 50
-    for n, t in targets["max_within_5x_of_median"].items():
+    for t in targets["max_within_5x_of_median"].values():
         t["met_raw_max"] = t["max_over_median"] <= 5
         t["met_path_max"] = t["max_path_over_median"] <= 5
-    rls_ratio = {str(n): fig("default_double", n)["ns_per_dof_sample_median"] / fig("rls_double", n)["ns_per_dof_sample_median"]
-                 for n in SIZES}
+    rls_ratio = {
+        str(n): fig("default_double", n)["ns_per_dof_sample_median"] / fig("rls_double", n)["ns_per_dof_sample_median"]
+        for n in SIZES
+    }
     rls_ratio_instructions = {
-        str(n): fig("default_double", n)["instructions_per_dof_sample"] / fig("rls_double", n)["instructions_per_dof_sample"]
-        for n in SIZES if fig("default_double", n).get("instructions_per_dof_sample")
-        and fig("rls_double", n).get("instructions_per_dof_sample")}
+        str(n): fig("default_double", n)["instructions_per_dof_sample"]
+        / fig("rls_double", n)["instructions_per_dof_sample"]
+        for n in SIZES
+        if fig("default_double", n).get("instructions_per_dof_sample")
+        and fig("rls_double", n).get("instructions_per_dof_sample")
+    }
 
     # The run-time sized estimator against the fixed-size one at the same n, same build and run.
     runtime_over_fixed = {}
     for suffix in ["", *(f"_{level}" for level in wide_dirs)]:
         for scalar in ("double", "float"):
-            ratios = {str(n): fig(f"dynamic_{scalar}{suffix}", n)["ns_per_dof_sample_median"] /
-                      fig(f"default_{scalar}{suffix}", n)["ns_per_dof_sample_median"]
-                      for n in SIZES if fig(f"dynamic_{scalar}{suffix}", n) and fig(f"default_{scalar}{suffix}", n)}
+            ratios = {
+                str(n): fig(f"dynamic_{scalar}{suffix}", n)["ns_per_dof_sample_median"]
+                / fig(f"default_{scalar}{suffix}", n)["ns_per_dof_sample_median"]
+                for n in SIZES
+                if fig(f"dynamic_{scalar}{suffix}", n) and fig(f"default_{scalar}{suffix}", n)
+            }
             if ratios:
                 runtime_over_fixed[f"update_{scalar}{suffix}"] = ratios
     for isa in [None, *other_isas]:
         suffix = f"_{isa}" if isa else ""
         runtime_over_fixed[f"python_run{suffix}"] = {
-            str(n): fig(f"python_run_dynamic_double{suffix}", n)["window_min"] / fig(f"python_run_double{suffix}", n)["window_min"]
-            for n in SIZES if fig(f"python_run_dynamic_double{suffix}", n)}
+            str(n): fig(f"python_run_dynamic_double{suffix}", n)["window_min"]
+            / fig(f"python_run_double{suffix}", n)["window_min"]
+            for n in SIZES
+            if fig(f"python_run_dynamic_double{suffix}", n)
+        }
     targets["runtime_within_1.5x_of_fixed"] = {
         key: {"worst": max(ratios.values()), "met": max(ratios.values()) <= 1.5}
-        for key, ratios in runtime_over_fixed.items() if ratios}
+        for key, ratios in runtime_over_fixed.items()
+        if ratios
+    }
     # After over before, where a baseline was timed: < 1 is faster now.
     after_over_before = {}
     for config in sorted(configs):
-        if config.startswith("baseline_") and config[len("baseline_"):] in configs:
-            now = config[len("baseline_"):]
+        if config.startswith("baseline_") and config[len("baseline_") :] in configs:
+            now = config[len("baseline_") :]
             after_over_before[now] = {
                 str(n): fig(now, n)["ns_per_dof_sample_median"] / fig(config, n)["ns_per_dof_sample_median"]
-                for n in SIZES if fig(now, n) and fig(config, n)}
+                for n in SIZES
+                if fig(now, n) and fig(config, n)
+            }
 
     single = [r for r in accuracy if r["scalar"] in ("double", "float")]
     float_1k = [r for r in single if r["scalar"] == "float" and r["rate_hz"] == 1000]
     targets["float_within_1pct_at_t0_plus_0.1s_1kHz"] = {
         r["source"]: {"max_rel_error": r["max_rel_error_at"]["0.10"], "met": r["max_rel_error_at"]["0.10"] <= 0.01}
-        for r in float_1k}
+        for r in float_1k
+    }
 
     result = {
-        "meta": {"date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-                 "command": "python bench/per_sample.py" + (" --quick" if args.quick else "") +
-                            (f" --baseline {args.baseline}" if args.baseline else ""),
-                 "machine": machine_info(), "loadavg_before": load_before, "loadavg_after": load_after,
-                 "build": {"default": "CMAKE_BUILD_TYPE=Release (-O3 -DNDEBUG), no -march: the flags of the "
-                                      "wheel's baseline module algid._core (which adds -fPIC -fvisibility=hidden)",
-                           "v3": "same plus -march=x86-64-v3 -ffp-contract=off: the flags of algid._core_v3, which "
-                                 "algid imports on CPUs with AVX2/FMA (reported as *_v3)",
-                           "v4": "same with -march=x86-64-v4: algid._core_v4, imported on CPUs with AVX-512 "
-                                 "(reported as *_v4)"},
-                 "python_isa": algid.ISA,
-                 "signals": "closed-form multisine chain (tests/cpp/closed_form.hpp SineChain), Table 1 for n = 3, 1 kHz",
-                 "units": "ns per DOF-sample (ns_per_sample_median: per whole sample of all n DOF)",
-                 "rounds": args.rounds,
-                 "definitions": {
-                     "ns_per_dof_sample_median": "median over 16-sample batches of the mean time per sample, / n; "
-                                                 "the lowest of the rounds (round_medians lists all)",
-                     "p99": "99th percentile of the same batch means, / n",
-                     "max": "worst single update() over all rounds (steady_clock around one call, clock overhead "
-                            "subtracted), / n; includes OS interference on this shared machine",
-                     "max_path": "max over sample index of the min over windows of the single-update time, / n: "
-                                 "the worst data-dependent path with interference filtered out",
-                     "window_min": "a whole window's batch pass / T, min over windows and rounds: the protocol of "
-                                   "python_run (whole-record run() call / T, min over calls)",
-                     "instructions_per_dof_sample": "callgrind Ir of the update loop (batch: one record() call) "
-                                                    "after 64 warm-up samples (continuous: 400), / (updates n)",
-                     "numpy_reference_over_python_run_interleaved": "per repetition: the numpy reference (cached "
-                                                                    "weights) at 1000 and 4000 samples (marginal cost) "
-                                                                    "and Python run() (min of 5 calls on 2000 samples), "
-                                                                    "back to back; the ratio of each repetition",
-                     "batch": "ChainEstimator::record() in 16-sample chunks (median, p99, max = slowest chunk) "
-                              "and whole windows (window_min), writing every sample's estimates into arrays as the "
-                              "Python run() does"},
-                 "continuous": continuous_note},
+        "meta": {
+            "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "command": "python bench/per_sample.py"
+            + (" --quick" if args.quick else "")
+            + (f" --baseline {args.baseline}" if args.baseline else ""),
+            "machine": machine_info(),
+            "loadavg_before": load_before,
+            "loadavg_after": load_after,
+            "build": {
+                "default": "CMAKE_BUILD_TYPE=Release (-O3 -DNDEBUG), no -march: the flags of the "
+                "wheel's baseline module algid._core (which adds -fPIC -fvisibility=hidden)",
+                "v3": "same plus -march=x86-64-v3 -ffp-contract=off: the flags of algid._core_v3, which "
+                "algid imports on CPUs with AVX2/FMA (reported as *_v3)",
+                "v4": "same with -march=x86-64-v4: algid._core_v4, imported on CPUs with AVX-512 (reported as *_v4)",
+            },
+            "python_isa": algid.ISA,
+            "signals": "closed-form multisine chain (tests/cpp/closed_form.hpp SineChain), Table 1 for n = 3, 1 kHz",
+            "units": "ns per DOF-sample (ns_per_sample_median: per whole sample of all n DOF)",
+            "rounds": args.rounds,
+            "definitions": {
+                "ns_per_dof_sample_median": "median over 16-sample batches of the mean time per sample, / n; "
+                "the lowest of the rounds (round_medians lists all)",
+                "p99": "99th percentile of the same batch means, / n",
+                "max": "worst single update() over all rounds (steady_clock around one call, clock overhead "
+                "subtracted), / n; includes OS interference on this shared machine",
+                "max_path": "max over sample index of the min over windows of the single-update time, / n: "
+                "the worst data-dependent path with interference filtered out",
+                "window_min": "a whole window's batch pass / T, min over windows and rounds: the protocol of "
+                "python_run (whole-record run() call / T, min over calls)",
+                "instructions_per_dof_sample": "callgrind Ir of the update loop (batch: one record() call) "
+                "after 64 warm-up samples (continuous: 400), / (updates n)",
+                "numpy_reference_over_python_run_interleaved": "per repetition: the numpy reference (cached "
+                "weights) at 1000 and 4000 samples (marginal cost) "
+                "and Python run() (min of 5 calls on 2000 samples), "
+                "back to back; the ratio of each repetition",
+                "batch": "ChainEstimator::record() in 16-sample chunks (median, p99, max = slowest chunk) "
+                "and whole windows (window_min), writing every sample's estimates into arrays as the "
+                "Python run() does",
+            },
+            "continuous": continuous_note,
+        },
         "configurations": configs,
-        "flops": {"per_dof_sample": {str(k): v for k, v in flops_per_dof.items()},
-                  "phases": [r for r in flops if r["subject"].startswith("phase")], "rls_per_dof_sample": rls_flops},
+        "flops": {
+            "per_dof_sample": {str(k): v for k, v in flops_per_dof.items()},
+            "phases": [r for r in flops if r["subject"].startswith("phase")],
+            "rls_per_dof_sample": rls_flops,
+        },
         "peak": peak,
         "lower_bound": bound,
         "ratio_estimator_over_rls": {"time": rls_ratio, "instructions": rls_ratio_instructions},
@@ -614,8 +758,10 @@ def main(argv: list[str] | None = None) -> int:
     args.output.write_text(json.dumps(result, indent=1) + "\n")
 
     # ---- table ---------------------------------------------------------------------------------
-    print(f"\nns per DOF-sample (median / p99 / max / max_path), instructions per DOF-sample; "
-          f"load average {load_before[0]:.1f} -> {load_after[0]:.1f} on {os.cpu_count()} cores")
+    print(
+        f"\nns per DOF-sample (median / p99 / max / max_path), instructions per DOF-sample; "
+        f"load average {load_before[0]:.1f} -> {load_after[0]:.1f} on {os.cpu_count()} cores"
+    )
     header = f"{'configuration':34s} " + " ".join(f"{'n=' + str(n):>30s}" for n in SIZES)
     print(header)
     for config in sorted(configs):
@@ -631,42 +777,86 @@ def main(argv: list[str] | None = None) -> int:
             ins = f.get("instructions_per_dof_sample")
             cells.append(f"{'/'.join(parts) + (f' [{ins:.0f}i]' if ins else ''):>30s}")
         print(f"{config:34s} " + " ".join(cells))
-    print(f"\nflops per DOF-sample (counted): " + ", ".join(
-        f"n={n}: {flops_per_dof[n]['flops_per_dof_sample']:.0f}" for n in SIZES if n in flops_per_dof)
-        + f"; RLS: {rls_flops:.0f}")
+    print(
+        "\nflops per DOF-sample (counted): "
+        + ", ".join(f"n={n}: {flops_per_dof[n]['flops_per_dof_sample']:.0f}" for n in SIZES if n in flops_per_dof)
+        + f"; RLS: {rls_flops:.0f}"
+    )
     for name, p in peak.items():
-        print(f"peak ({name}, {p['isa']}): double {p['double_gflops']:.1f} GFLOP/s "
-              f"(scalar {p['double_scalar_gflops']:.1f}), float {p['float_gflops']:.1f} GFLOP/s")
+        print(
+            f"peak ({name}, {p['isa']}): double {p['double_gflops']:.1f} GFLOP/s "
+            f"(scalar {p['double_scalar_gflops']:.1f}), float {p['float_gflops']:.1f} GFLOP/s"
+        )
     b3 = bound["3"]
-    print("lower bound n=3: " + ", ".join(f"{k[9:]} {v:.0f} ns" for k, v in b3.items() if k.startswith("bound_ns"))
-          + f"; measured {b3['measured_ns']:.0f} ns ({b3.get('achieved_gflops', 0):.1f} GFLOP/s achieved)")
+    print(
+        "lower bound n=3: "
+        + ", ".join(f"{k[9:]} {v:.0f} ns" for k, v in b3.items() if k.startswith("bound_ns"))
+        + f"; measured {b3['measured_ns']:.0f} ns ({b3.get('achieved_gflops', 0):.1f} GFLOP/s achieved)"
+    )
     print("\ntargets (issue 5):")
     t = targets
-    print(f"  median n=3 <= 100 ns/DOF-sample: {t['median_ns_per_dof_sample_n3_le_100']['value']:.0f} ns -> "
-          f"{'met' if t['median_ns_per_dof_sample_n3_le_100']['met'] else 'NOT met'}")
+    print(
+        f"  median n=3 <= 100 ns/DOF-sample: {t['median_ns_per_dof_sample_n3_le_100']['value']:.0f} ns -> "
+        f"{'met' if t['median_ns_per_dof_sample_n3_le_100']['met'] else 'NOT met'}"
+    )
     lin = t["linear_in_n_n50_per_dof_le_n3"]
-    print(f"  linear in n (n=50 per DOF <= n=3): {lin['n50']:.0f} vs {lin['n3']:.0f} -> {'met' if lin['met'] else 'NOT met'}")
-    print(f"  Python run() ({algid.ISA} build) / C++ {run_cpp} (whole record, min over repetitions): " + ", ".join(
-        f"n={n}: {v['ratio']:.2f}x{'' if v['met'] else ' (NOT met)'}" for n, v in t["python_run_within_1.5x_of_cpp"].items()))
-    print("  numpy reference / Python run(), back to back (median | min over repetitions): " + ", ".join(
-        f"n={n}: {v['ratio_interleaved_median']:.0f}x | {v['ratio_interleaved_min']:.0f}x"
-        for n, v in t["python_run_at_least_50x_faster_than_numpy_reference"].items()))
-    print("  (timed apart: marginal | whole call: " + ", ".join(
-        f"n={n}: {v['ratio_marginal_cached']:.0f}x | {v['ratio_whole_call_cached']:.0f}x"
-        for n, v in t["python_run_at_least_50x_faster_than_numpy_reference"].items()) + ")")
-    print("  max / median (raw | path): " + ", ".join(
-        f"n={n}: {v['max_over_median']:.1f} | {v['max_path_over_median']:.2f}" for n, v in t["max_within_5x_of_median"].items()))
+    print(
+        f"  linear in n (n=50 per DOF <= n=3): {lin['n50']:.0f} vs {lin['n3']:.0f} -> {'met' if lin['met'] else 'NOT met'}"
+    )
+    print(
+        f"  Python run() ({algid.ISA} build) / C++ {run_cpp} (whole record, min over repetitions): "
+        + ", ".join(
+            f"n={n}: {v['ratio']:.2f}x{'' if v['met'] else ' (NOT met)'}"
+            for n, v in t["python_run_within_1.5x_of_cpp"].items()
+        )
+    )
+    print(
+        "  numpy reference / Python run(), back to back (median | min over repetitions): "
+        + ", ".join(
+            f"n={n}: {v['ratio_interleaved_median']:.0f}x | {v['ratio_interleaved_min']:.0f}x"
+            for n, v in t["python_run_at_least_50x_faster_than_numpy_reference"].items()
+        )
+    )
+    print(
+        "  (timed apart: marginal | whole call: "
+        + ", ".join(
+            f"n={n}: {v['ratio_marginal_cached']:.0f}x | {v['ratio_whole_call_cached']:.0f}x"
+            for n, v in t["python_run_at_least_50x_faster_than_numpy_reference"].items()
+        )
+        + ")"
+    )
+    print(
+        "  max / median (raw | path): "
+        + ", ".join(
+            f"n={n}: {v['max_over_median']:.1f} | {v['max_path_over_median']:.2f}"
+            for n, v in t["max_within_5x_of_median"].items()
+        )
+    )
     print("  estimator / RLS per DOF-sample: " + ", ".join(f"n={n}: {r:.1f}x" for n, r in rls_ratio.items()))
-    print("  float at t0 + 0.1 s, 1 kHz: " + ", ".join(
-        f"{src}: {v['max_rel_error']:.1e}" for src, v in t["float_within_1pct_at_t0_plus_0.1s_1kHz"].items()))
+    print(
+        "  float at t0 + 0.1 s, 1 kHz: "
+        + ", ".join(
+            f"{src}: {v['max_rel_error']:.1e}" for src, v in t["float_within_1pct_at_t0_plus_0.1s_1kHz"].items()
+        )
+    )
     print(f"  continuous configuration: {continuous_note}")
-    print("  run-time sized / fixed-size, same n: " + "; ".join(
-        f"{key}: " + ", ".join(f"n={n} {r:.2f}x" for n, r in ratios.items())
-        for key, ratios in runtime_over_fixed.items() if ratios))
-    if after_over_before:
-        print(f"  after / before ({args.baseline}), median ns per DOF-sample: " + "; ".join(
+    print(
+        "  run-time sized / fixed-size, same n: "
+        + "; ".join(
             f"{key}: " + ", ".join(f"n={n} {r:.2f}x" for n, r in ratios.items())
-            for key, ratios in after_over_before.items() if ratios))
+            for key, ratios in runtime_over_fixed.items()
+            if ratios
+        )
+    )
+    if after_over_before:
+        print(
+            f"  after / before ({args.baseline}), median ns per DOF-sample: "
+            + "; ".join(
+                f"{key}: " + ", ".join(f"n={n} {r:.2f}x" for n, r in ratios.items())
+                for key, ratios in after_over_before.items()
+                if ratios
+            )
+        )
     print(f"\nwrote {args.output.relative_to(ROOT) if args.output.is_relative_to(ROOT) else args.output}")
     return 0
 

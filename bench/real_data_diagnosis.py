@@ -72,15 +72,35 @@ def f16_modal_recording(data: Path, level: int, channel: int = 1) -> Recording:
 
 def _summary(d) -> dict:
     js = to_json(d)
-    keep = ("effect", "location", "params", "params_std", "gap_before", "gap_after", "gap_before_fullband",
-            "gap_after_fullband", "gap_before_force", "gap_after_force", "band", "linear_model", "analysis", "model",
-            "equation_form", "combination", "mains_hum_removed_hz")
+    keep = (
+        "effect",
+        "location",
+        "params",
+        "params_std",
+        "gap_before",
+        "gap_after",
+        "gap_before_fullband",
+        "gap_after_fullband",
+        "gap_before_force",
+        "gap_after_force",
+        "band",
+        "linear_model",
+        "analysis",
+        "model",
+        "equation_form",
+        "combination",
+        "mains_hum_removed_hz",
+    )
     out = {k: js[k] for k in keep}
-    out["ranking_top3"] = [{k: r[k] for k in ("effect", "location", "params", "gap_after", "gap_after_fullband",
-                                              "z_noise")}
-                           for r in js["ranking"][:3]]
-    out["where"] = {"per_dof": js["where"]["per_dof"], "frequency": js["where"]["frequency"],
-                    "amplitude": js["where"]["amplitude"]}
+    out["ranking_top3"] = [
+        {k: r[k] for k in ("effect", "location", "params", "gap_after", "gap_after_fullband", "z_noise")}
+        for r in js["ranking"][:3]
+    ]
+    out["where"] = {
+        "per_dof": js["where"]["per_dof"],
+        "frequency": js["where"]["frequency"],
+        "amplitude": js["where"]["amplitude"],
+    }
     out["wall_s"] = d.timings.get("total")
     return out
 
@@ -127,8 +147,9 @@ def main(argv: list[str] | None = None) -> int:
         print(to_text(d, f"Silverbox SNLS80mV, {part}"), "\n")
         out["silverbox"][part] = _summary(d)
         if part == "arrow":
-            for path in save_figures(d, args.figures / "_tmp",
-                                     which=("restoring_force.png", "residuals_spectrum.png", "ranking.png")):
+            for path in save_figures(
+                d, args.figures / "_tmp", which=("restoring_force.png", "residuals_spectrum.png", "ranking.png")
+            ):
                 path.replace(args.figures / f"silverbox_{path.name}")
         print(f"[{time.perf_counter() - t0:.1f} s]", file=sys.stderr)
     for level in (1, 7):
@@ -144,8 +165,9 @@ def main(argv: list[str] | None = None) -> int:
         print(to_text(d, f"F-16 FullMSine level {level}, torsion band, 1 DOF"), "\n")
         m, c, k = d.lin.theta[0]
         s = _summary(d)
-        s.update(level=level, natural_hz=float(np.sqrt(k / m) / (2 * np.pi)),
-                 damping_ratio=float(c / (2 * np.sqrt(k * m))))
+        s.update(
+            level=level, natural_hz=float(np.sqrt(k / m) / (2 * np.pi)), damping_ratio=float(c / (2 * np.sqrt(k * m)))
+        )
         rows.append(s)
     out["f16_modal"] = rows
     level_figure(rows, args.figures / "f16_modal_levels.png")

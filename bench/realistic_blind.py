@@ -80,6 +80,7 @@ def _rms(x) -> float:
 
 # ------------------------------------------------------------------------------ nuisances
 
+
 def pink(T: int, n: int, rng) -> np.ndarray:
     """Unit-RMS 1/f noise (T, n)."""
     f = np.fft.rfftfreq(T)
@@ -138,7 +139,7 @@ def with_extra_mode(chain: Chain, rng, info: dict) -> Chain:
     m = np.r_[chain.mass, me]
     c = np.r_[chain.damping, 0.01 * chain.damping.mean()]
     if chain.boundary == "fixed":  # k_{n+1} split in two springs in series around the light mass:
-        kw = chain.stiffness[n]    # the same wall spring at low frequency, a mode ka + kb = me we^2
+        kw = chain.stiffness[n]  # the same wall spring at low frequency, a mode ka + kb = me we^2
         S = max(ke, 4.0 * kw)
         root = np.sqrt(max(S * S - 4.0 * S * kw, 0.0))
         ka, kb = 0.5 * (S + root), 0.5 * (S - root)
@@ -152,14 +153,19 @@ def with_extra_mode(chain: Chain, rng, info: dict) -> Chain:
 
 # ---------------------------------------------------------------------------------- rigs
 
+
 def shaker_case(seed: int, rng) -> tuple[Recording, dict]:
     case = B.draw_case(seed, DURATION, FS, effects=SHAKER_EFFECTS)
     lab, chain = case["label"], case["chain"]
     info: dict = {"rig": "shaker"}
     plant = chain
     loc = lab.get("location") or {}
-    if rng.uniform() < 0.3 and not (chain.boundary == "fixed" and loc.get("spring") == chain.n + 1) \
-            and chain.n >= 1 and not (chain.n == 1 and chain.boundary == "fixed"):
+    if (
+        rng.uniform() < 0.3
+        and not (chain.boundary == "fixed" and loc.get("spring") == chain.n + 1)
+        and chain.n >= 1
+        and not (chain.n == 1 and chain.boundary == "fixed")
+    ):
         plant = with_extra_mode(chain, rng, info)
     n = chain.n
     u_full = np.zeros((case["u"].shape[0], plant.n))
@@ -187,8 +193,11 @@ def axis_case(seed: int, rng) -> tuple[Recording, dict]:
     if effect == "coulomb_friction":
         params = {"force": r * u_rms}
     elif effect == "stribeck_friction":
-        params = {"force": r * u_rms, "static": r * u_rms * float(rng.uniform(1.5, 3.0)),
-                  "v_stribeck": float(rng.uniform(0.05, 0.3)) * v_rms}
+        params = {
+            "force": r * u_rms,
+            "static": r * u_rms * float(rng.uniform(1.5, 3.0)),
+            "v_stribeck": float(rng.uniform(0.05, 0.3)) * v_rms,
+        }
     elif effect == "quadratic_damping":
         params = {"c2": r * u_rms / v_rms**2}
     elif effect == "input_delay":
@@ -201,8 +210,15 @@ def axis_case(seed: int, rng) -> tuple[Recording, dict]:
     snr_u = float(rng.uniform(40, 60))
     u = sc.recording.u + 10 ** (-snr_u / 20) * sc.recording.u.std() * rng.standard_normal(sc.recording.u.shape)
     rec = Recording(t=sc.recording.t, u=u, x=sc.recording.x)
-    lab = _label(seed, effect, {"dof": 1}, params, Chain([m], [c], [0.0, 0.0]), snr_u,
-                 {"rig": "axis", "encoder_m": q, "force_offset_unrecorded": offset, "share": r})
+    lab = _label(
+        seed,
+        effect,
+        {"dof": 1},
+        params,
+        Chain([m], [c], [0.0, 0.0]),
+        snr_u,
+        {"rig": "axis", "encoder_m": q, "force_offset_unrecorded": offset, "share": r},
+    )
     return rec, lab
 
 
@@ -238,16 +254,27 @@ def device_case(seed: int, rng) -> tuple[Recording, dict]:
         u = u + b
         info["force_offset"] = b
     rec = Recording(t=sc.recording.t, u=u, x=sc.recording.x)
-    return rec, _label(seed, effect, loc if effect != "none" else None, params, Chain([m], [c], [k_lin, 0.0]),
-                       snr, info)
+    return rec, _label(
+        seed, effect, loc if effect != "none" else None, params, Chain([m], [c], [k_lin, 0.0]), snr, info
+    )
 
 
 def _label(seed, effect, loc, params, chain, snr, info) -> dict:
-    lab = {"seed": seed, "n": chain.n, "boundary": chain.boundary, "snr_db": snr, "effect": effect,
-           "location": loc if effect != "none" else None, "params": {k: float(v) for k, v in params.items()},
-           "visibility": float(info.get("share", 0.0)) * 100,
-           "chain": {"mass": chain.mass.tolist(), "damping": chain.damping.tolist(),
-                     "stiffness": chain.stiffness.tolist()}}
+    lab = {
+        "seed": seed,
+        "n": chain.n,
+        "boundary": chain.boundary,
+        "snr_db": snr,
+        "effect": effect,
+        "location": loc if effect != "none" else None,
+        "params": {k: float(v) for k, v in params.items()},
+        "visibility": float(info.get("share", 0.0)) * 100,
+        "chain": {
+            "mass": chain.mass.tolist(),
+            "damping": chain.damping.tolist(),
+            "stiffness": chain.stiffness.tolist(),
+        },
+    }
     lab.update(info)
     return lab
 
@@ -260,6 +287,7 @@ def draw(seed: int) -> tuple[Recording, dict]:
 
 
 # ------------------------------------------------------------------------------ stages
+
 
 def generate(seed: int, work: Path) -> None:
     rec_path = work / "recordings" / f"case{seed:05d}.npz"
@@ -292,9 +320,17 @@ def summarize(rows: list[dict]) -> dict:
         rs = [r for r in rows if r["rig"] == rig]
         if rs:
             s = B.summarize(rs)
-            out["per_rig"][rig] = {k: s[k] for k in ("cases", "top1_accuracy", "location_accuracy_among_correct",
-                                                     "param_within_20pct_among_correct", "median_gap_shrink_real",
-                                                     "false_alarm_rate_none")}
+            out["per_rig"][rig] = {
+                k: s[k]
+                for k in (
+                    "cases",
+                    "top1_accuracy",
+                    "location_accuracy_among_correct",
+                    "param_within_20pct_among_correct",
+                    "median_gap_shrink_real",
+                    "false_alarm_rate_none",
+                )
+            }
     return out
 
 
@@ -311,30 +347,49 @@ def main(argv=None) -> int:
         for k, seed in enumerate(seeds):
             t0 = time.perf_counter()
             generate(seed, work)
-            print(f"[generate {k + 1}/{len(seeds)}] seed {seed} ({time.perf_counter() - t0:.1f} s)", file=sys.stderr,
-                  flush=True)
+            print(
+                f"[generate {k + 1}/{len(seeds)}] seed {seed} ({time.perf_counter() - t0:.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
     if args.stage in ("all", "diagnose"):
         for k, seed in enumerate(seeds):
             out = work / "diagnoses" / f"case{seed:05d}.json"
             lab = json.loads((work / "labels" / f"case{seed:05d}.json").read_text())
             res = B.diagnose_case(seed, work, lab["boundary"])
             out.write_text(json.dumps(res, indent=1))
-            print(f"[diagnose {k + 1}/{len(seeds)}] seed {seed} {lab['rig']}: {lab['effect']} -> {res['effect']} "
-                  f"({res['_wall_s']:.1f} s)", file=sys.stderr, flush=True)
+            print(
+                f"[diagnose {k + 1}/{len(seeds)}] seed {seed} {lab['rig']}: {lab['effect']} -> {res['effect']} "
+                f"({res['_wall_s']:.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
     if args.stage in ("all", "score"):
         rows = B.score_all(work, seeds, score)
         summary = summarize(rows)
         print(B.confusion_table(summary["confusion"]))
-        for key in ("cases", "top1_accuracy", "location_accuracy_among_correct", "param_within_20pct_among_correct",
-                    "median_gap_shrink_real", "false_alarm_rate_none", "false_none_on_effect", "none_on_inadmissible",
-                    "wall_s_median", "wall_s_max"):
+        for key in (
+            "cases",
+            "top1_accuracy",
+            "location_accuracy_among_correct",
+            "param_within_20pct_among_correct",
+            "median_gap_shrink_real",
+            "false_alarm_rate_none",
+            "false_none_on_effect",
+            "none_on_inadmissible",
+            "wall_s_median",
+            "wall_s_max",
+        ):
             print(f"{key:36s} {summary[key]}")
         for rig, s in summary["per_rig"].items():
             print(f"{rig:8s} {s}")
         args.results.parent.mkdir(parents=True, exist_ok=True)
         args.results.write_text(json.dumps({"seeds": args.seeds, "summary": summary, "cases": rows}, indent=1))
-        B.confusion_png(summary["confusion"], args.results.with_suffix(".png"),
-                        f"realistic blind diagnosis, seeds {args.seeds}: top-1 {summary['top1_accuracy']:.0%}")
+        B.confusion_png(
+            summary["confusion"],
+            args.results.with_suffix(".png"),
+            f"realistic blind diagnosis, seeds {args.seeds}: top-1 {summary['top1_accuracy']:.0%}",
+        )
     return 0
 
 

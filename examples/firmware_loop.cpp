@@ -160,8 +160,8 @@ void run_task(const char* label) {
   static Estimator estimator(config);  // static storage: no heap, constructed once
 
   g_plant = Plant{};
-  const double truth[10] = {kMass[0],      kMass[1],      kMass[2],      kDamping[0],   kDamping[1],
-                            kDamping[2],   kStiffness[0], kStiffness[1], kStiffness[2], kStiffness[3]};
+  const double truth[10] = {kMass[0],    kMass[1],      kMass[2],      kDamping[0],   kDamping[1],
+                            kDamping[2], kStiffness[0], kStiffness[1], kStiffness[2], kStiffness[3]};
   constexpr int kSamples = 501;       // t = 0 .. 0.5 s
   constexpr int kCheckFrom = 100;     // t0 + 0.1 s
   int consumed = 0;
@@ -200,8 +200,8 @@ void run_task(const char* label) {
               static_cast<double>(estimator.window()));
   for (int i = 0; i < kDofs; ++i)
     std::printf("  m%d = %8.4f kg (true %.2f)   c%d = %7.4f N s/m (true %.2f)\n", i + 1,
-                static_cast<double>(estimator.mass()(i)), kMass[i], i + 1,
-                static_cast<double>(estimator.damping()(i)), kDamping[i]);
+                static_cast<double>(estimator.mass()(i)), kMass[i], i + 1, static_cast<double>(estimator.damping()(i)),
+                kDamping[i]);
   for (int j = 0; j <= kDofs; ++j)
     std::printf("  k%d = %9.3f N/m (true %.0f)\n", j + 1, static_cast<double>(estimator.stiffness()(j)), kStiffness[j]);
   std::printf("  worst relative error over t0 + [0.1, 0.5] s: %.2e\n", worst);

@@ -57,8 +57,10 @@ print(f"{'':4s} {'truth':>9s} {'t0+0.1 s':>11s} {'rel. err':>9s} {'t0+1 s':>11s}
 for name, x, a, b in zip(names, truth, at_100ms, final):
     print(f"{name:4s} {x:9.2f} {a:11.5f} {abs(a / x - 1):9.1e} {b:11.5f} {abs(b / x - 1):9.1e}")
 print(f"\nper-sample update(): {per_sample_s / T * 1e6:6.2f} us per sample")
-print(f"batch run():         {batch_s / T * 1e6:6.2f} us per sample "
-      f"({per_sample_s / batch_s:.0f}x faster, identical estimates)")
+print(
+    f"batch run():         {batch_s / T * 1e6:6.2f} us per sample "
+    f"({per_sample_s / batch_s:.0f}x faster, identical estimates)"
+)
 
 # 3. A noisy 10 s record as a rig would log it (40 dB on forces and accelerations), through the
 #    whole-record entry point: the estimator, its settings and one standard deviation per

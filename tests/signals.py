@@ -9,8 +9,10 @@ from scipy.integrate import solve_ivp
 from algid.chain import Chain
 
 #: Dry friction of a few percent of the drive's force and a constant force its sensor misses.
-FRICTION_AND_OFFSET = [{"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": 1.5}},
-                       {"name": "force_offset", "location": {"dof": 1}, "params": {"offset": 3.0}}]
+FRICTION_AND_OFFSET = [
+    {"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": 1.5}},
+    {"name": "force_offset", "location": {"dof": 1}, "params": {"offset": 3.0}},
+]
 
 
 def simulate_chain(chain: Chain, force, duration_s: float, fs_hz: float = 1000.0, breaks=()):

@@ -15,8 +15,13 @@ from algid.chain import Chain
 DT = 1e-3
 
 
-def tone_record(chain: Chain, duration_s: float, seed: int, snr_db: float | None = None,
-                step: tuple[float, int, float] | None = None):
+def tone_record(
+    chain: Chain,
+    duration_s: float,
+    seed: int,
+    snr_db: float | None = None,
+    step: tuple[float, int, float] | None = None,
+):
     """Closed-form record: prescribed trajectories (8 tones log-spaced over 1-20 Hz, displacement
     amplitudes falling as 1/f), forces from eq. 1 with the chain's parameters, optionally a
     spring step ``(time_s, spring index j (0-based), factor)``, and white noise of ``snr_db``
@@ -65,7 +70,7 @@ def test_window_results_match_numpy_reference(noisy_record):
     for r, s_end in enumerate(out["window_sample"][:8]):
         start = s_end - M + 1
         assert (start - (M * (r % K)) // K) % M == 0  # the staggered schedule
-        ref = reference.estimate(a[start:s_end + 1], u[start:s_end + 1], DT)["theta_ratio"][M - 1 - d]
+        ref = reference.estimate(a[start : s_end + 1], u[start : s_end + 1], DT)["theta_ratio"][M - 1 - d]
         k = np.full(n + 1, np.nan)
         for j in range(n + 1):
             votes = ([ref[j - 1, 3]] if j > 0 else []) + ([ref[j, 2]] if j < n else [])
@@ -92,7 +97,7 @@ def test_prefilter_matches_scipy_butterworth(noisy_record):
     for r, s_end in enumerate(out["window_sample"][:6]):
         start = s_end - M + 1
         assert start == 115 + (M * (r % 4)) // 4 + M * (r // 4)
-        ref = reference.estimate(af[start:s_end + 1], uf[start:s_end + 1], DT)["theta_ratio"][M - 1 - d]
+        ref = reference.estimate(af[start : s_end + 1], uf[start : s_end + 1], DT)["theta_ratio"][M - 1 - d]
         k = [np.mean(([ref[j - 1, 3]] if j > 0 else []) + ([ref[j, 2]] if j < n else [])) for j in range(n + 1)]
         np.testing.assert_allclose(out["windows"][r], np.concatenate([ref[:, 0], ref[:, 1], k]), rtol=1e-7)
 
@@ -110,7 +115,7 @@ def test_running_estimate_is_median_then_block_mean(noisy_record):
         if blocks == 0:
             expect = np.median(seen, axis=0)
         else:
-            expect = np.mean([np.median(seen[16 * b:16 * b + 16], axis=0) for b in range(blocks)], axis=0)
+            expect = np.mean([np.median(seen[16 * b : 16 * b + 16], axis=0) for b in range(blocks)], axis=0)
         np.testing.assert_allclose(got, expect, rtol=1e-12)
     # sigma: MAD of the ring (last 64), scaled to the estimate
     assert np.all(out["sigma"][-1] > 0) and np.all(np.isfinite(out["sigma"][-1]))

@@ -7,8 +7,7 @@ import pytest
 from scipy.linalg import expm
 
 from algid.chain import TABLE1
-from algid.controller import (DEFAULT_POLES, BezierReference, TrackingController, bezier,
-                              pole_placement_gains)
+from algid.controller import DEFAULT_POLES, BezierReference, TrackingController, bezier, pole_placement_gains
 from algid.simulator import simulate
 
 
@@ -83,8 +82,7 @@ def test_error_dynamics_after_the_switch_are_the_placed_poles():
 
 @pytest.mark.parametrize("mode", ["continuous", "sampled"])
 def test_tracking_with_exact_estimates(mode):
-    res = simulate(TABLE1, None, 3.0, 1000.0, controller=TrackingController(estimator_factory=truth()),
-                   mode=mode)
+    res = simulate(TABLE1, None, 3.0, 1000.0, controller=TrackingController(estimator_factory=truth()), mode=mode)
     err = np.abs(res.x - res.x_ref)
     stroke = 0.005
     tol = 1e-6 if mode == "continuous" else 2e-3  # the hold costs half a sample of phase
@@ -95,8 +93,10 @@ def test_tracking_with_exact_estimates(mode):
 
 
 def test_eq10_forms_agree_for_constant_estimates():
-    runs = [simulate(TABLE1, None, 1.0, 1000.0, controller=TrackingController(eq10=form, estimator_factory=truth()))
-            for form in ("integrated", "product")]
+    runs = [
+        simulate(TABLE1, None, 1.0, 1000.0, controller=TrackingController(eq10=form, estimator_factory=truth()))
+        for form in ("integrated", "product")
+    ]
     assert np.max(np.abs(runs[0].x - runs[1].x)) < 1e-12
     # and the reconstructed velocity is the true one once the true parameters are in use
     vel = runs[0].controller_log["velocity_estimate"]
@@ -104,12 +104,13 @@ def test_eq10_forms_agree_for_constant_estimates():
 
 
 def test_inadmissible_or_unsettled_estimates_are_not_used():
-    bad = lambda n, dt, b: Oracle(TABLE1.mass, TABLE1.damping, [1000.0, -900.0, 900.0, 700.0])
+    def bad(n, dt, b):
+        return Oracle(TABLE1.mass, TABLE1.damping, [1000.0, -900.0, 900.0, 700.0])
+
     res = simulate(TABLE1, None, 0.3, 1000.0, controller=TrackingController(estimator_factory=bad))
     assert np.all(res.controller_log["used"]["stiffness"] == 0.0)
     assert res.controller_log["first_accepted_s"] is None
-    lenient = simulate(TABLE1, None, 0.3, 1000.0,
-                       controller=TrackingController(estimator_factory=bad, accept="valid"))
+    lenient = simulate(TABLE1, None, 0.3, 1000.0, controller=TrackingController(estimator_factory=bad, accept="valid"))
     assert lenient.controller_log["used"]["stiffness"][-1, 1] == -900.0
 
     class Jumpy(Oracle):

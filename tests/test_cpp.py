@@ -16,8 +16,17 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 BUILD = REPO / "build" / "cpp-tests"
-BINARIES = ["test_quadrature", "test_cramer", "test_lanes", "test_estimator", "test_sizes", "test_realtime",
-            "test_no_exceptions", "firmware_loop", "test_continuous"]
+BINARIES = [
+    "test_quadrature",
+    "test_cramer",
+    "test_lanes",
+    "test_estimator",
+    "test_sizes",
+    "test_realtime",
+    "test_no_exceptions",
+    "firmware_loop",
+    "test_continuous",
+]
 # The same tests built for the wider instruction sets the wheel ships (x86-64 only; skipped
 # where the CPU cannot run them, exit code 77).
 WIDE_BINARIES = [f"{name}_{level}" for level in ("v3", "v4") for name in ("test_lanes", "test_sizes")]
@@ -28,8 +37,16 @@ def cpp_build() -> Path:
     cmake = shutil.which("cmake")
     if cmake is None:
         pytest.fail("cmake not found: install the test extra (pip install '.[test]')")
-    cmd = [cmake, "-S", str(REPO), "-B", str(BUILD), "-DALGID_BUILD_TESTS=ON", "-DCMAKE_BUILD_TYPE=Release",
-           f"-DPython_EXECUTABLE={sys.executable}"]
+    cmd = [
+        cmake,
+        "-S",
+        str(REPO),
+        "-B",
+        str(BUILD),
+        "-DALGID_BUILD_TESTS=ON",
+        "-DCMAKE_BUILD_TYPE=Release",
+        f"-DPython_EXECUTABLE={sys.executable}",
+    ]
     if shutil.which("ninja") and not (BUILD / "CMakeCache.txt").exists():
         cmd += ["-G", "Ninja"]
     for step in (cmd, [cmake, "--build", str(BUILD), "-j", str(os.cpu_count() or 2)]):
@@ -52,8 +69,10 @@ def test_cpp_binary(cpp_build: Path, name: str) -> None:
     if exe is None and name in WIDE_BINARIES:
         pytest.skip(f"{name}: the compiler or the architecture has no {name.rsplit('_', 1)[1]} build")
     if exe is None:
-        source = {"firmware_loop": REPO / "examples" / "firmware_loop.cpp",
-                  "test_continuous": REPO / "tests" / "cpp" / "test_continuous.cpp"}.get(name)
+        source = {
+            "firmware_loop": REPO / "examples" / "firmware_loop.cpp",
+            "test_continuous": REPO / "tests" / "cpp" / "test_continuous.cpp",
+        }.get(name)
         if source is not None and not source.exists():
             pytest.skip(f"{source.name} is not part of this tree")
         pytest.fail(f"{name} was not built")
@@ -74,8 +93,17 @@ def test_installed_package_is_found_by_cmake(cpp_build: Path, tmp_path: Path) ->
     eigen_prefix = subprocess.run([sys.executable, "-m", "cmeel", "cmake"], capture_output=True, text=True)
     search = [str(prefix)] + ([eigen_prefix.stdout.strip()] if eigen_prefix.returncode == 0 else [])
     consumer = tmp_path / "consumer-build"
-    steps.append([cmake, "-S", str(REPO / "tests" / "cpp" / "consumer"), "-B", str(consumer),
-                  f"-DCMAKE_PREFIX_PATH={';'.join(search)}", "-DCMAKE_BUILD_TYPE=Release"])
+    steps.append(
+        [
+            cmake,
+            "-S",
+            str(REPO / "tests" / "cpp" / "consumer"),
+            "-B",
+            str(consumer),
+            f"-DCMAKE_PREFIX_PATH={';'.join(search)}",
+            "-DCMAKE_BUILD_TYPE=Release",
+        ]
+    )
     steps.append([cmake, "--build", str(consumer)])
     for step in steps:
         proc = subprocess.run(step, capture_output=True, text=True)

@@ -65,10 +65,16 @@ def test_cli_writes_table_figures_and_json(tmp_path, capsys):
     parser = argparse.ArgumentParser()
     demo.add_parser(parser.add_subparsers(dest="command"))
     defaults = parser.parse_args(["demo"])
-    assert (defaults.mode, defaults.noise_db, defaults.n, defaults.seed, defaults.out) == \
-        ("continuous", None, 3, 0, "./algid-demo/")
-    args = parser.parse_args(["demo", "--n", "2", "--duration", "1.0", "--mode", "sampled",
-                              "--noise-db", "60", "--out", str(tmp_path)])
+    assert (defaults.mode, defaults.noise_db, defaults.n, defaults.seed, defaults.out) == (
+        "continuous",
+        None,
+        3,
+        0,
+        "./algid-demo/",
+    )
+    args = parser.parse_args(
+        ["demo", "--n", "2", "--duration", "1.0", "--mode", "sampled", "--noise-db", "60", "--out", str(tmp_path)]
+    )
     assert args.func(args) == 0
     out = capsys.readouterr().out
     assert "est @ switch" in out and "tracking error after 1 s" in out
@@ -128,8 +134,7 @@ def test_noisy_demo_tracks_and_reports_the_drift(noisy):
     res, s = noisy
     assert s["estimator"] == "continuous" and s["excitation_n"] == demo.DEFAULT_EXCITATION_N
     # the SNR holds on the accelerations actually measured (calibrated on a noise-free run)
-    snr = 20 * np.log10(np.sqrt(np.mean(res.a_true ** 2, axis=0))
-                        / np.sqrt(np.mean((res.a - res.a_true) ** 2, axis=0)))
+    snr = 20 * np.log10(np.sqrt(np.mean(res.a_true**2, axis=0)) / np.sqrt(np.mean((res.a - res.a_true) ** 2, axis=0)))
     assert np.allclose(snr, s["accel_snr_achieved_db"])
     # the noisy loop substitutes later than the calibration run (0.2 s against 0.1 s): the
     # longer nominal-model transient adds acceleration, so the SNR is a little better on a

@@ -228,7 +228,9 @@ def test_no_false_alarm_on_a_linear_chain_with_noise():
         d = diagnose(Recording(t=res.t, u=res.u, a=res.a))
         assert d.effect == "none"
         assert d.gap_after == d.gap_before
-        assert max(s.z for s in d.ranking if np.isfinite(s.z)) < 4.0 if any(np.isfinite(s.z) for s in d.ranking) else True
+        assert (
+            max(s.z for s in d.ranking if np.isfinite(s.z)) < 4.0 if any(np.isfinite(s.z) for s in d.ranking) else True
+        )
 
 
 def test_one_dof_reports_spring_one_for_the_second_spring():
@@ -247,8 +249,9 @@ def test_one_dof_reports_spring_one_for_the_second_spring():
 
 
 def test_displacement_only_recording_gives_the_same_diagnosis():
-    res = simulate(TABLE1, [{"name": "quadratic_damping", "location": {"dof": 3}, "params": {"c2": 40.0}}],
-                   noise_db=None, seed=2)
+    res = simulate(
+        TABLE1, [{"name": "quadratic_damping", "location": {"dof": 3}, "params": {"c2": 40.0}}], noise_db=None, seed=2
+    )
     d = diagnose(Recording(t=res.t, u=res.u, x=res.x))
     assert (d.effect, d.location) == ("quadratic_damping", {"dof": 3})
     assert d.params["c2"] == pytest.approx(40.0, rel=0.02)
@@ -271,13 +274,15 @@ def test_unforced_dof_has_parameters_per_unit_mass():
 
 def _run_cli(*argv):
     """The installed ``algid`` command line, as a user runs it."""
-    return subprocess.run([sys.executable, "-m", "algid.cli", *argv], capture_output=True, text=True,
-                          cwd=ROOT, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "algid.cli", *argv], capture_output=True, text=True, cwd=ROOT, timeout=300
+    )
 
 
 def test_cli_json_contract_and_figures(tmp_path):
-    res = simulate(TABLE1, [{"name": "cubic_stiffness", "location": {"spring": 3}, "params": {"k3": 6e5}}],
-                   duration=6.0, seed=8)
+    res = simulate(
+        TABLE1, [{"name": "cubic_stiffness", "location": {"spring": 3}, "params": {"k3": 6e5}}], duration=6.0, seed=8
+    )
     rec = save_recording(tmp_path / "rec.csv", Recording(t=res.t, u=res.u, a=res.a))
     out = tmp_path / "diag.json"
     p = _run_cli("diagnose", str(rec), "--json", str(out), "--plots", str(tmp_path / "figs"))
@@ -295,15 +300,26 @@ def test_cli_json_contract_and_figures(tmp_path):
     assert "signal band" in p.stdout
     assert "cubic_stiffness" in p.stdout and "Where the linear model fails" in p.stdout
     pngs = sorted(f.name for f in (tmp_path / "figs").iterdir())
-    assert pngs == sorted(["residuals_time.png", "residuals_spectrum.png", "restoring_force.png",
-                           "damping_force.png", "window_parameters.png", "ranking.png"])
+    assert pngs == sorted(
+        [
+            "residuals_time.png",
+            "residuals_spectrum.png",
+            "restoring_force.png",
+            "damping_force.png",
+            "window_parameters.png",
+            "ranking.png",
+        ]
+    )
 
 
-@pytest.mark.parametrize("content,needle", [
-    ("t,u1\n0,1\n", "missing columns a1"),
-    ("t,u1,a1\n" + "".join(f"{k}e-3,1,{'nan' if k == 3 else 2}\n" for k in range(20)), "NaN"),
-    ("", "empty file"),
-])
+@pytest.mark.parametrize(
+    "content,needle",
+    [
+        ("t,u1\n0,1\n", "missing columns a1"),
+        ("t,u1,a1\n" + "".join(f"{k}e-3,1,{'nan' if k == 3 else 2}\n" for k in range(20)), "NaN"),
+        ("", "empty file"),
+    ],
+)
 def test_cli_bad_input_is_one_line_and_exit_2(tmp_path, content, needle):
     rec = tmp_path / "bad.csv"
     rec.write_text(content)

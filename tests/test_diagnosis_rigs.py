@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.signal import butter, lfilter
-from signals import FRICTION_AND_OFFSET, multisine
 
 from algid.chain import TABLE1, Chain
 from algid.diagnosis import diagnose
@@ -15,6 +14,7 @@ from algid.diagnosis.report import to_json
 from algid.recording import Recording
 from algid.scenarios import displacement_driven, impact_test, positioning_axis
 from algid.simulator import simulate
+from signals import FRICTION_AND_OFFSET, multisine
 
 
 def _coulomb(force):
@@ -52,10 +52,13 @@ def test_friction_with_backlash_is_reported_as_a_combination():
     assert combo["gap_after"] < 0.5 * d.gap_after
 
 
-@pytest.mark.parametrize("effect,params,loc", [
-    ("amplitude_damping", {"c_amp": 4e6}, {"spring": 1}),
-    ("stribeck_friction", {"force": 8.0, "static": 24.0, "v_stribeck": 2e-3}, {"dof": 1}),
-])
+@pytest.mark.parametrize(
+    "effect,params,loc",
+    [
+        ("amplitude_damping", {"c_amp": 4e6}, {"spring": 1}),
+        ("stribeck_friction", {"force": 8.0, "static": 24.0, "v_stribeck": 2e-3}, {"dof": 1}),
+    ],
+)
 def test_new_effects_of_the_vocabulary(effect, params, loc):
     d = diagnose(displacement_driven(seed=3, effects=[{"name": effect, "location": loc, "params": params}]).recording)
     assert d.effect == effect and d.location == loc

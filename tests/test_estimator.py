@@ -8,11 +8,11 @@ import time
 
 import numpy as np
 import pytest
-from signals import multisine, relative_errors, simulate_chain
 
 import algid
 from algid import reference
 from algid.chain import TABLE1, Chain
+from signals import multisine, relative_errors, simulate_chain
 
 
 @pytest.fixture(scope="module")
@@ -327,7 +327,7 @@ def test_isa_builds_agree_and_selection():
     if len(builds) < 2:
         pytest.skip("no wider build or CPU here")
     _, a, u, _ = simulate_chain(TABLE1, multisine(3), 0.3)
-    outs = [getattr(chain_core(isa), "ChainEstimator3")(algid.ChainConfig(), 3).run(a, u) for isa in builds]
+    outs = [chain_core(isa).ChainEstimator3(algid.ChainConfig(), 3).run(a, u) for isa in builds]
     late = slice(60, None)
     for out in outs[1:]:
         for key in ("mass", "damping", "stiffness"):

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from signals import FRICTION_AND_OFFSET, multisine, relative_errors, simulate_chain
 
 import algid
 from algid.chain import TABLE1, Chain
@@ -16,9 +15,11 @@ from algid.noise import analyse
 from algid.recording import Recording, second_derivative
 from algid.scenarios import displacement_driven, positioning_axis
 from algid.simulator import simulate
+from signals import FRICTION_AND_OFFSET, multisine, relative_errors, simulate_chain
 
 DT = 1e-3
 # ---- surrogates ----------------------------------------------------------------------------
+
 
 def _sines(T, freqs, amps, dt=DT):
     t = np.arange(T) * dt
@@ -59,8 +60,10 @@ def test_chain_forces_are_eq1_with_the_chain_matrices():
         np.testing.assert_allclose(u, mo.a @ M + mo.v @ C + mo.x @ K.T, rtol=1e-12)
     one = Chain([2.0], [3.0], [500.0, 300.0])
     mo1 = Motion(mo.x[:, :1], mo.v[:, :1], mo.a[:, :1])
-    np.testing.assert_allclose(chain_forces(one.identifiable(), 1, "fixed", mo1)[:, 0],
-                               2.0 * mo1.a[:, 0] + 3.0 * mo1.v[:, 0] + 800.0 * mo1.x[:, 0])
+    np.testing.assert_allclose(
+        chain_forces(one.identifiable(), 1, "fixed", mo1)[:, 0],
+        2.0 * mo1.a[:, 0] + 3.0 * mo1.v[:, 0] + 800.0 * mo1.x[:, 0],
+    )
 
 
 def test_replicates_carry_the_recordings_noise():
@@ -69,8 +72,12 @@ def test_replicates_carry_the_recordings_noise():
     x, v, a = _sines(T, [2.0, 9.0], [1e-2, 1e-3])
     u = 3.0 * a + 50.0 * x
     sig_a, sig_u = 0.05, 0.02
-    nm = analyse(u[:, None] + sig_u * rng.standard_normal((T, 1)), a[:, None] + sig_a * rng.standard_normal((T, 1)),
-                 DT, "acceleration")
+    nm = analyse(
+        u[:, None] + sig_u * rng.standard_normal((T, 1)),
+        a[:, None] + sig_a * rng.standard_normal((T, 1)),
+        DT,
+        "acceleration",
+    )
     mo = Motion(x[:, None], v[:, None], a[:, None])
     a_b, u_b = replicate_signals(mo, u[:, None], nm, rng, 5)
     assert np.std(a_b[:, 0] - a) == pytest.approx(sig_a, rel=0.1)
@@ -85,6 +92,7 @@ def test_replicates_carry_the_recordings_noise():
 
 # ---- plan and verdicts -----------------------------------------------------------------------
 
+
 def test_plan_single_window_for_short_clean_records_else_continuous():
     t, a, u, _ = simulate_chain(TABLE1, multisine(3), 0.3)
     clean = analyse(u, a, DT)
@@ -97,8 +105,9 @@ def test_plan_single_window_for_short_clean_records_else_continuous():
     assert make_plan(noisy, 10.0, "window").estimator == "window"
     with pytest.raises(ValueError, match="estimator"):
         make_plan(noisy, 10.0, "kalman")
-    np.testing.assert_allclose(natural_frequencies_hz(TABLE1.identifiable(), 3, "fixed"),
-                               TABLE1.natural_frequencies_hz(), rtol=1e-9)
+    np.testing.assert_allclose(
+        natural_frequencies_hz(TABLE1.identifiable(), 3, "fixed"), TABLE1.natural_frequencies_hz(), rtol=1e-9
+    )
     assert natural_frequencies_hz(np.r_[-1.0, TABLE1.identifiable()[1:]], 3, "fixed").size == 0
 
 
@@ -110,8 +119,10 @@ def _judge(theta, sigma, u_scale=1.0, excess=None):
     u = u_scale * rng.standard_normal((T, 1))
     nm = analyse(u, mo.a, DT)
     ex = None if excess is None else np.array(excess, dtype=float)
-    return {v.name: v for v in judge(np.array(theta, float), np.array(sigma, float), 1, "fixed", mo, u,
-                                     np.array([True]), nm, ex)}
+    return {
+        v.name: v
+        for v in judge(np.array(theta, float), np.array(sigma, float), 1, "fixed", mo, u, np.array([True]), nm, ex)
+    }
 
 
 def test_verdicts_of_impossible_undetermined_and_negligible_estimates():
@@ -132,6 +143,7 @@ def test_verdicts_of_impossible_undetermined_and_negligible_estimates():
 
 
 # ---- whole records ---------------------------------------------------------------------------
+
 
 def test_noise_free_short_record_keeps_the_papers_accuracy():
     t, a, u, _ = simulate_chain(TABLE1, multisine(3), 0.2)

@@ -8,10 +8,10 @@ import sys
 
 import numpy as np
 import pytest
-from signals import FRICTION_AND_OFFSET, multisine, relative_errors, simulate_chain
 
 from algid.chain import TABLE1, Chain
 from algid.recording import Recording, save_recording
+from signals import FRICTION_AND_OFFSET, multisine, relative_errors, simulate_chain
 
 
 def _write(path, t, u, a=None, x=None):
@@ -26,8 +26,9 @@ def table1_csv(tmp_path_factory):
 
 
 def _identify(*args):
-    return subprocess.run([sys.executable, "-m", "algid.cli", "identify", *map(str, args)],
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "algid.cli", "identify", *map(str, args)], capture_output=True, text=True, timeout=120
+    )
 
 
 def test_identify_table1(table1_csv, tmp_path):

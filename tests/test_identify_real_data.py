@@ -32,8 +32,12 @@ def test_silverbox_through_the_command_line(tmp_path):
     rec = silverbox_recording(DATA, "all")
     path = save_recording(tmp_path / "silverbox.npz", rec)
     out = tmp_path / "silverbox.json"
-    proc = subprocess.run([sys.executable, "-m", "algid.cli", "identify", str(path), "--json", str(out)],
-                          capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        [sys.executable, "-m", "algid.cli", "identify", str(path), "--json", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(out.read_text())
     assert doc["valid"] is True and doc["motion"] == "displacement"

@@ -30,8 +30,8 @@ def test_band_edge_and_median_frequency_of_a_band_limited_signal():
     rng = np.random.default_rng(1)
     x = _band_limited(40000, 40.0, rng) + 1e-4 * rng.standard_normal(40000)
     ch = channel("u1", x, DT)
-    assert 35.0 < ch.f_hi < 60.0       # 99 % of a 6th-order 40 Hz low-pass's power
-    assert 10.0 < ch.f_mid < 30.0      # flat to 40 Hz: half the power below ~20 Hz
+    assert 35.0 < ch.f_hi < 60.0  # 99 % of a 6th-order 40 Hz low-pass's power
+    assert 10.0 < ch.f_mid < 30.0  # flat to 40 Hz: half the power below ~20 Hz
     assert ch.snr_db > 50.0
 
 

@@ -47,8 +47,16 @@ def test_version_configured_by_cmake_is_the_package_version(tmp_path: Path) -> N
     if cmake is None:
         pytest.fail("cmake not found: install the test extra (pip install '.[test]')")
     build = tmp_path / "build"
-    cmd = [cmake, "-S", str(REPO), "-B", str(build), "-DALGID_BUILD_PYTHON=OFF", "-DALGID_BUILD_TESTS=OFF",
-           f"-DPython_EXECUTABLE={sys.executable}"]
+    cmd = [
+        cmake,
+        "-S",
+        str(REPO),
+        "-B",
+        str(build),
+        "-DALGID_BUILD_PYTHON=OFF",
+        "-DALGID_BUILD_TESTS=OFF",
+        f"-DPython_EXECUTABLE={sys.executable}",
+    ]
     if shutil.which("ninja"):
         cmd += ["-G", "Ninja"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
@@ -92,8 +100,7 @@ def test_plotting_leaves_the_matplotlib_backend_alone() -> None:
     import json
 
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
-    proc = subprocess.run([sys.executable, "-c", _BACKEND_PROBE], capture_output=True, text=True, env=env,
-                          timeout=300)
+    proc = subprocess.run([sys.executable, "-c", _BACKEND_PROBE], capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr[-4000:]
     report = json.loads(proc.stdout.strip().splitlines()[-1])
     assert report["matplotlib_after_import_algid"] is False

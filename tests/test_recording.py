@@ -236,7 +236,9 @@ def test_velocity_recording_csv_and_its_accelerations(tmp_path):
     t = dt * np.arange(500)
     w = 2 * np.pi * 5.0
     path = tmp_path / "vib.csv"
-    path.write_text("t,u1,v1\n" + "\n".join(f"{tk:.17g},{np.sin(w * tk):.17g},{np.cos(w * tk):.17g}" for tk in t) + "\n")
+    path.write_text(
+        "t,u1,v1\n" + "\n".join(f"{tk:.17g},{np.sin(w * tk):.17g},{np.cos(w * tk):.17g}" for tk in t) + "\n"
+    )
     rec = load_recording(path)
     assert rec.v is not None and rec.a is None and rec.x is None
     a = accelerations(rec)

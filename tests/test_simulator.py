@@ -68,7 +68,7 @@ def rhs_reference(chain: Chain, force, effects=(), v_eps=None, duration=1.0):
         return f / m
 
     def rhs(t, y):
-        x, v, z = y[:n], y[n:2 * n], y[2 * n:]
+        x, v, z = y[:n], y[n : 2 * n], y[2 * n :]
         a = accel(t, x, v)
         dz = [lp[i] * (a[i] - z[q]) for q, i in enumerate(lp_dofs)]
         return np.concatenate([v, a, dz])
@@ -127,14 +127,19 @@ def test_linear_chain_matches_solve_ivp(mode):
         X = [y[:3]]
         for k in range(len(res.t) - 1):
             uk = f(res.t[k])
-            sol = solve_ivp(lambda t, y: rhs_reference(TABLE1, lambda _t: uk)[0](t, y),
-                            (res.t[k], res.t[k + 1]), y, rtol=1e-12, atol=1e-16, method="DOP853")
+            sol = solve_ivp(
+                lambda t, y, uk=uk: rhs_reference(TABLE1, lambda _t: uk)[0](t, y),
+                (res.t[k], res.t[k + 1]),
+                y,
+                rtol=1e-12,
+                atol=1e-16,
+                method="DOP853",
+            )
             y = sol.y[:, -1]
             X.append(y[:3])
         X = np.array(X)
     else:
-        sol = solve_ivp(rhs, (0, res.t[-1]), np.zeros(6), t_eval=res.t, rtol=1e-12, atol=1e-16,
-                        method="DOP853")
+        sol = solve_ivp(rhs, (0, res.t[-1]), np.zeros(6), t_eval=res.t, rtol=1e-12, atol=1e-16, method="DOP853")
         X = sol.y[:3].T
         A = np.array([accel(t, y[:3], y[3:6]) for t, y in zip(sol.t, sol.y.T)])
         assert np.max(np.abs(A - res.a_true)) < 1e-8 * np.max(np.abs(A))
@@ -147,8 +152,7 @@ def _effects_error(effects, substeps=None, duration=1.0):
     rhs, accel, lp_dofs = rhs_reference(TABLE1, f, effects, res.stats["v_eps"], duration)
     y0 = np.zeros(6 + len(lp_dofs))
     y0[6:] = accel(0.0, np.zeros(3), np.zeros(3))[lp_dofs]  # the sensor starts settled
-    sol = solve_ivp(rhs, (0, res.t[-1]), y0, t_eval=res.t, rtol=1e-11,
-                    atol=1e-15, method="DOP853")
+    sol = solve_ivp(rhs, (0, res.t[-1]), y0, t_eval=res.t, rtol=1e-11, atol=1e-15, method="DOP853")
     X = sol.y[:3].T
     A = np.array([accel(t, y[:3], y[3:6]) for t, y in zip(sol.t, sol.y.T)])
     ex = np.max(np.abs(X - res.x)) / np.max(np.abs(X))
@@ -175,8 +179,9 @@ def test_steep_effects_match_solve_ivp_and_converge_with_substeps():
     the switches, the error is still small and shrinks with sub-steps."""
     clearance = [Effect("clearance", {"spring": 4}, {"gap": 5e-4, "stiffness": 3000.0})]
     friction = [Effect("coulomb_friction", {"dof": 1}, {"force": 0.3, "v_eps": 2e-4})]
-    stribeck = [Effect("stribeck_friction", {"dof": 2}, {"force": 0.2, "static": 0.5, "v_stribeck": 2e-3,
-                                                         "v_eps": 2e-4})]
+    stribeck = [
+        Effect("stribeck_friction", {"dof": 2}, {"force": 0.2, "static": 0.5, "v_stribeck": 2e-3, "v_eps": 2e-4})
+    ]
     joint = [Effect("amplitude_damping", {"spring": 3}, {"c_amp": 2e4})]  # |d| kinks at d = 0
     for effects, tol in ((clearance, 1e-6), (friction, 5e-5), (stribeck, 5e-5), (joint, 5e-5)):
         _, _, _, ex1, ea1 = _effects_error(effects)
@@ -228,12 +233,15 @@ def test_sample_convention_decides_the_estimator_bias(monkeypatch):
     fs, T = 1000.0, 500
     t = np.arange(T) / fs
     rng = np.random.default_rng(1)
-    U = np.stack([sum(np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi)) for f in (1.3, 2.9, 4.7, 7.1))
-                  for _ in range(3)], axis=1)
+    U = np.stack(
+        [sum(np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi)) for f in (1.3, 2.9, 4.7, 7.1)) for _ in range(3)],
+        axis=1,
+    )
     res = simulate(TABLE1, U, T / fs, fs, mode="sampled")
     L = res.limits
-    theta = np.array([[TABLE1.mass[i], TABLE1.damping[i], TABLE1.stiffness[i], TABLE1.stiffness[i + 1]]
-                      for i in range(3)])
+    theta = np.array(
+        [[TABLE1.mass[i], TABLE1.damping[i], TABLE1.stiffness[i], TABLE1.stiffness[i + 1]] for i in range(3)]
+    )
 
     def err(a, u):
         est = reference.estimate(a, u, 1 / fs)["theta_ratio"][-1]
@@ -261,9 +269,17 @@ def test_sensor_bias_and_input_delay():
     f = multisine(3)
     U = np.array([f(t) for t in np.arange(600) / 1000.0])
     base = simulate(TABLE1, U, 0.6, 1000.0, mode="sampled")
-    res = simulate(TABLE1, U, 0.6, 1000.0, mode="sampled",
-                   effects=[Effect("sensor_bias", {"dof": 2}, {"bias": 0.25}),
-                            Effect("input_delay", {"dof": 1}, {"delay": 0.005})])
+    res = simulate(
+        TABLE1,
+        U,
+        0.6,
+        1000.0,
+        mode="sampled",
+        effects=[
+            Effect("sensor_bias", {"dof": 2}, {"bias": 0.25}),
+            Effect("input_delay", {"dof": 1}, {"delay": 0.005}),
+        ],
+    )
     assert np.allclose(res.a[:, 1] - res.a_true[:, 1], 0.25, rtol=0, atol=1e-14)
     assert np.array_equal(res.u, base.u)  # the sensor reads the command
     # a delay of 5 samples shifts the held staircase by exactly 5 samples
@@ -314,16 +330,19 @@ def test_to_arrays_is_the_recording_format():
     assert np.array_equal(rec["t"], np.arange(200) / 1000.0)
 
 
-@pytest.mark.parametrize("bad", [
-    ("spring_softening", {"spring": 1}, {"k3": 1.0}),
-    ("cubic_stiffness", {"dof": 1}, {"k3": 1.0}),
-    ("cubic_stiffness", {"spring": 1}, {"k": 1.0}),
-    ("coulomb_friction", {"dof": 1}, {"force": -1.0}),
-    ("sensor_lowpass", {"dof": 1}, {"cutoff_hz": 0.0}),
-    ("parameter_drift", {"spring": 1}, {"rel_change": -1.5}),
-    ("clearance", {"spring": 1}, {"gap": 1e-3}),
-    ("input_delay", {"dof": 1.5}, {"delay": 0.01}),
-])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        ("spring_softening", {"spring": 1}, {"k3": 1.0}),
+        ("cubic_stiffness", {"dof": 1}, {"k3": 1.0}),
+        ("cubic_stiffness", {"spring": 1}, {"k": 1.0}),
+        ("coulomb_friction", {"dof": 1}, {"force": -1.0}),
+        ("sensor_lowpass", {"dof": 1}, {"cutoff_hz": 0.0}),
+        ("parameter_drift", {"spring": 1}, {"rel_change": -1.5}),
+        ("clearance", {"spring": 1}, {"gap": 1e-3}),
+        ("input_delay", {"dof": 1.5}, {"delay": 0.01}),
+    ],
+)
 def test_bad_effects_are_rejected(bad):
     with pytest.raises(ValueError):
         Effect(*bad)
@@ -331,14 +350,26 @@ def test_bad_effects_are_rejected(bad):
 
 def test_effect_locations_are_checked_against_the_chain():
     free = Chain([1.0, 1.0], [1.0, 1.0], [100.0, 100.0, 0.0], boundary="free")
-    for chain, eff in ((TABLE1, Effect("coulomb_friction", {"dof": 4}, {"force": 1.0})),
-                       (TABLE1, Effect("cubic_stiffness", {"spring": 5}, {"k3": 1.0})),
-                       (free, Effect("cubic_stiffness", {"spring": 3}, {"k3": 1.0}))):
+    for chain, eff in (
+        (TABLE1, Effect("coulomb_friction", {"dof": 4}, {"force": 1.0})),
+        (TABLE1, Effect("cubic_stiffness", {"spring": 5}, {"k3": 1.0})),
+        (free, Effect("cubic_stiffness", {"spring": 3}, {"k3": 1.0})),
+    ):
         with pytest.raises(ValueError):
             simulate(chain, None, 0.01, effects=[eff])
-    assert set(EFFECT_NAMES) == {"coulomb_friction", "quadratic_damping", "cubic_stiffness", "clearance",
-                                 "input_delay", "sensor_bias", "sensor_lowpass", "parameter_drift", "force_offset",
-                                 "stribeck_friction", "amplitude_damping"}
+    assert set(EFFECT_NAMES) == {
+        "coulomb_friction",
+        "quadratic_damping",
+        "cubic_stiffness",
+        "clearance",
+        "input_delay",
+        "sensor_bias",
+        "sensor_lowpass",
+        "parameter_drift",
+        "force_offset",
+        "stribeck_friction",
+        "amplitude_damping",
+    }
     with pytest.raises(ValueError, match="static"):
         Effect("stribeck_friction", {"dof": 1}, {"force": 2.0, "static": 1.0, "v_stribeck": 1e-3})
     with pytest.raises(ValueError):
@@ -351,8 +382,9 @@ def test_force_offset_acts_like_an_unrecorded_constant_force():
     rng = np.random.default_rng(11)
     u = rng.standard_normal((500, 3))
     off = np.array([0.0, 2.5, 0.0])
-    with_eff = simulate(TABLE1, u, 0.5, effects=[{"name": "force_offset", "location": {"dof": 2},
-                                                  "params": {"offset": 2.5}}])
+    with_eff = simulate(
+        TABLE1, u, 0.5, effects=[{"name": "force_offset", "location": {"dof": 2}, "params": {"offset": 2.5}}]
+    )
     shifted = simulate(TABLE1, u + off, 0.5)
     np.testing.assert_allclose(with_eff.x, shifted.x, rtol=0, atol=1e-9 * np.abs(shifted.x).max())
     np.testing.assert_allclose(with_eff.u, u, rtol=0, atol=1e-12)  # the force sensor does not see it
@@ -368,8 +400,7 @@ def test_encoder_readings_are_whole_counts_in_open_and_closed_loop():
     assert np.max(np.abs(res.x_meas - res.x)) <= q / 2 + 1e-15
     ref = BangBangReference([[0.01], [-0.01]], a_max=2.0, dwell_s=0.2)
     ctl = PositioningController(ref, f_max=50.0, kp=2e4, kd=400.0, ki=1e5, m0=1.0)
-    loop = simulate(Chain([1.0], [5.0], [0.0, 0.0]), None, 0.8, controller=ctl, mode="sampled",
-                    encoder_resolution_m=q)
+    loop = simulate(Chain([1.0], [5.0], [0.0, 0.0]), None, 0.8, controller=ctl, mode="sampled", encoder_resolution_m=q)
     np.testing.assert_allclose(loop.x_meas / q, np.round(loop.x_meas / q), atol=1e-9)
     assert np.max(np.abs(loop.x[-1] - (-0.01))) < 2e-4  # the move is done and held
     with pytest.raises(ValueError, match="encoder_resolution_m"):
@@ -426,8 +457,9 @@ def test_a_controller_needs_only_the_protocol_methods():
             return {"force_command": np.array(self.forces)}
 
     ctl = HoldAt(np.array([1e-3, -2e-3, 1e-3]))
-    res = simulate(TABLE1, None, 0.5, 1000.0, controller=ctl, mode="sampled", noise_db=40.0,
-                   noise_on=("position",), seed=3)
+    res = simulate(
+        TABLE1, None, 0.5, 1000.0, controller=ctl, mode="sampled", noise_db=40.0, noise_on=("position",), seed=3
+    )
     ratio = 10 ** (-40.0 / 20)
     np.testing.assert_allclose(res.noise_rms["position"], ratio * np.abs(ctl.target), rtol=1e-12)
     np.testing.assert_array_equal(res.controller_log["force_command"], res.limits["u_plus"])  # held from t_k+

@@ -179,7 +179,9 @@ struct ContinuousSubject {
   }
   explicit ContinuousSubject(const algid_bench::Signals<Scalar>& sig) : ContinuousSubject(sig, sig.samples) {}
   // Never reset: consecutive segments are consecutive stretches of one signal.
-  void begin(int segment) noexcept { base = static_cast<std::size_t>(segment) * static_cast<std::size_t>(segment_samples); }
+  void begin(int segment) noexcept {
+    base = static_cast<std::size_t>(segment) * static_cast<std::size_t>(segment_samples);
+  }
   void step(int k) noexcept {
     const std::size_t at = (base + static_cast<std::size_t>(k)) * N;
     est->update(s->accel.data() + at, s->force.data() + at);
@@ -202,7 +204,9 @@ struct RlsSubject {
   }
   void step(int k) noexcept {
     const std::size_t at = static_cast<std::size_t>(k) * N;
-    for (int i = 0; i < N; ++i) rls[static_cast<std::size_t>(i)].update(s->phi.data() + 4 * (at + static_cast<std::size_t>(i)), s->force[at + static_cast<std::size_t>(i)]);
+    for (int i = 0; i < N; ++i)
+      rls[static_cast<std::size_t>(i)].update(s->phi.data() + 4 * (at + static_cast<std::size_t>(i)),
+                                              s->force[at + static_cast<std::size_t>(i)]);
   }
   double observe() const { return static_cast<double>(rls[0].theta()(0)); }
 };
@@ -313,7 +317,8 @@ void print(const char* config, int n, const char* scalar, const Result& r, doubl
   std::printf(
       "{\"config\": \"%s\", \"n\": %d, \"scalar\": \"%s\", "
       "\"ns_per_sample_median\": %.2f, \"ns_per_dof_sample_median\": %.2f, \"p99\": %.2f, \"max\": %.2f, "
-      "\"max_path\": %.2f, \"window_min\": %.2f, \"single_median\": %.2f, \"single_p99\": %.2f, \"timed_samples\": %ld, "
+      "\"max_path\": %.2f, \"window_min\": %.2f, \"single_median\": %.2f, \"single_p99\": %.2f, \"timed_samples\": "
+      "%ld, "
       "\"clock_overhead_ns\": %.1f, \"batch\": %d, \"layout\": \"%s\", \"lanes\": %d, \"lane_slots\": %d, "
       "\"units\": \"ns per DOF-sample except ns_per_sample_median\"}\n",
       config, n, scalar, r.batch_median, r.batch_median / dn, r.batch_p99 / dn, r.max / dn, r.max_path / dn,
@@ -333,7 +338,8 @@ void bench_n(const char* scalar, int samples, int windows, double overhead) {
     {
       EstimatorSubject<N, Scalar, true> subject(sig);
       print("dynamic", N, scalar, measure(subject, samples, windows, overhead), overhead,
-            LayoutInfo<N, Scalar, true>::name(), LayoutInfo<N, Scalar, true>::lanes(), LayoutInfo<N, Scalar, true>::slots());
+            LayoutInfo<N, Scalar, true>::name(), LayoutInfo<N, Scalar, true>::lanes(),
+            LayoutInfo<N, Scalar, true>::slots());
     }
     {
       BatchSubject<N, Scalar> subject(sig);
@@ -351,7 +357,8 @@ void bench_n(const char* scalar, int samples, int windows, double overhead) {
     // whole number of result periods (window samples / stagger) long, so that sample index k
     // has the same place in the harvest schedule in every segment (max_path needs that).
     const typename algid::ContinuousEstimator<N, Scalar>::Config cfg{};
-    const int period = static_cast<int>(std::lround(cfg.window_s / static_cast<Scalar>(algid_bench::kDt))) / cfg.stagger;
+    const int period = static_cast<int>(std::lround(cfg.window_s / static_cast<Scalar>(algid_bench::kDt))) /
+                       cfg.stagger;
     const int segment = (samples + period - 1) / period * period;
     const auto sig = algid_bench::make_signals<N, Scalar>(2 * (windows + 1) * segment, 7, algid_bench::kDt, false);
     {
@@ -391,14 +398,16 @@ template <int N>
 int callgrind_dispatch(const std::string& subject, const std::string& scalar, int updates) {
   if (subject == "default" && scalar == "double") return callgrind_run<EstimatorSubject<N, double>, double>(updates);
   if (subject == "default" && scalar == "float") return callgrind_run<EstimatorSubject<N, float>, float>(updates);
-  if (subject == "dynamic" && scalar == "double") return callgrind_run<EstimatorSubject<N, double, true>, double>(updates);
+  if (subject == "dynamic" && scalar == "double")
+    return callgrind_run<EstimatorSubject<N, double, true>, double>(updates);
   if (subject == "dynamic" && scalar == "float") return callgrind_run<EstimatorSubject<N, float, true>, float>(updates);
   if (subject == "batch" && scalar == "double") return callgrind_run<BatchSubject<N, double>, double>(updates);
   if (subject == "batch" && scalar == "float") return callgrind_run<BatchSubject<N, float>, float>(updates);
   if (subject == "rls" && scalar == "double") return callgrind_run<RlsSubject<N, double>, double>(updates);
   if (subject == "rls" && scalar == "float") return callgrind_run<RlsSubject<N, float>, float>(updates);
 #if ALGID_BENCH_HAVE_CONTINUOUS
-  if (subject == "continuous" && scalar == "double") return callgrind_run<ContinuousSubject<N, double>, double>(updates);
+  if (subject == "continuous" && scalar == "double")
+    return callgrind_run<ContinuousSubject<N, double>, double>(updates);
   if (subject == "continuous" && scalar == "float") return callgrind_run<ContinuousSubject<N, float>, float>(updates);
   if (subject == "continuous_dynamic" && scalar == "double")
     return callgrind_run<ContinuousSubject<N, double, true>, double>(updates);
@@ -452,7 +461,8 @@ int main(int argc, char** argv) {
         default: std::fprintf(stderr, "n must be 1, 3, 10 or 50\n"); return 2;
       }
     } else {
-      std::fprintf(stderr, "usage: %s [--windows W] [--samples T] | --callgrind SUBJECT N SCALAR UPDATES | --dump N T PATH\n",
+      std::fprintf(stderr,
+                   "usage: %s [--windows W] [--samples T] | --callgrind SUBJECT N SCALAR UPDATES | --dump N T PATH\n",
                    argv[0]);
       return 2;
     }

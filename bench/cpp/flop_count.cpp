@@ -38,10 +38,22 @@ class Counted {
   explicit operator long double() const { return v_; }
   double value() const { return v_; }
 
-  friend Counted operator+(Counted a, Counted b) { ++g_ops.add; return Counted(a.v_ + b.v_); }
-  friend Counted operator-(Counted a, Counted b) { ++g_ops.add; return Counted(a.v_ - b.v_); }
-  friend Counted operator*(Counted a, Counted b) { ++g_ops.mul; return Counted(a.v_ * b.v_); }
-  friend Counted operator/(Counted a, Counted b) { ++g_ops.div; return Counted(a.v_ / b.v_); }
+  friend Counted operator+(Counted a, Counted b) {
+    ++g_ops.add;
+    return Counted(a.v_ + b.v_);
+  }
+  friend Counted operator-(Counted a, Counted b) {
+    ++g_ops.add;
+    return Counted(a.v_ - b.v_);
+  }
+  friend Counted operator*(Counted a, Counted b) {
+    ++g_ops.mul;
+    return Counted(a.v_ * b.v_);
+  }
+  friend Counted operator/(Counted a, Counted b) {
+    ++g_ops.div;
+    return Counted(a.v_ / b.v_);
+  }
   friend Counted operator-(Counted a) { return Counted(-a.v_); }
   friend Counted operator+(Counted a) { return a; }
   Counted& operator+=(Counted b) { return *this = *this + b; }
@@ -91,7 +103,15 @@ struct NumTraits<algid_bench::Counted> : GenericNumTraits<algid_bench::Counted> 
   using NonInteger = algid_bench::Counted;
   using Nested = algid_bench::Counted;
   using Literal = algid_bench::Counted;
-  enum { IsComplex = 0, IsInteger = 0, IsSigned = 1, RequireInitialization = 1, ReadCost = 1, AddCost = 1, MulCost = 1 };
+  enum {
+    IsComplex = 0,
+    IsInteger = 0,
+    IsSigned = 1,
+    RequireInitialization = 1,
+    ReadCost = 1,
+    AddCost = 1,
+    MulCost = 1
+  };
   static Real epsilon() { return std::numeric_limits<double>::epsilon(); }
   static Real dummy_precision() { return 1e-12; }
   static Real highest() { return std::numeric_limits<double>::max(); }
@@ -115,8 +135,8 @@ void print(const char* subject, int n, long samples, const algid_bench::OpCount&
   std::printf(
       "{\"subject\": \"%s\", \"n\": %d, \"flops_per_dof_sample\": %.2f, \"add\": %.2f, \"mul\": %.2f, "
       "\"div\": %.2f, \"sqrt\": %.2f}\n",
-      subject, n, static_cast<double>(c.flops()) / per, static_cast<double>(c.add) / per, static_cast<double>(c.mul) / per,
-      static_cast<double>(c.div) / per, static_cast<double>(c.sqrt) / per);
+      subject, n, static_cast<double>(c.flops()) / per, static_cast<double>(c.add) / per,
+      static_cast<double>(c.mul) / per, static_cast<double>(c.div) / per, static_cast<double>(c.sqrt) / per);
 }
 
 constexpr int kWarm = 64;

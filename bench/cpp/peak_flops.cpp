@@ -62,7 +62,8 @@ void report(const char* scalar) {
     const double g = gflops<T, Lanes>(800000 / Lanes);
     best = g > best ? g : best;
   }
-  std::printf("{\"scalar\": \"%s\", \"lanes\": %d, \"gflops\": %.2f, \"flops_per_ns\": %.2f}\n", scalar, Lanes, best, best);
+  std::printf("{\"scalar\": \"%s\", \"lanes\": %d, \"gflops\": %.2f, \"flops_per_ns\": %.2f}\n", scalar, Lanes, best,
+              best);
   std::fflush(stdout);
 }
 

@@ -168,13 +168,15 @@ void bind_chain(py::module_& m, const char* name, bool module_local) {
                                return out;
                              })
       .def_property_readonly("window", &Est::window)
-      .def("theta", [](const Est& e, int i) { return Array(4, e.theta(require_index(i, e.dofs(), "dof")).data()); },
-           py::arg("dof"))
-      .def("theta_instant",
-           [](const Est& e, int i) { return Array(4, e.theta_instant(require_index(i, e.dofs(), "dof")).data()); },
-           py::arg("dof"))
-      .def("hadamard", [](const Est& e, int i) { return e.hadamard(require_index(i, e.dofs(), "dof")); },
-           py::arg("dof"))
+      .def(
+          "theta", [](const Est& e, int i) { return Array(4, e.theta(require_index(i, e.dofs(), "dof")).data()); },
+          py::arg("dof"))
+      .def(
+          "theta_instant",
+          [](const Est& e, int i) { return Array(4, e.theta_instant(require_index(i, e.dofs(), "dof")).data()); },
+          py::arg("dof"))
+      .def(
+          "hadamard", [](const Est& e, int i) { return e.hadamard(require_index(i, e.dofs(), "dof")); }, py::arg("dof"))
       .def(
           "run",
           [](Est& e, const Array& accel, const Array& force, bool full) {
@@ -239,10 +241,12 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
              }
              return out;
            })
-      .def("since_restart", [](const Est& e, int j) { return e.since_restart(require_index(j, e.params(), "param")); },
-           py::arg("param"))
-      .def("window_spread", [](const Est& e, int j) { return e.window_spread(require_index(j, e.params(), "param")); },
-           py::arg("param"))
+      .def(
+          "since_restart", [](const Est& e, int j) { return e.since_restart(require_index(j, e.params(), "param")); },
+          py::arg("param"))
+      .def(
+          "window_spread", [](const Est& e, int j) { return e.window_spread(require_index(j, e.params(), "param")); },
+          py::arg("param"))
       .def(
           "run",
           [](Est& e, const Array& accel, const Array& force, long stride) {

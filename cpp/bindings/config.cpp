@@ -50,8 +50,9 @@ void bind_config_classes(py::module_& m) {
   py::class_<Chain> chain(m, "ChainConfig", "Configuration of a ChainEstimator (C++ ChainConfig; defaults from C++).");
   chain.def(py::init<>());
   bind_window_fields<Chain>(chain);
-  chain.def("validate", [](const Chain& c, int n) { return std::string(algid::to_string(algid::validate(c, n))); },
-            py::arg("n"), "'ok', or why a chain of n DOF rejects this configuration");
+  chain.def(
+      "validate", [](const Chain& c, int n) { return std::string(algid::to_string(algid::validate(c, n))); },
+      py::arg("n"), "'ok', or why a chain of n DOF rejects this configuration");
 
   using Cont = algid::ContinuousConfig<double>;
   py::class_<Cont> cont(m, "ContinuousConfig",
@@ -72,7 +73,8 @@ void bind_config_classes(py::module_& m) {
       .def_readwrite("overlap_efficiency", &Cont::overlap_efficiency,
                      "independent fraction of the staggered window results, (0, 1]")
       .def_readwrite("horizon_s", &Cont::horizon_s, "forgetting time constant of the block mean [s]; 0: none")
-      .def_readwrite("prefilter_hz", &Cont::prefilter_hz, "low-pass on accelerations and forces [Hz]; -1: 0.05/dt, 0: off")
+      .def_readwrite("prefilter_hz", &Cont::prefilter_hz,
+                     "low-pass on accelerations and forces [Hz]; -1: 0.05/dt, 0: off")
       .def_readwrite("prefilter_order", &Cont::prefilter_order, "Butterworth order of the prefilter: 2 or 4")
       .def_readwrite("detect", &Cont::detect, "run the change detector")
       .def_readwrite("amortize", &Cont::amortize, "spread the per-parameter work over the samples");

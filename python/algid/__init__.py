@@ -6,8 +6,23 @@ from .estimator import ISA, SIZES, ChainConfig, ChainEstimator, Status
 from .identification import Identification, identify
 from .recording import Recording, load_recording
 
-__all__ = ["Chain", "ChainConfig", "ChainEstimator", "ChangeEvent", "ContinuousConfig", "ContinuousEstimator", "ISA",
-           "Identification", "Recording", "SIZES", "Status", "TABLE1", "get_include", "identify", "load_recording"]
+__all__ = [
+    "Chain",
+    "ChainConfig",
+    "ChainEstimator",
+    "ChangeEvent",
+    "ContinuousConfig",
+    "ContinuousEstimator",
+    "ISA",
+    "Identification",
+    "Recording",
+    "SIZES",
+    "Status",
+    "TABLE1",
+    "get_include",
+    "identify",
+    "load_recording",
+]
 __version__ = "0.1.0"
 
 

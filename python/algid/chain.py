@@ -174,7 +174,7 @@ class Chain:
         return np.concatenate([self.mass, self.damping, k])
 
     @staticmethod
-    def random(n: int, rng: np.random.Generator, boundary: str = "fixed") -> "Chain":
+    def random(n: int, rng: np.random.Generator, boundary: str = "fixed") -> Chain:
         """A chain with parameters drawn log-uniformly around Table 1's magnitudes."""
         m = rng.uniform(1.0, 4.0, n)
         c = rng.uniform(2.0, 8.0, n)

@@ -13,7 +13,8 @@ def build_parser() -> argparse.ArgumentParser:
     from .identification import cli as identify_cli
 
     parser = argparse.ArgumentParser(
-        prog="algid", description="On-line algebraic identification of mass-spring-damper chains.")
+        prog="algid", description="On-line algebraic identification of mass-spring-damper chains."
+    )
     parser.add_argument("--version", action="version", version=f"algid {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     demo.add_parser(sub)

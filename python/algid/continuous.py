@@ -42,19 +42,19 @@ def config_dict(config) -> dict:
 class ChangeEvent:
     """The aggregation of one parameter restarted because its window results changed level."""
 
-    sample: int      #: index of the sample whose update raised it (0-based, since construction/reset)
-    time_s: float    #: ``sample * dt`` [s]
-    param: int       #: index into :attr:`ContinuousEstimator.names`
-    name: str        #: ``"m1"``, ``"c2"``, ``"k3"``, ...
-    kind: str        #: ``"step"`` or ``"drift"``
-    before: float    #: running estimate before [kg, N s/m or N/m]
-    after: float     #: running estimate right after
+    sample: int  #: index of the sample whose update raised it (0-based, since construction/reset)
+    time_s: float  #: ``sample * dt`` [s]
+    param: int  #: index into :attr:`ContinuousEstimator.names`
+    name: str  #: ``"m1"``, ``"c2"``, ``"k3"``, ...
+    kind: str  #: ``"step"`` or ``"drift"``
+    before: float  #: running estimate before [kg, N s/m or N/m]
+    after: float  #: running estimate right after
 
 
 def unpack(vec: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mass, damping and spring views ``(n,), (n,), (n+1,)`` of a packed vector
     ``m1..mn, c1..cn, k1..k{n+1}`` (the order of :func:`parameter_names`)."""
-    return vec[:n], vec[n: 2 * n], vec[2 * n:]
+    return vec[:n], vec[n : 2 * n], vec[2 * n :]
 
 
 class PackedParameters:
@@ -135,8 +135,14 @@ class ContinuousEstimator(PackedParameters):
         Validity rule of each window (see :class:`algid.ChainEstimator`).
     """
 
-    def __init__(self, n: int, dt: float | None = None, boundary: str | None = None,
-                 config: ContinuousConfig | None = None, **options) -> None:
+    def __init__(
+        self,
+        n: int,
+        dt: float | None = None,
+        boundary: str | None = None,
+        config: ContinuousConfig | None = None,
+        **options,
+    ) -> None:
         n = dofs(n)
         if dt is None and config is None:
             raise TypeError("ContinuousEstimator needs dt (or a config)")
@@ -241,19 +247,30 @@ class ContinuousEstimator(PackedParameters):
         out = dict(self._impl.run(a, u, int(stride)))
         n = self.n
         est = out["estimate"]
-        out["mass"], out["damping"], out["stiffness"] = est[:, :n], est[:, n:2 * n], est[:, 2 * n:]
+        out["mass"], out["damping"], out["stiffness"] = est[:, :n], est[:, n : 2 * n], est[:, 2 * n :]
         out["time_s"] = out["sample"] * self.dt
-        out["events"] = [self._event(s, p, k, b, a_) for s, p, k, b, a_ in
-                         zip(out["event_sample"], out["event_param"], out["event_kind"],
-                             out["event_before"], out["event_after"])]
+        out["events"] = [
+            self._event(s, p, k, b, a_)
+            for s, p, k, b, a_ in zip(
+                out["event_sample"], out["event_param"], out["event_kind"], out["event_before"], out["event_after"]
+            )
+        ]
         out["names"] = list(self.names)
         return out
 
     def _event(self, sample, param, kind, before, after) -> ChangeEvent:
-        return ChangeEvent(sample=int(sample), time_s=float(sample) * self.dt, param=int(param),
-                           name=self.names[int(param)], kind={1: "step", 2: "drift"}.get(int(kind), "none"),
-                           before=float(before), after=float(after))
+        return ChangeEvent(
+            sample=int(sample),
+            time_s=float(sample) * self.dt,
+            param=int(param),
+            name=self.names[int(param)],
+            kind={1: "step", 2: "drift"}.get(int(kind), "none"),
+            before=float(before),
+            after=float(after),
+        )
 
     def __repr__(self) -> str:
-        return (f"ContinuousEstimator(n={self.n}, dt={self.dt}, boundary={self.boundary!r}, "
-                f"window_s={self.options['window_s']}, stagger={self.options['stagger']})")
+        return (
+            f"ContinuousEstimator(n={self.n}, dt={self.dt}, boundary={self.boundary!r}, "
+            f"window_s={self.options['window_s']}, stagger={self.options['stagger']})"
+        )

@@ -4,7 +4,8 @@ continuous time (integrators as ODE states) and sampled (discrete integrals)."""
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple, Optional, Sequence
+from collections.abc import Sequence
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -46,7 +47,7 @@ class LawParameters(NamedTuple):
     stiffness: np.ndarray
 
     @classmethod
-    def pack(cls, m: np.ndarray, c: np.ndarray, k: np.ndarray) -> "LawParameters":
+    def pack(cls, m: np.ndarray, c: np.ndarray, k: np.ndarray) -> LawParameters:
         """Copies of ``m, c, k`` with the stiffness matrix of ``k``."""
         return cls(m.copy(), c.copy(), stiffness_matrix(k), k.copy())
 
@@ -62,8 +63,15 @@ class ControlLaw:
     (trapezoidal for positions, exact for the held force).
     """
 
-    def __init__(self, reference: BezierReference, gains: tuple[float, float, float], eq10: str,
-                 excitation: Optional[Callable[[float], np.ndarray]], n: int, dt: float) -> None:
+    def __init__(
+        self,
+        reference: BezierReference,
+        gains: tuple[float, float, float],
+        eq10: str,
+        excitation: Callable[[float], np.ndarray] | None,
+        n: int,
+        dt: float,
+    ) -> None:
         self.reference = reference
         self.beta0, self.beta1, self.beta2 = gains
         self.eq10 = eq10
@@ -76,8 +84,9 @@ class ControlLaw:
         self._e_prev = np.zeros(n)
         self._u_prev = np.zeros(n)
 
-    def force(self, t: float, x: np.ndarray, E: np.ndarray, X: np.ndarray, S: np.ndarray,
-              U: np.ndarray, p: LawParameters) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def force(
+        self, t: float, x: np.ndarray, E: np.ndarray, X: np.ndarray, S: np.ndarray, U: np.ndarray, p: LawParameters
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Force [N], velocity estimate of eq. 10 [m/s] and reference position [m] at ``t``
         [s] from positions ``x`` [m] and the integrals ``E, X, S, U``."""
         m, c, K, _ = p
@@ -95,7 +104,7 @@ class ControlLaw:
         """Force [N] and the derivative of the controller states
         ``z = [int (x - x*), int x, int K x, int u]`` (4n)."""
         n = x.size
-        u, _, xs = self.force(t, x, z[:n], z[n:2 * n], z[2 * n:3 * n], z[3 * n:], p)
+        u, _, xs = self.force(t, x, z[:n], z[n : 2 * n], z[2 * n : 3 * n], z[3 * n :], p)
         return u, np.concatenate((x - xs, x, p[2] @ x, u))
 
     def sampled(self, k: int, t: float, x_meas: np.ndarray, p: LawParameters) -> tuple[np.ndarray, np.ndarray]:

@@ -75,7 +75,8 @@ estimator may also expose ``theta(dof)`` (each DOF's own four estimates), ``sigm
 
 from __future__ import annotations
 
-from typing import Any, Callable, Optional, Sequence
+from collections.abc import Sequence
+from typing import Any, Callable
 
 import numpy as np
 
@@ -133,8 +134,15 @@ class ContinuousAdapter(PackedParameters):
         Passed to :class:`algid.ContinuousEstimator` (``window_s``, ``stagger``, ...).
     """
 
-    def __init__(self, n: int, dt: float, boundary: str = "fixed", rel_sigma_tol: float = 0.05,
-                 bootstrap_window_s: float = 0.02, **options: Any) -> None:
+    def __init__(
+        self,
+        n: int,
+        dt: float,
+        boundary: str = "fixed",
+        rel_sigma_tol: float = 0.05,
+        bootstrap_window_s: float = 0.02,
+        **options: Any,
+    ) -> None:
         from . import ChainEstimator, ContinuousEstimator
 
         if not rel_sigma_tol > 0:
@@ -149,7 +157,7 @@ class ContinuousAdapter(PackedParameters):
         self._k = 0
         self.phase = "bootstrap"
         #: sample index (0-based) from which the running estimate is served; None before
-        self.running_from: Optional[int] = None
+        self.running_from: int | None = None
         self.estimate = np.full(3 * self.n + 1, np.nan)
         self.sigma = np.full(3 * self.n + 1, np.nan)
         self.valid = np.zeros(self.n, bool)
@@ -164,11 +172,11 @@ class ContinuousAdapter(PackedParameters):
         at least 1 % of the critical damping; 0 for a parameter that is not estimated)."""
         n = self.n
         est = self.estimate
-        m, k = est[:n], est[2 * n:]
-        k_sum = k[:n] + np.where(np.isnan(k[1:]) & self._absent[2 * n + 1:], 0.0, k[1:])
+        m, k = est[:n], est[2 * n :]
+        k_sum = k[:n] + np.where(np.isnan(k[1:]) & self._absent[2 * n + 1 :], 0.0, k[1:])
         with np.errstate(invalid="ignore", divide="ignore"):
             scale = np.abs(est).copy()
-            scale[n:2 * n] = np.maximum(scale[n:2 * n], 0.02 * np.sqrt(np.abs(k_sum * m)))
+            scale[n : 2 * n] = np.maximum(scale[n : 2 * n], 0.02 * np.sqrt(np.abs(k_sum * m)))
             r = self.sigma / scale
         r[self._absent] = 0.0
         return r
@@ -180,14 +188,19 @@ class ContinuousAdapter(PackedParameters):
         n = self.n
         if self.phase == "bootstrap":
             self.bootstrap.update(accel, force)
-            est = np.concatenate([np.asarray(self.bootstrap.mass, float),
-                                  np.asarray(self.bootstrap.damping, float),
-                                  np.asarray(self.bootstrap.stiffness, float)])
+            est = np.concatenate(
+                [
+                    np.asarray(self.bootstrap.mass, float),
+                    np.asarray(self.bootstrap.damping, float),
+                    np.asarray(self.bootstrap.stiffness, float),
+                ]
+            )
             ok_b = np.asarray(self.bootstrap.valid, bool)
             self._hist[self._k % self._W] = est
             with np.errstate(invalid="ignore"):
-                spread = np.max(np.abs(self._hist - est), axis=0) if self._k + 1 >= self._W \
-                    else np.full(est.size, np.inf)
+                spread = (
+                    np.max(np.abs(self._hist - est), axis=0) if self._k + 1 >= self._W else np.full(est.size, np.inf)
+                )
             self.estimate, self.sigma = est, spread
             if self.continuous.ready:
                 self.phase, self.running_from = "running", self._k
@@ -253,14 +266,21 @@ class TrackingController:
     :class:`~algid.controller_log.ControllerLog` (all made by :meth:`start`).
     """
 
-
-    def __init__(self, reference: Optional[BezierReference] = None,
-                 poles: Sequence[complex] = DEFAULT_POLES, switch_time_s: float = 0.1,
-                 nominal_mass_kg: float = 1.0,
-                 estimator_factory: Optional[Callable[[int, float, str], Any]] = None,
-                 use_estimates: bool = True, eq10: str = "integrated", accept: str = "settled",
-                 settle_window_s: float = 0.02, settle_tol: float = 0.02, hold: bool = False,
-                 excitation: Optional[Callable[[float], np.ndarray]] = None) -> None:
+    def __init__(
+        self,
+        reference: BezierReference | None = None,
+        poles: Sequence[complex] = DEFAULT_POLES,
+        switch_time_s: float = 0.1,
+        nominal_mass_kg: float = 1.0,
+        estimator_factory: Callable[[int, float, str], Any] | None = None,
+        use_estimates: bool = True,
+        eq10: str = "integrated",
+        accept: str = "settled",
+        settle_window_s: float = 0.02,
+        settle_tol: float = 0.02,
+        hold: bool = False,
+        excitation: Callable[[float], np.ndarray] | None = None,
+    ) -> None:
         self.excitation = excitation
         if accept not in ACCEPT_RULES:
             raise ValueError(f"accept must be 'settled', 'valid' or 'sigma', got {accept!r}")
@@ -286,8 +306,9 @@ class TrackingController:
         self.use_estimates = bool(use_estimates)
         self.estimator: Any = None
 
-    def start(self, chain_n: int, dt: float, boundary: str = "fixed", samples: int = 0,
-              mode: str = "continuous") -> None:
+    def start(
+        self, chain_n: int, dt: float, boundary: str = "fixed", samples: int = 0, mode: str = "continuous"
+    ) -> None:
         """Prepare a run of ``samples`` samples every ``dt`` [s] on an ``chain_n``-DOF chain."""
         n = int(chain_n)
         if self.reference is None:
@@ -297,10 +318,12 @@ class TrackingController:
         self.n, self.dt, self.boundary, self.mode = n, float(dt), boundary, mode
         self.k_switch = int(round(self.switch_time_s / self.dt))
         self.estimator = self.estimator_factory(n, self.dt, boundary)
-        self.law = ControlLaw(self.reference, (self.beta0, self.beta1, self.beta2), self.eq10, self.excitation,
-                              n, self.dt)
-        self.gate = EstimateGate(n, boundary, self.dt, self.accept, self.settle_window_s, self.settle_tol,
-                                 self.hold, self.nominal_mass_kg)
+        self.law = ControlLaw(
+            self.reference, (self.beta0, self.beta1, self.beta2), self.eq10, self.excitation, n, self.dt
+        )
+        self.gate = EstimateGate(
+            n, boundary, self.dt, self.accept, self.settle_window_s, self.settle_tol, self.hold, self.nominal_mass_kg
+        )
         self.history = ControllerLog(int(samples), n, self.estimator)
         self._nominal = LawParameters.pack(np.full(n, self.nominal_mass_kg), np.zeros(n), np.zeros(n + 1))
         self._used_accepted = np.zeros(n, bool)  # DOFs whose estimates the law used so far
@@ -321,7 +344,7 @@ class TrackingController:
         """Reference position [m], velocity [m/s] and acceleration [m/s^2] (T, n) at ``t`` [s]."""
         return self.reference.evaluate(t)
 
-    def params_for_sample(self, k: int, z: Optional[np.ndarray] = None) -> LawParameters:
+    def params_for_sample(self, k: int, z: np.ndarray | None = None) -> LawParameters:
         """Parameters the law uses on ``[t_k, t_{k+1})`` (``z``: the continuous-mode
         controller states at ``t_k``); logged as ``used_*``."""
         if k < self.k_switch or not self.use_estimates:
@@ -333,7 +356,7 @@ class TrackingController:
         if self.eq10 == "integrated" and np.any(used_acc & ~self._used_accepted):
             # a first substitution: the new stiffnesses model the whole past (as in the
             # paper's product form); later changes enter the integral as they come
-            X = z[self.n:2 * self.n] if z is not None else self.law.X
+            X = z[self.n : 2 * self.n] if z is not None else self.law.X
             self.law.rebase(p.K, self._p_prev.K, X)
         self._used_accepted |= used_acc
         self._p_prev = p
@@ -353,13 +376,14 @@ class TrackingController:
         self.history.law(k, xd, u)
         return u
 
-    def observe(self, k: int, t: float, accel: np.ndarray, force: np.ndarray,
-                x_meas: np.ndarray, z: Optional[np.ndarray] = None) -> None:
+    def observe(
+        self, k: int, t: float, accel: np.ndarray, force: np.ndarray, x_meas: np.ndarray, z: np.ndarray | None = None
+    ) -> None:
         """Feed sample ``k`` (accelerations [m/s^2], forces [N]) to the estimator and keep
         its valid estimates for the following intervals."""
         n = self.n
         if z is not None and k < self.history.T:
-            u, xd, _ = self.law.force(t, x_meas, z[:n], z[n:2 * n], z[2 * n:3 * n], z[3 * n:], self._p_k)
+            u, xd, _ = self.law.force(t, x_meas, z[:n], z[n : 2 * n], z[2 * n : 3 * n], z[3 * n :], self._p_k)
             self.history.law(k, xd, u)
         status = self.estimator.update(accel, force)
         m = np.asarray(self.estimator.mass, dtype=float)
@@ -383,11 +407,19 @@ class TrackingController:
         running_from = getattr(self.estimator, "running_from", None)
         first = self.gate.first_accept
         return {
-            "t": t, "x_ref": xs, "xd_ref": xd, "xdd_ref": xdd, **self.history.history(),
-            "gains": self.gains, "poles": [complex(p) for p in self.poles], "eq10": self.eq10,
-            "switch_time_s": self.switch_time_s, "k_switch": self.k_switch,
+            "t": t,
+            "x_ref": xs,
+            "xd_ref": xd,
+            "xdd_ref": xdd,
+            **self.history.history(),
+            "gains": self.gains,
+            "poles": [complex(p) for p in self.poles],
+            "eq10": self.eq10,
+            "switch_time_s": self.switch_time_s,
+            "k_switch": self.k_switch,
             "delay_samples": int(getattr(self.estimator, "delay_samples", 0)),
-            "accept": self.accept, "hold": self.hold,
+            "accept": self.accept,
+            "hold": self.hold,
             "running_from_s": None if running_from is None else running_from * self.dt,
             "first_accepted_s": None if first is None else first * self.dt,
         }

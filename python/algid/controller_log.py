@@ -49,8 +49,9 @@ class ControllerLog:
             self.velocity_estimate[k] = xd
             self.force_command[k] = u
 
-    def estimates(self, k: int, estimator: Any, m: np.ndarray, c: np.ndarray, kk: np.ndarray, valid: np.ndarray,
-                  status: int) -> None:
+    def estimates(
+        self, k: int, estimator: Any, m: np.ndarray, c: np.ndarray, kk: np.ndarray, valid: np.ndarray, status: int
+    ) -> None:
         """The estimator's output after sample ``k``."""
         if k >= self.T:
             return
@@ -67,9 +68,16 @@ class ControllerLog:
         """``estimates``, ``used``, ``velocity_estimate`` and ``force_command`` as in
         :meth:`algid.controller.TrackingController.log`."""
         return {
-            "estimates": {"mass": self.est_mass, "damping": self.est_damping, "stiffness": self.est_stiffness,
-                          "valid": self.est_valid, "theta": self.est_theta, "sigma": self.est_sigma,
-                          "status": self.status},
+            "estimates": {
+                "mass": self.est_mass,
+                "damping": self.est_damping,
+                "stiffness": self.est_stiffness,
+                "valid": self.est_valid,
+                "theta": self.est_theta,
+                "sigma": self.est_sigma,
+                "status": self.status,
+            },
             "used": {"mass": self.used_mass, "damping": self.used_damping, "stiffness": self.used_stiffness},
-            "velocity_estimate": self.velocity_estimate, "force_command": self.force_command,
+            "velocity_estimate": self.velocity_estimate,
+            "force_command": self.force_command,
         }

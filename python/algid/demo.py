@@ -61,14 +61,13 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable, Optional
+from typing import Any, Callable
 
 import numpy as np
 
 from .chain import TABLE1, Chain, parameter_names
 
-__all__ = ["add_parser", "run", "demo_chain", "run_scenario", "summarize", "settle_time",
-           "format_summary", "jsonable"]
+__all__ = ["add_parser", "run", "demo_chain", "run_scenario", "summarize", "settle_time", "format_summary", "jsonable"]
 
 #: Relative accuracy an estimate must reach [-].
 TOLERANCE = 0.01
@@ -86,8 +85,7 @@ def demo_chain(n: int) -> Chain:
         return TABLE1
     if n < 1:
         raise ValueError(f"--n must be >= 1, got {n}")
-    return Chain(np.resize(TABLE1.mass, n), np.resize(TABLE1.damping, n),
-                 np.resize(TABLE1.stiffness, n + 1))
+    return Chain(np.resize(TABLE1.mass, n), np.resize(TABLE1.damping, n), np.resize(TABLE1.stiffness, n + 1))
 
 
 def settle_time(t: np.ndarray, rel_err: np.ndarray, tol: float = TOLERANCE) -> tuple[float, float]:
@@ -107,7 +105,7 @@ def settle_time(t: np.ndarray, rel_err: np.ndarray, tol: float = TOLERANCE) -> t
     return first, stays
 
 
-def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] = None) -> dict[str, Any]:
+def summarize(res: Any, wall_s: float = float("nan"), noise_db: float | None = None) -> dict[str, Any]:
     """Numbers of the demo from a closed-loop :class:`~algid.simulator.SimulationResult`
     (``noise_db``: the accelerometer SNR asked for [dB], None if noise-free)."""
     chain = res.chain
@@ -129,13 +127,21 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] 
     params = []
     for q in np.nonzero(keep)[0]:
         first, stays = settle_time(t, rel[:, q])
-        params.append({
-            "name": names[q], "true": float(true[q]),
-            "at_switch": float(est[k_at, q]), "at_end": float(est[-1, q]),
-            "rel_err_at_switch": float(rel[k_at, q]), "rel_err_at_end": float(rel[-1, q]),
-            "first_within_1pct_s": first, "stays_within_1pct_s": stays,
-            "max_rel_err_after_1s": float(np.nanmax(np.abs(rel[t >= 1.0, q]))) if np.any(t >= 1.0) else float("nan"),
-        })
+        params.append(
+            {
+                "name": names[q],
+                "true": float(true[q]),
+                "at_switch": float(est[k_at, q]),
+                "at_end": float(est[-1, q]),
+                "rel_err_at_switch": float(rel[k_at, q]),
+                "rel_err_at_end": float(rel[-1, q]),
+                "first_within_1pct_s": first,
+                "stays_within_1pct_s": stays,
+                "max_rel_err_after_1s": float(np.nanmax(np.abs(rel[t >= 1.0, q])))
+                if np.any(t >= 1.0)
+                else float("nan"),
+            }
+        )
     # each DOF's own [m_i, c_i, k_i, k_{i+1}] (interior springs are estimated twice)
     th = np.asarray(E.get("theta", np.full((len(t), chain.n, 4), np.nan)), dtype=float)
     k_all = chain.stiffness.copy()
@@ -149,8 +155,7 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] 
                 if not np.isfinite(th_true[i, j]) or th_true[i, j] == 0 or np.all(np.isnan(th[:, i, j])):
                     continue
                 first, stays = settle_time(t, th[:, i, j] / th_true[i, j] - 1.0)
-                per_dof.append({"dof": i + 1, "param": sym, "first_within_1pct_s": first,
-                                "stays_within_1pct_s": stays})
+                per_dof.append({"dof": i + 1, "param": sym, "first_within_1pct_s": first, "stays_within_1pct_s": stays})
     x_ref = res.x_ref
     err = res.x - x_ref
     stroke = float(np.max(np.abs(x_ref)))
@@ -171,28 +176,37 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] 
     dev = np.abs(res.u_applied[win] - u_ff[win])
     before = (t >= t[k_at] - 0.02) & (t < t[k_at])
     return {
-        "n": chain.n, "mode": res.mode, "fs_hz": res.fs_hz, "duration_s": float(len(t) / res.fs_hz),
+        "n": chain.n,
+        "mode": res.mode,
+        "fs_hz": res.fs_hz,
+        "duration_s": float(len(t) / res.fs_hz),
         "noise_db": noise_db,
         "accel_snr_achieved_db": (res.snr_db["accel"].tolist() if "accel" in res.snr_db else None),
-        "switch_time_s": float(t[k_at]), "eq10": log.get("eq10"),
-        "estimates_substituted_s": (None if log.get("first_accepted_s") is None
-                                    else max(float(t[k_at]), float(log["first_accepted_s"]) + 1.0 / res.fs_hz)),
+        "switch_time_s": float(t[k_at]),
+        "eq10": log.get("eq10"),
+        "estimates_substituted_s": (
+            None
+            if log.get("first_accepted_s") is None
+            else max(float(t[k_at]), float(log["first_accepted_s"]) + 1.0 / res.fs_hz)
+        ),
         "continuous_running_from_s": log.get("running_from_s"),
-        "gains": log["gains"], "poles_rad_s": [p.real for p in log["poles"]],
+        "gains": log["gains"],
+        "poles_rad_s": [p.real for p in log["poles"]],
         "estimator_delay_samples": log["delay_samples"],
         "parameters": params,
         "all_first_within_1pct_s": max(p["first_within_1pct_s"] for p in params),
         "all_stay_within_1pct_s": max(p["stays_within_1pct_s"] for p in params),
         "per_dof_estimates": per_dof,
-        "all_per_dof_first_within_1pct_s": (max(p["first_within_1pct_s"] for p in per_dof)
-                                            if per_dof else None),
+        "all_per_dof_first_within_1pct_s": (max(p["first_within_1pct_s"] for p in per_dof) if per_dof else None),
         "max_rel_err_at_switch": max(abs(p["rel_err_at_switch"]) for p in params),
         "max_rel_err_at_end": max(abs(p["rel_err_at_end"]) for p in params),
         "max_rel_err_after_1s": max(p["max_rel_err_after_1s"] for p in params),
         "stroke_m": stroke,
         "tracking": {
-            "peak_after_switch_m": peak(after), "rms_after_switch_m": rms(after),
-            "peak_after_1s_m": peak(late), "rms_after_1s_m": rms(late),
+            "peak_after_switch_m": peak(after),
+            "rms_after_switch_m": rms(after),
+            "peak_after_1s_m": peak(late),
+            "rms_after_1s_m": rms(late),
             "peak_after_switch_pct_stroke": 100 * peak(after) / stroke,
             "peak_after_1s_pct_stroke": 100 * peak(late) / stroke,
         },
@@ -209,7 +223,7 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: Optional[float] 
     }
 
 
-def resolve_estimator(estimator: str, noise_db: Optional[float]) -> str:
+def resolve_estimator(estimator: str, noise_db: float | None) -> str:
     """``"single"`` or ``"continuous"`` for ``--estimator`` (``auto``: continuous when noisy)."""
     if estimator == "auto":
         return "single" if noise_db is None else "continuous"
@@ -224,7 +238,7 @@ def _continuous_factory(n: int, dt: float, boundary: str) -> Any:
     return ContinuousAdapter(n, dt, boundary)
 
 
-def _actual_snr_noise(noise_db: float, seed: Optional[int], scale: np.ndarray) -> Any:
+def _actual_snr_noise(noise_db: float, seed: int | None, scale: np.ndarray) -> Any:
     """Accelerometer noise whose RMS is ``10**(-noise_db/20)`` times ``scale`` times the
     simulator's planned-motion level, per DOF."""
     from dataclasses import dataclass
@@ -262,9 +276,13 @@ def estimator_drift(res: Any, times_s: tuple = DRIFT_TIMES_S) -> dict[str, Any]:
     for k in range(T):
         ad.update(res.a[k], res.u[k])
         th_c[k], rs_c[k] = ad.estimate, ad.rel_sigma
-    out: dict[str, Any] = {"times_s": list(times_s), "single": [], "continuous": [],
-                           "continuous_rel_sigma": [],
-                           "running_from_s": None if ad.running_from is None else ad.running_from * dt}
+    out: dict[str, Any] = {
+        "times_s": list(times_s),
+        "single": [],
+        "continuous": [],
+        "continuous_rel_sigma": [],
+        "running_from_s": None if ad.running_from is None else ad.running_from * dt,
+    }
     with np.errstate(divide="ignore", invalid="ignore"):
         rel_s = np.abs(th_s / true - 1.0)[:, keep]
         rel_c = np.abs(th_c / true - 1.0)[:, keep]
@@ -275,16 +293,25 @@ def estimator_drift(res: Any, times_s: tuple = DRIFT_TIMES_S) -> dict[str, Any]:
         out["continuous"].append(worst(rel_c[k]))
         sig = rs_c[k][keep]
         # no uncertainty yet (the running estimate starts after its first windows): NaN
-        out["continuous_rel_sigma"].append(float(np.max(sig[np.isfinite(sig)])) if np.isfinite(sig).any() else float("nan"))
+        out["continuous_rel_sigma"].append(
+            float(np.max(sig[np.isfinite(sig)])) if np.isfinite(sig).any() else float("nan")
+        )
     out["single_history"], out["continuous_history"] = rel_s, rel_c
     return out
 
 
-def run_scenario(n: int = 3, mode: str = "continuous", noise_db: Optional[float] = None,
-                 seed: Optional[int] = 0, duration_s: float = 5.0, eq10: str = "integrated",
-                 progress: Optional[Callable[[float], None]] = None, estimator: str = "auto",
-                 excitation_n: Optional[float] = None,
-                 drift: bool = True) -> tuple[Any, dict[str, Any]]:
+def run_scenario(
+    n: int = 3,
+    mode: str = "continuous",
+    noise_db: float | None = None,
+    seed: int | None = 0,
+    duration_s: float = 5.0,
+    eq10: str = "integrated",
+    progress: Callable[[float], None] | None = None,
+    estimator: str = "auto",
+    excitation_n: float | None = None,
+    drift: bool = True,
+) -> tuple[Any, dict[str, Any]]:
     """Simulate the demo's closed loop and summarise it; returns ``(result, summary)``.
 
     ``estimator``: ``single``, ``continuous`` or ``auto``; ``excitation_n``: probe amplitude
@@ -318,9 +345,8 @@ def run_scenario(n: int = 3, mode: str = "continuous", noise_db: Optional[float]
         ctrl0 = controller()
         cal = simulate(chain, None, duration_s, 1000.0, controller=ctrl0, mode=mode)
         planned = nominal_closed_loop_rms(chain, ctrl0, cal.t)["accel"]
-        noise = _actual_snr_noise(noise_db, seed, np.sqrt(np.mean(cal.a_true ** 2, axis=0)) / planned)
-    res = simulate(chain, None, duration_s, 1000.0, controller=controller(), mode=mode,
-                   noise=noise, progress=progress)
+        noise = _actual_snr_noise(noise_db, seed, np.sqrt(np.mean(cal.a_true**2, axis=0)) / planned)
+    res = simulate(chain, None, duration_s, 1000.0, controller=controller(), mode=mode, noise=noise, progress=progress)
     s = summarize(res, time.perf_counter() - t0, noise_db)
     s["estimator"] = kind
     s["excitation_n"] = float(excitation_n)
@@ -340,18 +366,26 @@ def format_summary(s: dict[str, Any]) -> str:
     lines = [
         f"algid demo: n = {s['n']}, {s['mode']} mode, fs = {s['fs_hz']:.0f} Hz, "
         f"{s['duration_s']:.1f} s, accelerometers "
-        + ("noise-free" if s["noise_db"] is None else
-           f"{s['noise_db']:.1f} dB SNR (achieved on the actual signals: "
-           + ", ".join(f"{v:.1f}" for v in s["accel_snr_achieved_db"]) + " dB)"),
+        + (
+            "noise-free"
+            if s["noise_db"] is None
+            else f"{s['noise_db']:.1f} dB SNR (achieved on the actual signals: "
+            + ", ".join(f"{v:.1f}" for v in s["accel_snr_achieved_db"])
+            + " dB)"
+        ),
         f"estimator: {s.get('estimator', 'single')}"
-        + (f" (running estimate served from {s['continuous_running_from_s']:.3f} s)"
-           if s.get("continuous_running_from_s") is not None else "")
+        + (
+            f" (running estimate served from {s['continuous_running_from_s']:.3f} s)"
+            if s.get("continuous_running_from_s") is not None
+            else ""
+        )
         + (f"; probe multisine {s['excitation_n']:.3g} N per line" if s.get("excitation_n") else ""),
         f"controller: poles {s['poles_rad_s']} rad/s, eq. 10 {s['eq10']}; "
-        + ("estimates never substituted (none passed the acceptance rule: nominal m = 1 kg, "
-           "c = k = 0 throughout)"
-           if s["estimates_substituted_s"] is None else
-           f"estimates substituted at t = {s['estimates_substituted_s']:.3f} s"),
+        + (
+            "estimates never substituted (none passed the acceptance rule: nominal m = 1 kg, c = k = 0 throughout)"
+            if s["estimates_substituted_s"] is None
+            else f"estimates substituted at t = {s['estimates_substituted_s']:.3f} s"
+        ),
         "",
         f"{'param':>6} {'true':>10} {'est @ switch':>13} {'rel err':>9} {'est @ end':>12} "
         f"{'rel err':>9} {'<=1% at [s]':>11} {'stays from [s]':>14}",
@@ -360,16 +394,23 @@ def format_summary(s: dict[str, Any]) -> str:
         lines.append(
             f"{p['name']:>6} {p['true']:>10.4g} {p['at_switch']:>13.6g} {p['rel_err_at_switch']:>9.1e} "
             f"{p['at_end']:>12.6g} {p['rel_err_at_end']:>9.1e} {_fmt_t(p['first_within_1pct_s']):>11} "
-            f"{_fmt_t(p['stays_within_1pct_s']):>14}")
+            f"{_fmt_t(p['stays_within_1pct_s']):>14}"
+        )
     tr, sb = s["tracking"], s["substitution"]
     lines += [
         "",
         f"all {len(s['parameters'])} fused estimates within 1 % first at {_fmt_t(s['all_first_within_1pct_s'])} s"
-        + (f" ({len(s['per_dof_estimates'])} per-DOF estimates: "
-           f"{_fmt_t(s['all_per_dof_first_within_1pct_s'])} s)" if s["per_dof_estimates"] else "")
+        + (
+            f" ({len(s['per_dof_estimates'])} per-DOF estimates: {_fmt_t(s['all_per_dof_first_within_1pct_s'])} s)"
+            if s["per_dof_estimates"]
+            else ""
+        )
         + ", "
-        + ("do not all stay within 1 % to the end; " if not np.isfinite(s["all_stay_within_1pct_s"])
-           else f"and all stay within 1 % from {s['all_stay_within_1pct_s']:.3f} s on; ")
+        + (
+            "do not all stay within 1 % to the end; "
+            if not np.isfinite(s["all_stay_within_1pct_s"])
+            else f"and all stay within 1 % from {s['all_stay_within_1pct_s']:.3f} s on; "
+        )
         + f"largest error after 1 s {100 * s['max_rel_err_after_1s']:.3g} %",
         f"tracking error after the switch: peak {1e6 * tr['peak_after_switch_m']:.3g} um "
         f"({tr['peak_after_switch_pct_stroke']:.3g} % of the {1e3 * s['stroke_m']:.0f} mm stroke), "
@@ -383,31 +424,45 @@ def format_summary(s: dict[str, Any]) -> str:
     ]
     d = s.get("drift")
     if d:
-        lines += ["", "largest relative error of the estimates, both estimators open loop on the "
-                      "recorded samples:",
-                  f"{'t [s]':>8} " + " ".join(f"{t:>9g}" for t in d["times_s"]),
-                  f"{'single':>8} " + " ".join(f"{100 * e:>8.3g}%" for e in d["single"]),
-                  f"{'contin.':>8} " + " ".join(f"{100 * e:>8.3g}%" for e in d["continuous"]),
-                  f"{'(sigma)':>8} " + " ".join(f"{100 * e:>8.2g}%" for e in d["continuous_rel_sigma"])]
+        lines += [
+            "",
+            "largest relative error of the estimates, both estimators open loop on the recorded samples:",
+            f"{'t [s]':>8} " + " ".join(f"{t:>9g}" for t in d["times_s"]),
+            f"{'single':>8} " + " ".join(f"{100 * e:>8.3g}%" for e in d["single"]),
+            f"{'contin.':>8} " + " ".join(f"{100 * e:>8.3g}%" for e in d["continuous"]),
+            f"{'(sigma)':>8} " + " ".join(f"{100 * e:>8.2g}%" for e in d["continuous_rel_sigma"]),
+        ]
     return "\n".join(lines)
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``algid demo`` on an argparse sub-parser collection."""
     p = subparsers.add_parser(
-        "demo", help="reproduce the paper's closed-loop experiment (Table 1, 5 s)",
+        "demo",
+        help="reproduce the paper's closed-loop experiment (Table 1, 5 s)",
         description="Closed-loop tracking of the Table 1 chain with on-line estimates "
-                    "substituted at 0.1 s; prints a table and writes PNG figures.")
-    p.add_argument("--mode", choices=("continuous", "sampled"), default="continuous",
-                   help="controller inside the ODE (paper) or held at the sample rate (DAC)")
-    p.add_argument("--noise-db", type=float, default=None,
-                   help="SNR of the accelerometers [dB] (default: noise-free)")
-    p.add_argument("--estimator", choices=("single", "continuous", "auto"), default="auto",
-                   help="paper's growing window, continuous running estimate, or auto "
-                        "(continuous with --noise-db, single otherwise)")
-    p.add_argument("--excitation", type=float, default=None,
-                   help="probe multisine amplitude per line [N] (default 0.05 with --noise-db, "
-                        "0 otherwise)")
+        "substituted at 0.1 s; prints a table and writes PNG figures.",
+    )
+    p.add_argument(
+        "--mode",
+        choices=("continuous", "sampled"),
+        default="continuous",
+        help="controller inside the ODE (paper) or held at the sample rate (DAC)",
+    )
+    p.add_argument("--noise-db", type=float, default=None, help="SNR of the accelerometers [dB] (default: noise-free)")
+    p.add_argument(
+        "--estimator",
+        choices=("single", "continuous", "auto"),
+        default="auto",
+        help="paper's growing window, continuous running estimate, or auto "
+        "(continuous with --noise-db, single otherwise)",
+    )
+    p.add_argument(
+        "--excitation",
+        type=float,
+        default=None,
+        help="probe multisine amplitude per line [N] (default 0.05 with --noise-db, 0 otherwise)",
+    )
     p.add_argument("--n", type=int, default=3, help="number of DOF (default 3, Table 1)")
     p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
     p.add_argument("--duration", type=float, default=5.0, help="record length [s] (default 5)")
@@ -443,9 +498,16 @@ def run(args: argparse.Namespace) -> int:
         print("algid demo: --duration must be > 0.5 s", file=sys.stderr)
         return 2
     try:
-        res, summary = run_scenario(args.n, args.mode, args.noise_db, args.seed, args.duration,
-                                    progress=_ProgressPrinter(), estimator=args.estimator,
-                                    excitation_n=args.excitation)
+        res, summary = run_scenario(
+            args.n,
+            args.mode,
+            args.noise_db,
+            args.seed,
+            args.duration,
+            progress=_ProgressPrinter(),
+            estimator=args.estimator,
+            excitation_n=args.excitation,
+        )
     except ValueError as exc:
         print(f"algid demo: {exc}", file=sys.stderr)
         return 2

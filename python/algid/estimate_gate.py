@@ -4,8 +4,6 @@ estimates the control law takes (the rules ``settled``, ``valid`` and ``sigma`` 
 
 from __future__ import annotations
 
-from typing import Optional
-
 import numpy as np
 
 from .control_law import LawParameters
@@ -30,8 +28,17 @@ class EstimateGate:
         stiffnesses 0).
     """
 
-    def __init__(self, n: int, boundary: str, dt: float, rule: str, settle_window_s: float, settle_tol: float,
-                 hold: bool, nominal_mass_kg: float) -> None:
+    def __init__(
+        self,
+        n: int,
+        boundary: str,
+        dt: float,
+        rule: str,
+        settle_window_s: float,
+        settle_tol: float,
+        hold: bool,
+        nominal_mass_kg: float,
+    ) -> None:
         self.n, self.rule, self.hold, self.tol = n, rule, hold, settle_tol
         self.good_m = np.full(n, nominal_mass_kg)
         self.good_c = np.zeros(n)
@@ -39,7 +46,7 @@ class EstimateGate:
         #: DOFs whose estimates were taken at least once
         self.accepted = np.zeros(n, bool)
         #: sample of the first substitution (None before)
-        self.first_accept: Optional[int] = None
+        self.first_accept: int | None = None
         self.window = max(2, int(round(settle_window_s / dt)))
         self._hist_m = np.zeros((self.window, n))
         self._hist_c = np.zeros((self.window, n))
@@ -47,7 +54,7 @@ class EstimateGate:
         self._hist_n = 0
         self.k_right_absent = np.zeros(n, bool)
         self.k_right_absent[-1] = (boundary == "free") or n == 1
-        self._packed: Optional[LawParameters] = None
+        self._packed: LawParameters | None = None
 
     def parameters(self) -> LawParameters:
         """The accepted parameters (packed once per change)."""
@@ -106,7 +113,7 @@ class EstimateGate:
         self.accepted |= ok
         # a spring is estimated by the DOFs at its ends: take it from an accepted neighbour
         near = np.zeros(self.n + 1, bool)
-        near[:self.n] |= ok
+        near[: self.n] |= ok
         near[1:] |= ok
         near &= np.isfinite(kk)
         self.good_k[near] = kk[near]

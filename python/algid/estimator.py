@@ -57,8 +57,10 @@ def chain_core(isa: str | None = None):
             return importlib.import_module(f".{name}", __package__)
         except ImportError:
             if wanted is not None:
-                raise RuntimeError(f"the {level} build of algid is not in this installation "
-                                   "(only x86-64 machines with a recent compiler build it)") from None
+                raise RuntimeError(
+                    f"the {level} build of algid is not in this installation "
+                    "(only x86-64 machines with a recent compiler build it)"
+                ) from None
     return _core
 
 
@@ -148,8 +150,9 @@ class ChainEstimator:
     (the quadrature centres its stencil). A non-finite sample reseeds the estimator.
     """
 
-    def __init__(self, n: int, dt: float | None = None, boundary: str | None = None,
-                 config: ChainConfig | None = None, **options) -> None:
+    def __init__(
+        self, n: int, dt: float | None = None, boundary: str | None = None, config: ChainConfig | None = None, **options
+    ) -> None:
         n = dofs(n)
         if dt is None and config is None:
             raise TypeError("ChainEstimator needs dt (or a config)")

@@ -104,13 +104,21 @@ class NoiseModel:
         return any(c.quantum > 0 for c in self.motions)
 
     def to_json(self) -> dict:
-        return {"motion": self.motion, "band_hz": [0.0, _num(self.f_hi)], "f_mid_hz": _num(self.f_mid),
-                "band_source": self.band_source, "nyquist_hz": self.nyquist,
-                "forces": [c.to_json() for c in self.forces], "motions": [c.to_json() for c in self.motions],
-                "rule": (f"per channel: Welch PSD, floor = median PSD of the upper third, signal = bins above "
-                         f"{DETECT:g}x floor, f_hi = frequency below which {POWER:.0%} of the above-floor power "
-                         "lies; band edge = largest f_hi of the forces and of measured accelerations (derived "
-                         "accelerations are not used: their noise grows like f^2)")}
+        return {
+            "motion": self.motion,
+            "band_hz": [0.0, _num(self.f_hi)],
+            "f_mid_hz": _num(self.f_mid),
+            "band_source": self.band_source,
+            "nyquist_hz": self.nyquist,
+            "forces": [c.to_json() for c in self.forces],
+            "motions": [c.to_json() for c in self.motions],
+            "rule": (
+                f"per channel: Welch PSD, floor = median PSD of the upper third, signal = bins above "
+                f"{DETECT:g}x floor, f_hi = frequency below which {POWER:.0%} of the above-floor power "
+                "lies; band edge = largest f_hi of the forces and of measured accelerations (derived "
+                "accelerations are not used: their noise grows like f^2)"
+            ),
+        }
 
 
 def _num(v):
@@ -205,8 +213,17 @@ def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False) -> Cha
     else:
         f_hi = f_mid = f_low = snr = float("nan")
     q = encoder_quantum(x) if quantised else 0.0
-    return Channel(name=name, floor_psd=floor, sigma=float(np.sqrt(floor * 0.5 / dt)), f_hi=f_hi, f_mid=f_mid,
-                   snr_db=float(snr), quantum=q, rms=float(np.std(x)), f_low=f_low)
+    return Channel(
+        name=name,
+        floor_psd=floor,
+        sigma=float(np.sqrt(floor * 0.5 / dt)),
+        f_hi=f_hi,
+        f_mid=f_mid,
+        snr_db=float(snr),
+        quantum=q,
+        rms=float(np.std(x)),
+        f_low=f_low,
+    )
 
 
 def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "acceleration") -> NoiseModel:
@@ -219,8 +236,9 @@ def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "accelerat
     motion = np.asarray(motion, dtype=float).reshape(motion.shape[0], -1)
     sym = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
     forces = [channel(f"u{i + 1}", u[:, i], dt) for i in range(u.shape[1])]
-    motions = [channel(f"{sym}{i + 1}", motion[:, i], dt, quantised=kind == "displacement")
-               for i in range(motion.shape[1])]
+    motions = [
+        channel(f"{sym}{i + 1}", motion[:, i], dt, quantised=kind == "displacement") for i in range(motion.shape[1])
+    ]
     setting = [c for c in forces if np.any(u[:, int(c.name[1:]) - 1] != 0.0)]
     if kind == "acceleration":
         setting += motions
@@ -232,8 +250,9 @@ def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "accelerat
         f_hi, source = 0.5 / dt, ""
     mids = [c.f_mid for c in forces if np.isfinite(c.f_mid)]
     f_mid = float(np.median(mids)) if mids else float("nan")
-    return NoiseModel(dt=float(dt), motion=kind, forces=forces, motions=motions, f_hi=float(f_hi), f_mid=f_mid,
-                      band_source=source)
+    return NoiseModel(
+        dt=float(dt), motion=kind, forces=forces, motions=motions, f_hi=float(f_hi), f_mid=f_mid, band_source=source
+    )
 
 
 #: Mains frequencies [Hz] whose lines (and harmonics) are looked for.
@@ -261,7 +280,7 @@ def mains_lines(signals: np.ndarray, dt: float, harmonics: int = 6) -> list[floa
                 break
             i = int(round(fk / df))
             near = (np.abs(f - fk) <= 5.0) & (np.abs(f - fk) > 1.0)
-            peak = S[max(i - 1, 0): i + 2].max(axis=0)
+            peak = S[max(i - 1, 0) : i + 2].max(axis=0)
             if np.any(peak > LINE_RATIO * np.median(S[near], axis=0)):
                 found.append(fk)
         if f0 in found or len(found) >= 2:

@@ -27,7 +27,8 @@ plant's.
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence, Union
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -49,8 +50,9 @@ class BangBangReference:
         Rest before the first move [s].
     """
 
-    def __init__(self, targets_m: Sequence[Sequence[float]], a_max: float, dwell_s: float = 0.5,
-                 start_s: float = 0.2) -> None:
+    def __init__(
+        self, targets_m: Sequence[Sequence[float]], a_max: float, dwell_s: float = 0.5, start_s: float = 0.2
+    ) -> None:
         tg = np.asarray(targets_m, dtype=float)
         if tg.ndim == 1:
             tg = tg[:, None]
@@ -80,7 +82,7 @@ class BangBangReference:
         """Number of DOF."""
         return int(self.targets.shape[1])
 
-    def evaluate(self, t: Union[float, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def evaluate(self, t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Reference position [m], velocity [m/s] and acceleration [m/s^2] at ``t`` [s]:
         three ``(n,)`` arrays for a scalar ``t``, three ``(T, n)`` for an array."""
         scalar = np.ndim(t) == 0
@@ -92,8 +94,7 @@ class BangBangReference:
         acc, x0 = self._acc[q], self._from[q]
         first = (s <= half)[:, None]
         s_, h_ = s[:, None], half[:, None]
-        pos = np.where(first, x0 + 0.5 * acc * s_**2,
-                       x0 + acc * (h_**2 - 0.5 * (2 * h_ - s_) ** 2))
+        pos = np.where(first, x0 + 0.5 * acc * s_**2, x0 + acc * (h_**2 - 0.5 * (2 * h_ - s_) ** 2))
         vel = np.where(first, acc * s_, acc * (2 * h_ - s_))
         moving = (tt - self._t0[q] < self._dur[q])[:, None] & started[:, None]
         accel = np.where(moving, np.where(first, acc, -acc), 0.0)
@@ -127,8 +128,17 @@ class PositioningController:
     :meth:`log` at the end (:meth:`reference_motion` for the noise level of a noisy loop).
     """
 
-    def __init__(self, reference: BangBangReference, f_max: float, kp: float, kd: float,
-                 ki: float = 0.0, m0: float = 0.0, c0: float = 0.0, rate_filter_hz: float = 100.0) -> None:
+    def __init__(
+        self,
+        reference: BangBangReference,
+        f_max: float,
+        kp: float,
+        kd: float,
+        ki: float = 0.0,
+        m0: float = 0.0,
+        c0: float = 0.0,
+        rate_filter_hz: float = 100.0,
+    ) -> None:
         if not (f_max > 0 and kp >= 0 and kd >= 0 and ki >= 0 and rate_filter_hz > 0):
             raise ValueError("need f_max > 0, kp, kd, ki >= 0 and rate_filter_hz > 0")
         self.reference = reference
@@ -137,8 +147,7 @@ class PositioningController:
         self.rate_filter_hz = float(rate_filter_hz)
         self.n_states = 0
 
-    def start(self, chain_n: int, dt: float, boundary: str = "fixed", samples: int = 0,
-              mode: str = "sampled") -> None:
+    def start(self, chain_n: int, dt: float, boundary: str = "fixed", samples: int = 0, mode: str = "sampled") -> None:
         """Prepare a run of ``samples`` samples every ``dt`` [s]."""
         if mode != "sampled":
             raise ValueError("PositioningController runs once per sample: use mode='sampled'")
@@ -154,7 +163,7 @@ class PositioningController:
         self._force = np.full((self._T, n), np.nan)
         self._saturated = np.zeros((self._T, n), bool)
 
-    def params_for_sample(self, k: int, z: Optional[np.ndarray] = None) -> None:
+    def params_for_sample(self, k: int, z: np.ndarray | None = None) -> None:
         """No estimated parameters enter this law."""
         return None
 
@@ -173,8 +182,9 @@ class PositioningController:
             self._force[k], self._saturated[k] = u, sat
         return u
 
-    def observe(self, k: int, t: float, accel: np.ndarray, force: np.ndarray, x_meas: np.ndarray,
-                z: Optional[np.ndarray] = None) -> None:
+    def observe(
+        self, k: int, t: float, accel: np.ndarray, force: np.ndarray, x_meas: np.ndarray, z: np.ndarray | None = None
+    ) -> None:
         """Nothing to learn from the measurements."""
 
     def reference_motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -184,5 +194,9 @@ class PositioningController:
     def log(self) -> dict[str, Any]:
         """``x_ref`` (T, n) [m], ``force_command`` (T, n) [N] and ``saturated`` (T, n)."""
         t = np.arange(self._T) * self.dt
-        return {"t": t, "x_ref": self.reference.evaluate(t)[0], "force_command": self._force,
-                "saturated": self._saturated}
+        return {
+            "t": t,
+            "x_ref": self.reference.evaluate(t)[0],
+            "force_command": self._force,
+            "saturated": self._saturated,
+        }

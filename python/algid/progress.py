@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import sys
 import time
-from typing import Optional, TextIO
-
+from typing import TextIO
 
 #: Stages shorter than this [s] print nothing.
 SHOW_AFTER_S = 1.0
@@ -20,12 +19,12 @@ SHOW_AFTER_S = 1.0
 class Progress:
     """``progress(stage, fraction)`` callback for a command called ``command``."""
 
-    def __init__(self, command: str, quiet: bool = False, stream: Optional[TextIO] = None) -> None:
+    def __init__(self, command: str, quiet: bool = False, stream: TextIO | None = None) -> None:
         self.command = command
         self.quiet = bool(quiet)
         self.stream = stream if stream is not None else sys.stderr
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self._stage: Optional[str] = None
+        self._stage: str | None = None
         self._t0 = time.perf_counter()
         self._shown = -1
 

@@ -115,9 +115,7 @@ class Recording:
             raise RecordingError("need accelerations a1..an, velocities v1..vn or displacements x1..xn")
         for name, arr in (("a", a), ("v", v), ("x", x)):
             if arr is not None and arr.shape[1] != n:
-                raise RecordingError(
-                    f"mismatched n: {n} force columns but {arr.shape[1]} {_KIND[name]} columns"
-                )
+                raise RecordingError(f"mismatched n: {n} force columns but {arr.shape[1]} {_KIND[name]} columns")
         if self.n is not None and int(self.n) != n:
             raise RecordingError(f"mismatched n: n = {self.n} given but u has {n} columns")
         for name, arr in (("t", t[:, None]), ("u", u), ("a", a), ("v", v), ("x", x)):
@@ -212,8 +210,7 @@ def _group_columns(names: list[str], source: str) -> tuple[int, dict[str, list[i
         raise RecordingError(f"{source}: missing force columns u1..un")
     n = max(groups["u"])
     if not groups["a"] and not groups["v"] and not groups["x"]:
-        raise RecordingError(f"{source}: missing columns a1..a{n} (or velocities v1..v{n}, or displacements "
-                             f"x1..x{n})")
+        raise RecordingError(f"{source}: missing columns a1..a{n} (or velocities v1..v{n}, or displacements x1..x{n})")
     for key, cols in groups.items():
         if not cols:
             continue
@@ -258,9 +255,7 @@ def _read_csv(path: Path) -> Recording:
     width = len(header)
     for fields, lineno in zip(rows, lines):
         if len(fields) != width:
-            raise RecordingError(
-                f"{path.name}: ragged row at line {lineno}: {len(fields)} fields, header has {width}"
-            )
+            raise RecordingError(f"{path.name}: ragged row at line {lineno}: {len(fields)} fields, header has {width}")
     try:
         data = np.array(rows, dtype=float)
     except ValueError:

@@ -25,7 +25,7 @@ It implements the same discretisation, so both agree to rounding:
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from math import factorial
 
 import numpy as np
@@ -35,7 +35,7 @@ import numpy as np
 MAX_ORDER = 5
 
 
-@lru_cache(maxsize=None)
+@cache
 def quadrature_weights(points: int, max_order: int = MAX_ORDER) -> np.ndarray:
     """Weights ``W[off, r-1, m]`` (shape ``(points-1, max_order, points)``).
 
@@ -152,8 +152,9 @@ def equilibrated_hadamard(S: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(h), h, 0.0)
 
 
-def estimate(y, u, dt: float, boundary: str = "fixed", points: int = 8, min_samples: int = 16,
-             min_hadamard: float = 1e-9):
+def estimate(
+    y, u, dt: float, boundary: str = "fixed", points: int = 8, min_samples: int = 16, min_hadamard: float = 1e-9
+):
     """Instantaneous (eq. 5) and ratio (eq. 7) estimates for every sample.
 
     Returns a dict with ``theta_inst`` and ``theta_ratio`` of shape ``(T, n, 4)``

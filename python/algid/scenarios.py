@@ -16,8 +16,8 @@ would write it (only the signals the rig measures), the true chain, and what els
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 
@@ -41,9 +41,17 @@ class Scenario:
     info: dict = field(default_factory=dict)
 
 
-def positioning_axis(seed: int = 0, duration_s: float = 20.0, mass_kg: float = 5.0, viscous_ns_m: float = 25.0,
-                     encoder_m: float = 1e-6, effects: Sequence = (), stroke_m: float = 0.05, a_max: float = 4.0,
-                     fs_hz: float = 1000.0) -> Scenario:
+def positioning_axis(
+    seed: int = 0,
+    duration_s: float = 20.0,
+    mass_kg: float = 5.0,
+    viscous_ns_m: float = 25.0,
+    encoder_m: float = 1e-6,
+    effects: Sequence = (),
+    stroke_m: float = 0.05,
+    a_max: float = 4.0,
+    fs_hz: float = 1000.0,
+) -> Scenario:
     """A ball-screw axis moving between random targets within ``+-stroke_m`` (module
     docstring), with any simulator ``effects`` of its DOF (dry friction, an unrecorded
     constant force, a drive delay ...). The drive's feedforward assumes 80 % of the mass
@@ -51,21 +59,39 @@ def positioning_axis(seed: int = 0, duration_s: float = 20.0, mass_kg: float = 5
     and a force limit of 12 N, each per kg of mass) closes the loop on the encoder."""
     rng = np.random.default_rng(seed)
     moves = max(2, int(np.ceil(duration_s / 0.5)))
-    ref = BangBangReference(rng.uniform(-stroke_m, stroke_m, (moves, 1)), a_max=a_max,
-                            dwell_s=float(rng.uniform(0.3, 0.6)))
+    ref = BangBangReference(
+        rng.uniform(-stroke_m, stroke_m, (moves, 1)), a_max=a_max, dwell_s=float(rng.uniform(0.3, 0.6))
+    )
     m = mass_kg
-    ctl = PositioningController(ref, f_max=12.0 * m, kp=8e3 * m, kd=160.0 * m, ki=4e4 * m, m0=0.8 * m,
-                                c0=0.5 * viscous_ns_m)
+    ctl = PositioningController(
+        ref, f_max=12.0 * m, kp=8e3 * m, kd=160.0 * m, ki=4e4 * m, m0=0.8 * m, c0=0.5 * viscous_ns_m
+    )
     chain = Chain([mass_kg], [viscous_ns_m], [0.0, 0.0])
-    sim = simulate(chain, None, duration_s, fs_hz, controller=ctl, mode="sampled", effects=list(effects),
-                   encoder_resolution_m=encoder_m)
+    sim = simulate(
+        chain,
+        None,
+        duration_s,
+        fs_hz,
+        controller=ctl,
+        mode="sampled",
+        effects=list(effects),
+        encoder_resolution_m=encoder_m,
+    )
     rec = Recording(t=sim.t, u=sim.u, x=sim.x_meas)
     return Scenario(rec, chain, list(effects), {"encoder_m": encoder_m, "moves": moves, "fs_hz": fs_hz})
 
 
-def displacement_driven(seed: int = 0, duration_s: float = 20.0, mass_kg: float = 0.05,
-                        damping_ns_m: float = 200.0, stiffness_n_m: float = 2e4, effects: Sequence = (),
-                        amplitude_m: float = 2e-3, noise_db: float = 50.0, fs_hz: float = 1000.0) -> Scenario:
+def displacement_driven(
+    seed: int = 0,
+    duration_s: float = 20.0,
+    mass_kg: float = 0.05,
+    damping_ns_m: float = 200.0,
+    stiffness_n_m: float = 2e4,
+    effects: Sequence = (),
+    amplitude_m: float = 2e-3,
+    noise_db: float = 50.0,
+    fs_hz: float = 1000.0,
+) -> Scenario:
     """Imposed displacement: three sines at 0.5, 1.1 and 1.9 Hz (random phases) of total
     amplitude about ``amplitude_m``; the force is what the device needs for that motion,
     ``m x'' + c x' + k x`` minus the forces of ``effects`` (simulator effects of DOF 1 and
@@ -86,12 +112,22 @@ def displacement_driven(seed: int = 0, duration_s: float = 20.0, mass_kg: float 
     ratio = 10.0 ** (-noise_db / 20.0)
     u_meas = u + ratio * np.std(u) * rng.standard_normal(u.shape)
     x_meas = x + ratio * np.std(x) * rng.standard_normal(x.shape)
-    return Scenario(Recording(t=t, u=u_meas, x=x_meas), chain, list(effects),
-                    {"frequencies_hz": f.tolist(), "noise_db": noise_db, "fs_hz": fs_hz})
+    return Scenario(
+        Recording(t=t, u=u_meas, x=x_meas),
+        chain,
+        list(effects),
+        {"frequencies_hz": f.tolist(), "noise_db": noise_db, "fs_hz": fs_hz},
+    )
 
 
-def impact_test(seed: int = 0, modes: int = 5, hits: int = 4, duration_s: float = 4.0, fs_hz: float = 10000.0,
-                noise_db: float = 50.0) -> Scenario:
+def impact_test(
+    seed: int = 0,
+    modes: int = 5,
+    hits: int = 4,
+    duration_s: float = 4.0,
+    fs_hz: float = 10000.0,
+    noise_db: float = 50.0,
+) -> Scenario:
     """An impact-hammer test of a clamped structure: a chain of ``modes`` masses (a clamped
     beam's first modes, about 20-400 Hz) struck ``hits`` times at DOF 1 with half-sine
     pulses of 0.5-1.5 ms, its force and the velocity of DOF 1 recorded (a laser vibrometer
@@ -113,5 +149,9 @@ def impact_test(seed: int = 0, modes: int = 5, hits: int = 4, duration_s: float 
     ratio = 10.0 ** (-noise_db / 20.0)
     f_meas = sim.u[:, :1] + ratio * np.std(sim.u[:, 0]) * rng.standard_normal((T, 1))
     v_meas = sim.v[:, :1] + ratio * np.std(sim.v[:, 0]) * rng.standard_normal((T, 1))
-    return Scenario(Recording(t=t, u=f_meas, v=v_meas), chain, [],
-                    {"natural_hz": chain.natural_frequencies_hz().tolist(), "hits": hits, "fs_hz": fs_hz})
+    return Scenario(
+        Recording(t=t, u=f_meas, v=v_meas),
+        chain,
+        [],
+        {"natural_hz": chain.natural_frequencies_hz().tolist(), "hits": hits, "fs_hz": fs_hz},
+    )

@@ -11,7 +11,8 @@ repeating the pattern ``+, +, -`` (``n = 1``: ``+5 mm``; ``n = 5``: ``+, +, -, +
 
 from __future__ import annotations
 
-from typing import Any, Sequence, Union
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -21,7 +22,7 @@ __all__ = ["BEZIER_COEFFS", "BezierReference", "Multisine", "bezier"]
 BEZIER_COEFFS = (252.0, -1050.0, 1800.0, -1575.0, 700.0, -126.0)
 
 
-def bezier(tau: Union[float, np.ndarray]) -> tuple[Any, Any, Any]:
+def bezier(tau: float | np.ndarray) -> tuple[Any, Any, Any]:
     """``psi``, ``dpsi/dtau``, ``d2psi/dtau2`` of the rest-to-rest Bezier polynomial, with
     ``tau`` clipped to ``[0, 1]``."""
     tau = np.clip(tau, 0.0, 1.0)
@@ -61,8 +62,12 @@ class BezierReference:
         Interval of the return move (after ``t_out``).
     """
 
-    def __init__(self, targets_m: Sequence[float], t_out: tuple[float, float] = (0.0, 2.0),
-                 t_back: tuple[float, float] = (2.5, 4.5)) -> None:
+    def __init__(
+        self,
+        targets_m: Sequence[float],
+        t_out: tuple[float, float] = (0.0, 2.0),
+        t_back: tuple[float, float] = (2.5, 4.5),
+    ) -> None:
         self.targets = np.asarray(targets_m, dtype=float).reshape(-1)
         if self.targets.size < 1 or not np.all(np.isfinite(self.targets)):
             raise ValueError("targets_m must be finite with at least one entry")
@@ -84,12 +89,12 @@ class BezierReference:
         return float(np.max(np.abs(self.targets)))
 
     @classmethod
-    def paper(cls, n: int, stroke_m: float = 0.005, **kw: Any) -> "BezierReference":
+    def paper(cls, n: int, stroke_m: float = 0.005, **kw: Any) -> BezierReference:
         """The paper's targets ``(+s, +s, -s)`` for n = 3, the pattern repeated for other n."""
         pattern = np.array([1.0, 1.0, -1.0])
         return cls(stroke_m * np.resize(pattern, int(n)), **kw)
 
-    def evaluate(self, t: Union[float, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def evaluate(self, t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Reference position [m], velocity [m/s] and acceleration [m/s^2] at ``t`` [s].
 
         A scalar ``t`` gives three ``(n,)`` arrays, an array ``(T,)`` three ``(T, n)``.
@@ -129,8 +134,7 @@ class Multisine:
 
     FREQS_HZ = (3.1, 4.7, 6.3, 8.9, 12.1, 15.7)
 
-    def __init__(self, n: int, amplitude_n: float, freqs_hz: Sequence[float] = FREQS_HZ,
-                 seed: int = 0) -> None:
+    def __init__(self, n: int, amplitude_n: float, freqs_hz: Sequence[float] = FREQS_HZ, seed: int = 0) -> None:
         if not amplitude_n >= 0:
             raise ValueError("amplitude_n must be >= 0")
         self.amplitude_n = float(amplitude_n)

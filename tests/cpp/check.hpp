@@ -10,8 +10,14 @@
 #endif
 
 namespace algid_test {
-inline int& passed() { static int n = 0; return n; }
-inline int& failed() { static int n = 0; return n; }
+inline int& passed() {
+  static int n = 0;
+  return n;
+}
+inline int& failed() {
+  static int n = 0;
+  return n;
+}
 inline void record(bool ok, const char* what, const char* file, int line) {
   if (ok) {
     ++passed();
@@ -39,11 +45,11 @@ inline const bool kCpuRunsThisBuild = [] {
 }  // namespace algid_test
 
 #define CHECK(cond) ::algid_test::record(static_cast<bool>(cond), #cond, __FILE__, __LINE__)
-#define CHECK_NEAR(a, b, tol)                                                                          \
-  do {                                                                                                 \
-    const double check_a_ = static_cast<double>(a), check_b_ = static_cast<double>(b);                \
-    const bool check_ok_ = std::abs(check_a_ - check_b_) <= static_cast<double>(tol);                  \
-    if (!check_ok_) std::printf("  %s = %.17g, %s = %.17g, tol %.3g\n", #a, check_a_, #b, check_b_,  \
-                                static_cast<double>(tol));                                             \
-    ::algid_test::record(check_ok_, #a " ~ " #b, __FILE__, __LINE__);                                 \
+#define CHECK_NEAR(a, b, tol)                                                                                    \
+  do {                                                                                                           \
+    const double check_a_ = static_cast<double>(a), check_b_ = static_cast<double>(b);                           \
+    const bool check_ok_ = std::abs(check_a_ - check_b_) <= static_cast<double>(tol);                            \
+    if (!check_ok_)                                                                                              \
+      std::printf("  %s = %.17g, %s = %.17g, tol %.3g\n", #a, check_a_, #b, check_b_, static_cast<double>(tol)); \
+    ::algid_test::record(check_ok_, #a " ~ " #b, __FILE__, __LINE__);                                            \
   } while (0)

@@ -22,7 +22,10 @@ struct PolynomialChainN {
   std::vector<std::array<double, 6>> coef;   // x_i(t) = sum coef[i][d] t^d
 
   PolynomialChainN(int dofs, unsigned seed, bool free_end = false)
-      : n(dofs), m(static_cast<std::size_t>(dofs)), c(m), k(static_cast<std::size_t>(dofs) + 1),
+      : n(dofs),
+        m(static_cast<std::size_t>(dofs)),
+        c(m),
+        k(static_cast<std::size_t>(dofs) + 1),
         coef(static_cast<std::size_t>(dofs)) {
     std::mt19937 gen(seed);
     std::uniform_real_distribution<double> u(0.5, 1.5), s(-1.0, 1.0);
@@ -60,8 +63,12 @@ struct SineChainN {
   std::vector<std::array<double, kTones>> amp, phase;
 
   SineChainN(int dofs, unsigned seed, bool free_end = false)
-      : n(dofs), m(static_cast<std::size_t>(dofs)), c(m), k(static_cast<std::size_t>(dofs) + 1),
-        amp(static_cast<std::size_t>(dofs)), phase(amp) {
+      : n(dofs),
+        m(static_cast<std::size_t>(dofs)),
+        c(m),
+        k(static_cast<std::size_t>(dofs) + 1),
+        amp(static_cast<std::size_t>(dofs)),
+        phase(amp) {
     std::mt19937 gen(seed);
     std::uniform_real_distribution<double> u(0.5, 1.5), ph(0.0, 6.283185307179586);
     for (std::size_t i = 0; i < m.size(); ++i) {
@@ -73,7 +80,8 @@ struct SineChainN {
       }
     }
     for (auto& kk : k) kk = 900.0 * u(gen);
-    for (std::size_t q = 0; q < kTones; ++q) w[q] = 2 * 3.141592653589793 * (2.0 + 5.3 * static_cast<double>(q)) * u(gen);
+    for (std::size_t q = 0; q < kTones; ++q)
+      w[q] = 2 * 3.141592653589793 * (2.0 + 5.3 * static_cast<double>(q)) * u(gen);
     if (free_end) k.back() = 0.0;
   }
   double deriv(int i, int order, double t) const {

@@ -20,9 +20,9 @@
 //   - the springs fused as ChainEstimator documents (mean of both estimates of an interior
 //     spring where both DOF are valid, else the valid one; 0 at a free end; k_1 + k_2 and NaN
 //     for n = 1 with walls).
-#include <algid/quadrature.hpp>
-#include <algid/integrator_chain.hpp>
 #include <algid/chain_config.hpp>
+#include <algid/integrator_chain.hpp>
+#include <algid/quadrature.hpp>
 
 #include <Eigen/Dense>
 
@@ -81,8 +81,12 @@ class Oracle {
   using VectorR = Eigen::Matrix<Real, Eigen::Dynamic, 1>;
 
   Oracle(int n, const algid::ChainConfig<double>& config)
-      : n_(n), config_(config), rule_(static_cast<Real>(config.dt)), accel_(static_cast<std::size_t>(n)),
-        force_(accel_.size()), dof_(static_cast<std::size_t>(n)) {
+      : n_(n),
+        config_(config),
+        rule_(static_cast<Real>(config.dt)),
+        accel_(static_cast<std::size_t>(n)),
+        force_(accel_.size()),
+        dof_(static_cast<std::size_t>(n)) {
     reseed();
   }
 
@@ -123,7 +127,8 @@ class Oracle {
         rows(q, 0) = scaled_moment(J, 2, q) - 4 * scaled_moment(J, 1, q + 1) + 2 * scaled_moment(J, 0, q + 2);
         rows(q, 1) = scaled_moment(J, 2, q + 1) - 2 * scaled_moment(J, 1, q + 2);
         rows(q, 2) = scaled_moment(J, 2, q + 2);
-        uf[static_cast<std::size_t>(i)](q) = scaled_moment(F, 2, q) - 4 * scaled_moment(F, 1, q + 1) + 2 * scaled_moment(F, 0, q + 2);
+        uf[static_cast<std::size_t>(i)](q) = scaled_moment(F, 2, q) - 4 * scaled_moment(F, 1, q + 1) +
+                                             2 * scaled_moment(F, 0, q + 2);
       }
     }
     const Real h = static_cast<Real>(config_.dt);
@@ -158,7 +163,8 @@ class Oracle {
       for (int r = 0; r < m; ++r) E.row(r) /= E.row(r).norm();
       const double had = static_cast<double>(std::abs(Eigen::FullPivLU<MatrixR>(E).determinant()));
       d.hadamard = std::isfinite(had) ? had : 0.0;
-      d.instant_valid = samples_ >= config_.validity.min_samples && solved && d.hadamard >= config_.validity.min_hadamard;
+      d.instant_valid = samples_ >= config_.validity.min_samples && solved &&
+                        d.hadamard >= config_.validity.min_hadamard;
       // Eq. 7: trapezoidal double integrals from t0 of the physical weights.
       Real x[5] = {0, 0, 0, 0, 0};
       if (d.instant_valid) {

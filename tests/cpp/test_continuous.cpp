@@ -51,7 +51,8 @@ struct ToneChain {
     for (int q = 0; q < kTones; ++q)
       w[static_cast<std::size_t>(q)] = 2 * 3.141592653589793 * std::pow(20.0, (q + uni(0.0, 1.0)) / kTones);
     for (auto& row : amp)
-      for (int q = 0; q < kTones; ++q) row[static_cast<std::size_t>(q)] = 1e-3 * w[0] / w[static_cast<std::size_t>(q)] * uni(0.5, 1.5);
+      for (int q = 0; q < kTones; ++q)
+        row[static_cast<std::size_t>(q)] = 1e-3 * w[0] / w[static_cast<std::size_t>(q)] * uni(0.5, 1.5);
     for (auto& row : phase)
       for (auto& p : row) p = uni(0.0, 6.283185307179586);
   }
@@ -105,7 +106,8 @@ struct Record {
     for (auto* signal : {&accel, &force}) {
       for (int i = 0; i < N; ++i) {
         double ss = 0;
-        for (long s = 0; s < T; ++s) ss += (*signal)[static_cast<std::size_t>(s * N + i)] * (*signal)[static_cast<std::size_t>(s * N + i)];
+        for (long s = 0; s < T; ++s)
+          ss += (*signal)[static_cast<std::size_t>(s * N + i)] * (*signal)[static_cast<std::size_t>(s * N + i)];
         const double sigma = ratio * std::sqrt(ss / static_cast<double>(T));
         for (long s = 0; s < T; ++s) (*signal)[static_cast<std::size_t>(s * N + i)] += sigma * gauss();
       }
@@ -191,9 +193,11 @@ void dynamic_equals_fixed() {
     for (int j = 0; j < Fixed::kParams; ++j) {
       differences += !same(fixed->estimate()(j), dyn->estimate()(j)) + !same(fixed->sigma()(j), dyn->sigma()(j));
       differences += !same(fixed->last_window()(j), dyn->last_window()(j));
-      differences += !same(fixed->window_spread(j), dyn->window_spread(j)) + (fixed->since_restart(j) != dyn->since_restart(j));
+      differences += !same(fixed->window_spread(j), dyn->window_spread(j)) +
+                     (fixed->since_restart(j) != dyn->since_restart(j));
     }
-    for (int i = 0; i < N; ++i) differences += !same(fixed->mass()(i), dyn->mass()(i)) + !same(fixed->damping()(i), dyn->damping()(i));
+    for (int i = 0; i < N; ++i)
+      differences += !same(fixed->mass()(i), dyn->mass()(i)) + !same(fixed->damping()(i), dyn->damping()(i));
     for (int j = 0; j <= N; ++j) differences += !same(fixed->stiffness()(j), dyn->stiffness()(j));
     differences += fixed->events() != dyn->events();
     for (int e = 0; e < std::min(fixed->events(), dyn->events()); ++e) {
@@ -204,9 +208,10 @@ void dynamic_equals_fixed() {
       step_events += a.kind == algid::ChangeKind::kStep && a.param == 2 * N + 1 && s >= 6000;
     }
   }
-  std::printf("  Dynamic n=3 against ContinuousEstimator<3>, 10 s with a 20 %% step at 6 s and a bad sample: %ld differing "
-              "values, %ld events (%ld step events on k_2 after the step), %ld window results\n",
-              differences, events, step_events, fixed->window_results());
+  std::printf(
+      "  Dynamic n=3 against ContinuousEstimator<3>, 10 s with a 20 %% step at 6 s and a bad sample: %ld differing "
+      "values, %ld events (%ld step events on k_2 after the step), %ld window results\n",
+      differences, events, step_events, fixed->window_results());
   CHECK(differences == 0);
   CHECK(step_events >= 1);
   CHECK(fixed->window_results() > 100);
@@ -297,7 +302,9 @@ void schedule_and_aggregation_match_oracle() {
         expect = median(r);
       } else {
         double sum = 0;
-        for (std::size_t b = 0; b < blocks; ++b) sum += median(std::vector<double>(r.begin() + static_cast<long>(16 * b), r.begin() + static_cast<long>(16 * b + 16)));
+        for (std::size_t b = 0; b < blocks; ++b)
+          sum += median(
+              std::vector<double>(r.begin() + static_cast<long>(16 * b), r.begin() + static_cast<long>(16 * b + 16)));
         expect = sum / static_cast<double>(blocks);
       }
       ++estimate_checks;
@@ -316,7 +323,8 @@ template <int N, class Est>
 std::vector<double> rel_errors(const Est& est, const Record<N>& rec, long s) {
   const auto truth = rec.truth(s);
   std::vector<double> e;
-  for (int j = 0; j < Est::kParams; ++j) e.push_back(std::abs(est.estimate()(j) - truth[static_cast<std::size_t>(j)]) / truth[static_cast<std::size_t>(j)]);
+  for (int j = 0; j < Est::kParams; ++j)
+    e.push_back(std::abs(est.estimate()(j) - truth[static_cast<std::size_t>(j)]) / truth[static_cast<std::size_t>(j)]);
   return e;
 }
 
@@ -405,7 +413,6 @@ void free_end_and_single_dof() {
     CHECK_NEAR(est.estimate()(2), rec.before.k[0] + rec.before.k[1], 1e-6 * rec.before.k[0]);
   }
 }
-
 
 void prefilter_keeps_the_model() {
   // Noise-free closed-form record: with the default prefilter (fs/20, order 4) the window

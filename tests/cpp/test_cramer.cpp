@@ -66,8 +66,10 @@ void against_lu(std::mt19937& gen) {
     algid::equilibrated_hadamard2<M>(S, det, h2num, h2den);
     worst_hadamard = std::max(worst_hadamard, std::abs(std::sqrt(h2num / h2den) - hadamard_definition<M>(a)));
   }
-  std::printf("%dx%d: worst relative difference to LU %.2e, det %.2e, numerators (to column-replaced determinants) "
-              "%.2e, Hadamard ratio %.2e\n", M, M, worst, worst_det, worst_num, worst_hadamard);
+  std::printf(
+      "%dx%d: worst relative difference to LU %.2e, det %.2e, numerators (to column-replaced determinants) "
+      "%.2e, Hadamard ratio %.2e\n",
+      M, M, worst, worst_det, worst_num, worst_hadamard);
   CHECK(worst < 1e-9);
   CHECK(worst_det < 1e-12);
   CHECK(worst_num < 1e-12);

@@ -65,8 +65,8 @@ void exact_case(int n, unsigned seed, algid::Boundary boundary) {
       const auto th = est.theta_instant(i);
       if (std::isnan(th(0))) continue;
       const double kl = sum_only ? k(0) + k(1) : k(i);
-      double e = std::max({rel(th(0), truth.m[static_cast<std::size_t>(i)]), rel(th(1), truth.c[static_cast<std::size_t>(i)]),
-                           rel(th(2), kl)});
+      double e = std::max({rel(th(0), truth.m[static_cast<std::size_t>(i)]),
+                           rel(th(1), truth.c[static_cast<std::size_t>(i)]), rel(th(2), kl)});
       if (!std::isnan(th(3))) e = std::max(e, rel(th(3), k(i + 1)));
       worst_scaled = std::max(worst_scaled, e * est.hadamard(i));
     }
@@ -75,7 +75,8 @@ void exact_case(int n, unsigned seed, algid::Boundary boundary) {
   for (int i = 0; i < n; ++i)
     final_err = std::max({final_err, rel(est.mass()(i), truth.m[static_cast<std::size_t>(i)]),
                           rel(est.damping()(i), truth.c[static_cast<std::size_t>(i)])});
-  for (int j = 0; j < (sum_only ? 1 : n); ++j) final_err = std::max(final_err, rel(est.stiffness()(j), sum_only ? k(0) + k(1) : k(j)));
+  for (int j = 0; j < (sum_only ? 1 : n); ++j)
+    final_err = std::max(final_err, rel(est.stiffness()(j), sum_only ? k(0) + k(1) : k(j)));
   if (!free_end && !sum_only) final_err = std::max(final_err, rel(est.stiffness()(n), k(n)));
   std::printf("%s %s: exact case, max |error| * hadamard %.2e, final eq. 7 error %.2e\n", label<Est>(n).c_str(),
               free_end ? "free" : "fixed", worst_scaled, final_err);
@@ -116,7 +117,8 @@ void multisine_case(int n, unsigned seed) {
     if (s == 56 || s == 506) {
       double e = 0;
       for (int i = 0; i < n; ++i)
-        e = std::max({e, rel(est.mass()(i), truth.m[static_cast<std::size_t>(i)]), rel(est.damping()(i), truth.c[static_cast<std::size_t>(i)])});
+        e = std::max({e, rel(est.mass()(i), truth.m[static_cast<std::size_t>(i)]),
+                      rel(est.damping()(i), truth.c[static_cast<std::size_t>(i)])});
       if (n == 1) {
         e = std::max(e, rel(est.stiffness()(0), truth.k[0] + truth.k[1]));  // only the sum
       } else {
@@ -125,8 +127,8 @@ void multisine_case(int n, unsigned seed) {
       (s == 56 ? err_50ms : err_end) = e;
     }
   }
-  std::printf("%s multisine at 1 kHz: max error %.2e at t0 + 0.05 s, %.2e at t0 + 0.5 s\n", label<Est>(n).c_str(), err_50ms,
-              err_end);
+  std::printf("%s multisine at 1 kHz: max error %.2e at t0 + 0.05 s, %.2e at t0 + 0.5 s\n", label<Est>(n).c_str(),
+              err_50ms, err_end);
   CHECK(err_50ms < 1e-2);
   CHECK(err_end < 1e-6);
 }
@@ -259,12 +261,13 @@ OracleFigures oracle_case(int n, algid::Boundary boundary, unsigned seed, bool m
     for (int j = 0; j <= n; ++j) eq7(est.stiffness()(j), oracle.stiffness(j), j < n && oracle.reduced(j), since);
   }
   if (report)
-    std::printf("%s %s%s vs oracle: theta_instant |rel| * hadamard %.2e, rel %.2e (hadamard > 1e-2), %.2e (> 1e-6); "
-                "hadamard %.2e; eq. 7 from t0 + 100 ms %.2e (3x3 DOF %.2e), from t0 + 30 ms %.2e; %ld mismatches; "
-                "vs long double: |rel| * hadamard %.2e (double LU oracle %.2e)\n",
-                label<Est>(n).c_str(), free_end ? "free" : "fixed", mismatch ? " model mismatch" : "", f.instant_scaled,
-                f.instant_1e2, f.instant_1e6, f.hadamard, f.eq7, f.eq7_reduced, f.eq7_early, f.mismatches, f.accuracy,
-                f.accuracy_oracle);
+    std::printf(
+        "%s %s%s vs oracle: theta_instant |rel| * hadamard %.2e, rel %.2e (hadamard > 1e-2), %.2e (> 1e-6); "
+        "hadamard %.2e; eq. 7 from t0 + 100 ms %.2e (3x3 DOF %.2e), from t0 + 30 ms %.2e; %ld mismatches; "
+        "vs long double: |rel| * hadamard %.2e (double LU oracle %.2e)\n",
+        label<Est>(n).c_str(), free_end ? "free" : "fixed", mismatch ? " model mismatch" : "", f.instant_scaled,
+        f.instant_1e2, f.instant_1e6, f.hadamard, f.eq7, f.eq7_reduced, f.eq7_early, f.mismatches, f.accuracy,
+        f.accuracy_oracle);
   CHECK(f.mismatches == 0);
   CHECK(compared_instant > 500 * n);
   CHECK(compared_eq7 > 500 * n);
@@ -303,9 +306,11 @@ void oracle_dynamic(int n, unsigned seed) {
 void model_mismatch_weighting() {
   double worst = 0;
   worst = std::max(worst, oracle_case<algid::ChainEstimator<1>>(1, algid::Boundary::kFixed, 301, true).eq7_reduced);
-  worst = std::max(worst, oracle_case<algid::ChainEstimator<Dynamic>>(1, algid::Boundary::kFixed, 301, true).eq7_reduced);
+  worst = std::max(worst,
+                   oracle_case<algid::ChainEstimator<Dynamic>>(1, algid::Boundary::kFixed, 301, true).eq7_reduced);
   worst = std::max(worst, oracle_case<algid::ChainEstimator<3>>(3, algid::Boundary::kFree, 303, true).eq7_reduced);
-  worst = std::max(worst, oracle_case<algid::ChainEstimator<Dynamic>>(5, algid::Boundary::kFree, 305, true).eq7_reduced);
+  worst = std::max(worst,
+                   oracle_case<algid::ChainEstimator<Dynamic>>(5, algid::Boundary::kFree, 305, true).eq7_reduced);
   CHECK(worst < 1e-9);
 }
 
@@ -332,9 +337,11 @@ void bad_samples_and_reseed(int n) {
     const algid::Status st = est.update(rec.a(s), rec.u(s));
     CHECK(st == (s - 100 < 7 ? algid::Status::kWarmup : algid::Status::kOk));
     if (s == 399)
-      for (int i = 0; i < n; ++i) worst = std::max(worst, std::abs(est.mass()(i) / truth.m[static_cast<std::size_t>(i)] - 1));
+      for (int i = 0; i < n; ++i)
+        worst = std::max(worst, std::abs(est.mass()(i) / truth.m[static_cast<std::size_t>(i)] - 1));
   }
-  std::printf("%s after bad sample and reseed at t = 0.1 s: mass error %.2e at t0 + 0.3 s\n", label<Est>(n).c_str(), worst);
+  std::printf("%s after bad sample and reseed at t = 0.1 s: mass error %.2e at t0 + 0.3 s\n", label<Est>(n).c_str(),
+              worst);
   CHECK(est.all_valid());
   CHECK(worst < 1e-6);
   CHECK(est.samples() == 300);
@@ -420,11 +427,12 @@ int main() {
   oracle_fixed<5>(105);
   oracle_fixed<11>(111);
   for (int n : {1, 2, 3, 5, 11, 30}) oracle_dynamic(n, 200u + static_cast<unsigned>(n));
-  std::printf("oracle, every case: theta_instant |rel| * hadamard %.2e, rel %.2e (hadamard > 1e-2), %.2e (> 1e-6); "
-              "hadamard %.2e; eq. 7 from t0 + 100 ms %.2e (3x3 DOF %.2e), from t0 + 30 ms %.2e; %ld mismatches; "
-              "vs long double: |rel| * hadamard %.2e (double LU oracle %.2e)\n",
-              g_oracle.instant_scaled, g_oracle.instant_1e2, g_oracle.instant_1e6, g_oracle.hadamard, g_oracle.eq7,
-              g_oracle.eq7_reduced, g_oracle.eq7_early, g_oracle.mismatches, g_oracle.accuracy, g_oracle.accuracy_oracle);
+  std::printf(
+      "oracle, every case: theta_instant |rel| * hadamard %.2e, rel %.2e (hadamard > 1e-2), %.2e (> 1e-6); "
+      "hadamard %.2e; eq. 7 from t0 + 100 ms %.2e (3x3 DOF %.2e), from t0 + 30 ms %.2e; %ld mismatches; "
+      "vs long double: |rel| * hadamard %.2e (double LU oracle %.2e)\n",
+      g_oracle.instant_scaled, g_oracle.instant_1e2, g_oracle.instant_1e6, g_oracle.hadamard, g_oracle.eq7,
+      g_oracle.eq7_reduced, g_oracle.eq7_early, g_oracle.mismatches, g_oracle.accuracy, g_oracle.accuracy_oracle);
   model_mismatch_weighting();
   // Exactness.
   exact_both<1>(1, algid::Boundary::kFixed);

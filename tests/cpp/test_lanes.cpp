@@ -82,7 +82,8 @@ void integrator_lanes_exact(int registers, int signals) {
     const double t = s * h;
     for (int k = 0; k < K; ++k) f[static_cast<std::size_t>(k)] = std::pow(t, k % P);
     const bool advanced = lanes.push(f.data(), K, weights);
-    for (int k = 0; k < K; ++k) CHECK(advanced == plain[static_cast<std::size_t>(k)].push(f[static_cast<std::size_t>(k)], rule));
+    for (int k = 0; k < K; ++k)
+      CHECK(advanced == plain[static_cast<std::size_t>(k)].push(f[static_cast<std::size_t>(k)], rule));
     if (!advanced) continue;
     const double tend = (s - P + 2) * h;
     inv_pow[0] = 1.0;
@@ -108,9 +109,10 @@ void integrator_lanes_exact(int registers, int signals) {
       }
     }
   }
-  std::printf("IntegratorLanes %d lanes x %d registers%s, %d signals: degrees 0..%d exact to %.2e, equal to the plain "
-              "loops to %.2e, %ld non-zero padding values\n",
-              W, registers, G == algid::Dynamic ? " (Dynamic)" : "", K, P - 1, worst, worst_vs_plain, padding);
+  std::printf(
+      "IntegratorLanes %d lanes x %d registers%s, %d signals: degrees 0..%d exact to %.2e, equal to the plain "
+      "loops to %.2e, %ld non-zero padding values\n",
+      W, registers, G == algid::Dynamic ? " (Dynamic)" : "", K, P - 1, worst, worst_vs_plain, padding);
   CHECK(worst < 1e-10);
   CHECK(worst_vs_plain < 1e-13);
   CHECK(padding == 0);
@@ -214,12 +216,14 @@ int main() {
   static_assert(algid::detail::lane_width<50, double>() <= 4 && algid::detail::lane_width<50, float>() <= 8,
                 "256-bit lanes at most");
   static_assert(algid::ChainEstimator<algid::Dynamic>::kLanes == kWidest, "Dynamic: the widest lanes");
-  static_assert(algid::ChainEstimator<50>::kLanes == kWidest && algid::ChainEstimator<50>::kRegisters == (50 + kWidest - 1) / kWidest,
+  static_assert(algid::ChainEstimator<50>::kLanes == kWidest &&
+                    algid::ChainEstimator<50>::kRegisters == (50 + kWidest - 1) / kWidest,
                 "registers of DOF");
   static_assert(algid::ChainEstimator<algid::Dynamic, float>::kLanes == algid::detail::lane_width<(1 << 30), float>(),
                 "Dynamic float");
   static_assert(algid::ChainEstimator<algid::Dynamic>::kRegisters == algid::Dynamic &&
-                algid::ChainEstimator<algid::Dynamic>::kSpringRegisters == algid::Dynamic, "run-time registers");
+                    algid::ChainEstimator<algid::Dynamic>::kSpringRegisters == algid::Dynamic,
+                "run-time registers");
   std::printf("lane width: double %d (Dynamic), float %d (Dynamic)\n", algid::ChainEstimator<algid::Dynamic>::kLanes,
               algid::ChainEstimator<algid::Dynamic, float>::kLanes);
   return algid_test::finish("test_lanes");

@@ -76,7 +76,8 @@ void exact_on_polynomials() {
       for (int p = 0; p <= 2; ++p)
         for (int r = 0; r + p <= kOrders; ++r) {
           const double exact = iterated_monomial(d + p, r, tend) / std::pow(tend, r + p);
-          worst_moment = std::max(worst_moment, std::abs(algid::scaled_moment(J, p, r) - exact) / (std::abs(exact) + 1e-30));
+          worst_moment = std::max(worst_moment,
+                                  std::abs(algid::scaled_moment(J, p, r) - exact) / (std::abs(exact) + 1e-30));
         }
     }
     std::printf("P=%d%s degree %d: worst relative error %.2e (integrals), %.2e (Delta^p moments)\n", P,
@@ -115,7 +116,8 @@ void row_recurrence() {
       const double rows[3] = {algid::signal_row(J1, q, q)(0), algid::signal_row(J1, q, q + 1)(0),
                               algid::signal_row(J1, q, q + 2)(0)};
       worst = std::max({worst, std::abs(rows[0] - mass), std::abs(rows[1] - damping), std::abs(rows[2] - spring)});
-      for (int c = 0; c < 3; ++c) worst_lanes = std::max(worst_lanes, std::abs(algid::signal_row(J4, q, q + c)(lane) - rows[c]));
+      for (int c = 0; c < 3; ++c)
+        worst_lanes = std::max(worst_lanes, std::abs(algid::signal_row(J4, q, q + c)(lane) - rows[c]));
     }
   }
   std::printf("row recurrence: worst difference %.2e (moments), %.2e (4 lanes against 1)\n", worst, worst_lanes);
@@ -141,8 +143,8 @@ template <int P>
 void convergence_order(double h) {
   const double e1 = chain_error<P>(h), e2 = chain_error<P>(h / 2);
   const double order = std::log2(e1 / e2);
-  std::printf("P=%d: error %.3e -> %.3e when h halves (ratio %.1f, 2^P = %d), measured order %.2f\n", P, e1, e2, e1 / e2,
-              1 << P, order);
+  std::printf("P=%d: error %.3e -> %.3e when h halves (ratio %.1f, 2^P = %d), measured order %.2f\n", P, e1, e2,
+              e1 / e2, 1 << P, order);
   CHECK(order > P - 0.6);
   CHECK(order < P + 1.5);
 }

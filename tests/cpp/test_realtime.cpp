@@ -103,7 +103,8 @@ void run_does_not_allocate(int n) {
   rec.accel[static_cast<std::size_t>(700 * n)] = Scalar(NAN);
   // record() writes the histories into caller-owned arrays (allocated outside the guarded scope)
   std::vector<std::int8_t> status(static_cast<std::size_t>(T));
-  std::vector<Scalar> mass(static_cast<std::size_t>(T * n)), damping(mass.size()), stiffness(static_cast<std::size_t>(T * (n + 1)));
+  std::vector<Scalar> mass(static_cast<std::size_t>(T * n)), damping(mass.size()),
+      stiffness(static_cast<std::size_t>(T * (n + 1)));
   std::unique_ptr<bool[]> valid(new bool[static_cast<std::size_t>(T * n)]);
   const algid::Histories<Scalar> out{status.data(), mass.data(), damping.data(), stiffness.data(), valid.get()};
   bool threw = false;
@@ -130,8 +131,8 @@ void run_does_not_allocate(int n) {
   } catch (const algid_test::EigenAssertion&) {
     threw = true;
   }
-  std::printf("%s n=%d %s: run() %ld allocations, record() %ld\n", label<Est>(), n, sizeof(Scalar) == 4 ? "float" : "double",
-              run_allocations, record_allocations);
+  std::printf("%s n=%d %s: run() %ld allocations, record() %ld\n", label<Est>(), n,
+              sizeof(Scalar) == 4 ? "float" : "double", run_allocations, record_allocations);
   CHECK(!threw);
   CHECK(run_allocations == 0);
   CHECK(record_allocations == 0);
@@ -169,7 +170,8 @@ void continuous_dynamic_does_not_allocate(int n) {
     NoAllocationScope scope;
     for (long s = 0; s < rec.T; ++s) {
       est.update(rec.a(s), rec.u(s));
-      volatile Scalar sink = est.estimate()(0) + est.sigma()(n) + est.mass()(0) + est.stiffness()(n) + est.last_window()(1);
+      volatile Scalar sink = est.estimate()(0) + est.sigma()(n) + est.mass()(0) + est.stiffness()(n) +
+                             est.last_window()(1);
       (void)sink;
     }
     results = est.window_results();
@@ -179,9 +181,10 @@ void continuous_dynamic_does_not_allocate(int n) {
   } catch (const algid_test::EigenAssertion&) {
     threw = true;
   }
-  std::printf("ContinuousEstimator<Dynamic> n=%d %s: construction %ld allocations; update()/reset() over %ld samples "
-              "(%ld window results): %ld\n",
-              n, sizeof(Scalar) == 4 ? "float" : "double", constructed, rec.T + 500, results, allocations);
+  std::printf(
+      "ContinuousEstimator<Dynamic> n=%d %s: construction %ld allocations; update()/reset() over %ld samples "
+      "(%ld window results): %ld\n",
+      n, sizeof(Scalar) == 4 ? "float" : "double", constructed, rec.T + 500, results, allocations);
   CHECK(!threw);
   CHECK(allocations == 0);
   CHECK(constructed > 0);

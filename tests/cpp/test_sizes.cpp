@@ -51,7 +51,9 @@ struct Comparison {
       differences += std::isnan(a) != std::isnan(b);
     } else if (a != b) {
       const double d = std::abs(static_cast<double>(a) - static_cast<double>(b));
-      *worst = std::max(*worst, scale < 0 ? d : d / std::max(std::abs(static_cast<double>(a)), std::abs(static_cast<double>(b))) * scale);
+      *worst = std::max(
+          *worst,
+          scale < 0 ? d : d / std::max(std::abs(static_cast<double>(a)), std::abs(static_cast<double>(b))) * scale);
     }
   }
   template <class X, class Y>
@@ -93,7 +95,8 @@ const char* scalar_name() {
 // the poorly conditioned first instants, so only the statuses and samples() are required to
 // agree and eq. 7 from t0 + 100 ms to 1e-2 (the figures are printed).
 template <int N, class Scalar>
-void fixed_equals_dynamic(algid::Boundary boundary, unsigned seed, long T = 700, long bad_at = 310, long reseed_at = 520) {
+void fixed_equals_dynamic(algid::Boundary boundary, unsigned seed, long T = 700, long bad_at = 310,
+                          long reseed_at = 520) {
   using Fixed = algid::ChainEstimator<N, Scalar>;
   using Dyn = algid::ChainEstimator<Dynamic, Scalar>;
   const bool bitwise = Fixed::kLanes == Dyn::kLanes;
@@ -130,11 +133,15 @@ void fixed_equals_dynamic(algid::Boundary boundary, unsigned seed, long T = 700,
     (s - t0 >= 100 ? late : all).states(fixed, dyn, bitwise);
   }
   const bool relaxed = !bitwise && sizeof(Scalar) == 4;
-  std::printf("N=%d %s %s, kLanes %d (fixed) / %d (Dynamic): %s, %ld samples (%ld kOk, %ld bad), %ld differing flags or NaNs; "
-              "eq. 7 %.2e (from t0 + 100 ms; %.2e before), Hadamard %.2e, theta_instant |rel| * hadamard %.2e\n",
-              N, free_end ? "free" : "fixed", scalar_name<Scalar>(), Fixed::kLanes, Dyn::kLanes,
-              bitwise ? "bitwise" : relaxed ? "float, to single-precision rounding" : "to rounding", T, ok, bad, all.differences + late.differences, late.eq7, all.eq7,
-              std::max(all.hadamard, late.hadamard), std::max(all.instant_scaled, late.instant_scaled));
+  std::printf(
+      "N=%d %s %s, kLanes %d (fixed) / %d (Dynamic): %s, %ld samples (%ld kOk, %ld bad), %ld differing flags or NaNs; "
+      "eq. 7 %.2e (from t0 + 100 ms; %.2e before), Hadamard %.2e, theta_instant |rel| * hadamard %.2e\n",
+      N, free_end ? "free" : "fixed", scalar_name<Scalar>(), Fixed::kLanes, Dyn::kLanes,
+      bitwise   ? "bitwise"
+      : relaxed ? "float, to single-precision rounding"
+                : "to rounding",
+      T, ok, bad, all.differences + late.differences, late.eq7, all.eq7, std::max(all.hadamard, late.hadamard),
+      std::max(all.instant_scaled, late.instant_scaled));
   CHECK(statuses == 0);
   CHECK(bad == 1);
   CHECK(ok > T - 40);
@@ -159,9 +166,13 @@ struct HistoryArrays {
   std::vector<Scalar> mass, damping, stiffness;
   std::vector<unsigned char> valid;  // bool, but addressable (std::vector<bool> is not)
   HistoryArrays(long samples, int dofs)
-      : T(samples), n(dofs), status(static_cast<std::size_t>(samples), std::int8_t(-1)),
-        mass(static_cast<std::size_t>(samples * dofs), Scalar(-1)), damping(mass),
-        stiffness(static_cast<std::size_t>(samples * (dofs + 1)), Scalar(-1)), valid(static_cast<std::size_t>(samples * dofs), 2) {}
+      : T(samples),
+        n(dofs),
+        status(static_cast<std::size_t>(samples), std::int8_t(-1)),
+        mass(static_cast<std::size_t>(samples * dofs), Scalar(-1)),
+        damping(mass),
+        stiffness(static_cast<std::size_t>(samples * (dofs + 1)), Scalar(-1)),
+        valid(static_cast<std::size_t>(samples * dofs), 2) {}
   algid::Histories<Scalar> view(long t0) {
     static_assert(sizeof(bool) == 1, "bool histories as bytes");
     return {status.data() + t0, mass.data() + t0 * n, damping.data() + t0 * n, stiffness.data() + t0 * (n + 1),
@@ -231,11 +242,12 @@ void batch_equals_update(int n, algid::Boundary boundary, long T, long split, lo
   const long vs_write_row = from_record.differences(from_write_row);
   Comparison end;
   end.states(one_by_one, recorded, true);
-  std::printf("%s %s %s T=%ld split=%ld bad=%ld: run() %ld differing values over %ld samples; record() %ld / %ld "
-              "history entries differ from the accessors / write_row(), %ld differing values at the end\n",
-              Est::kDofs == Dynamic ? "Dynamic" : "fixed", boundary == algid::Boundary::kFree ? "free" : "walls",
-              scalar_name<Scalar>(), T, split, bad_at, states.differences, observed, vs_accessors, vs_write_row,
-              end.differences);
+  std::printf(
+      "%s %s %s T=%ld split=%ld bad=%ld: run() %ld differing values over %ld samples; record() %ld / %ld "
+      "history entries differ from the accessors / write_row(), %ld differing values at the end\n",
+      Est::kDofs == Dynamic ? "Dynamic" : "fixed", boundary == algid::Boundary::kFree ? "free" : "walls",
+      scalar_name<Scalar>(), T, split, bad_at, states.differences, observed, vs_accessors, vs_write_row,
+      end.differences);
   CHECK(observed == T && out_of_order == 0);
   CHECK(status_mismatch == 0);
   CHECK(states.differences == 0);

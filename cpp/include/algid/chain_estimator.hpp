@@ -126,8 +126,8 @@ class ChainEstimator {
     weights_.configure(rule);
     accel_.configure(registers);
     force_.configure(registers);
-    for (auto* s : {&det_, &weight_, &hadamard2_num_, &hadamard2_den_, &numerator_[0], &numerator_[1],
-                    &numerator_[2], &numerator_[3]})
+    for (auto* s : {&det_, &weight_, &hadamard2_num_, &hadamard2_den_, &numerator_[0], &numerator_[1], &numerator_[2],
+                    &numerator_[3]})
       s->resize(registers);
     ratio_.resize(registers);
     for (auto& s : estimate_) s.resize(springs);
@@ -377,7 +377,7 @@ class ChainEstimator {
     L weight, weighted[kSystem];  // eq. 7 keeps kSystem numerators: the others stay 0
     for (int j = M; j < kSystem; ++j) weighted[j].setZero();
     weigh_lanes<M>(det, scaled, h2num, h2den, now.samples, config_.validity, weight, weighted);
-    const L rho = M == 3 ? L::Constant(now.decay3)
+    const L rho = M == 3        ? L::Constant(now.decay3)
                   : has_reduced ? Ops::if_less(zero, reduced_, L::Constant(now.decay3), L::Constant(now.decay4))
                                 : L::Constant(now.decay4);
     auto& ratio = ratio_[g];
@@ -386,7 +386,9 @@ class ChainEstimator {
     L estimate[M];
     estimates_lanes<M>(ratio.denominator(), ratio.numerators(), estimate);
     for (int j = 0; j < M; ++j) estimate_[j][g] = estimate[j];
-    if (has_reduced) estimate_[3][g] = Ops::if_less(zero, reduced_, L::Constant(std::numeric_limits<Scalar>::quiet_NaN()), estimate_[3][g]);
+    if (has_reduced)
+      estimate_[3][g] = Ops::if_less(zero, reduced_, L::Constant(std::numeric_limits<Scalar>::quiet_NaN()),
+                                     estimate_[3][g]);
     det_[g] = det;
     weight_[g] = weight;
     hadamard2_num_[g] = h2num;

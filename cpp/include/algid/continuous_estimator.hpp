@@ -103,10 +103,10 @@ struct ContinuousConfig {
   int min_windows = 8;                            ///< window results since a restart before the tests are armed
   Scalar overlap_efficiency = Scalar(0.5);        ///< independent fraction of the staggered window results, (0, 1]
   Scalar horizon_s = Scalar(0);                   ///< forgetting time constant of the block mean [s]; 0: none
-  Scalar prefilter_hz = Scalar(-1);               ///< low-pass on accelerations and forces alike [Hz]; -1: 0.05 / dt, 0: off
-  int prefilter_order = 4;                        ///< Butterworth order of the prefilter: 2 or 4
-  bool detect = true;                             ///< run the change detector
-  bool amortize = true;                           ///< spread the per-parameter work over the samples
+  Scalar prefilter_hz = Scalar(-1);  ///< low-pass on accelerations and forces alike [Hz]; -1: 0.05 / dt, 0: off
+  int prefilter_order = 4;  ///< Butterworth order of the prefilter: 2 or 4
+  bool detect = true;  ///< run the change detector
+  bool amortize = true;  ///< spread the per-parameter work over the samples
 };
 
 /// Why a ContinuousConfig is rejected (kNone: accepted).
@@ -200,8 +200,8 @@ class ContinuousEstimator {
     if (c.block < 1 || c.block > Capacity) return ContinuousConfigError::kBadBlock;
     if (c.confirm < 0 || c.confirm > Capacity) return ContinuousConfigError::kBadConfirm;
     if (!(c.step_threshold > Scalar(0)) || !(c.cusum_threshold > Scalar(0)) || !(c.cusum_clip > Scalar(0)) ||
-        !(c.cusum_reference >= Scalar(0)) || !std::isfinite(c.step_threshold) ||
-        !std::isfinite(c.cusum_threshold) || !std::isfinite(c.cusum_clip) || !std::isfinite(c.cusum_reference))
+        !(c.cusum_reference >= Scalar(0)) || !std::isfinite(c.step_threshold) || !std::isfinite(c.cusum_threshold) ||
+        !std::isfinite(c.cusum_clip) || !std::isfinite(c.cusum_reference))
       return ContinuousConfigError::kBadThreshold;
     if (!(c.min_relative_spread >= Scalar(0)) || !std::isfinite(c.min_relative_spread))
       return ContinuousConfigError::kBadSpreadFloor;
@@ -370,7 +370,8 @@ class ContinuousEstimator {
   long settle_samples() const noexcept { return settle_; }
   /// Prefilter cut-off in force [Hz] (0: off).
   Scalar prefilter_hz() const noexcept {
-    return filtered_ ? (config_.prefilter_hz < Scalar(0) ? Scalar(0.05) / config_.dt : config_.prefilter_hz) : Scalar(0);
+    return filtered_ ? (config_.prefilter_hz < Scalar(0) ? Scalar(0.05) / config_.dt : config_.prefilter_hz)
+                     : Scalar(0);
   }
   /// Window results in the step test (config.confirm, or 2K+1).
   int confirm() const noexcept { return confirm_; }
@@ -388,16 +389,16 @@ class ContinuousEstimator {
 
   struct Track {
     std::array<Scalar, Capacity> value{};  // window results since the restart, newest at head - 1
-    std::array<Scalar, Capacity> z{};      // their z-scores against the estimate before them
+    std::array<Scalar, Capacity> z{};  // their z-scores against the estimate before them
     int head = 0;
-    int count = 0;      // entries since the restart, <= Capacity
-    int z_count = 0;    // consecutive newest entries with a finite z, <= Capacity
-    long since = 0;     // window results aggregated since the restart (kept ones included)
-    long fresh = 0;     // window results that arrived after the restart
-    int in_block = 0;   // results in the current block
+    int count = 0;  // entries since the restart, <= Capacity
+    int z_count = 0;  // consecutive newest entries with a finite z, <= Capacity
+    long since = 0;  // window results aggregated since the restart (kept ones included)
+    long fresh = 0;  // window results that arrived after the restart
+    int in_block = 0;  // results in the current block
     Scalar s0 = Scalar(0), s1 = Scalar(0), s2 = Scalar(0), s0sq = Scalar(0);  // block-median moments
     Scalar cusum_hi = Scalar(0), cusum_lo = Scalar(0);
-    Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();           // per-window sigma
+    Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();  // per-window sigma
     Scalar relative_spread = std::numeric_limits<Scalar>::quiet_NaN();  // carried over a restart
     bool spread_ok = false;  // spread measured on >= min_windows results: the tests may run
   };
@@ -418,7 +419,7 @@ class ContinuousEstimator {
 
   template <std::size_t... I>
   static std::array<Window, sizeof...(I)> make_windows(const typename Window::Config& c, int n,
-                                                        std::index_sequence<I...>) {
+                                                       std::index_sequence<I...>) {
     return {{((void)I, Window(c, n))...}};
   }
 
@@ -450,7 +451,9 @@ class ContinuousEstimator {
 
   // Copy the newest `count` entries of a ring into scratch_, newest last.
   int newest(const std::array<Scalar, Capacity>& ring, int head, int count) noexcept {
-    for (int i = 0; i < count; ++i) scratch_[static_cast<std::size_t>(count - 1 - i)] = ring[static_cast<std::size_t>((head - 1 - i + Capacity) % Capacity)];
+    for (int i = 0; i < count; ++i)
+      scratch_[static_cast<std::size_t>(count - 1 - i)] =
+          ring[static_cast<std::size_t>((head - 1 - i + Capacity) % Capacity)];
     return count;
   }
 
@@ -576,7 +579,9 @@ class ContinuousEstimator {
       if ((zi > Scalar(0)) == (mz > Scalar(0)) && std::abs(zi) > Scalar(0.5) * config_.step_threshold)
         scratch_[static_cast<std::size_t>(kept++)] = t.value[slot];
     }
-    if (kept == 0) scratch_[static_cast<std::size_t>(kept++)] = t.value[static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity)];
+    if (kept == 0)
+      scratch_[static_cast<std::size_t>(kept++)] =
+          t.value[static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity)];
     for (int i = 0; i < kept; ++i) {
       const std::size_t slot = static_cast<std::size_t>((t.head - kept + i + Capacity) % Capacity);
       t.value[slot] = scratch_[static_cast<std::size_t>(i)];

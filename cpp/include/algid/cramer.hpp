@@ -21,10 +21,10 @@ inline void cramer_lanes4(const L* S, const L* b, L& det, L* numerator) noexcept
   const auto a = [&](int r, int c) -> const L& { return c == 4 ? b[r] : S[c * 4 + r]; };
   const auto t = [&](int i, int j) -> L { return a(0, i) * a(1, j) - a(0, j) * a(1, i); };
   const auto u = [&](int i, int j) -> L { return a(2, i) * a(3, j) - a(2, j) * a(3, i); };
-  const L t01 = t(0, 1), t02 = t(0, 2), t03 = t(0, 3), t04 = t(0, 4), t12 = t(1, 2), t13 = t(1, 3),
-          t14 = t(1, 4), t23 = t(2, 3), t24 = t(2, 4), t34 = t(3, 4);
-  const L u01 = u(0, 1), u02 = u(0, 2), u03 = u(0, 3), u04 = u(0, 4), u12 = u(1, 2), u13 = u(1, 3),
-          u14 = u(1, 4), u23 = u(2, 3), u24 = u(2, 4), u34 = u(3, 4);
+  const L t01 = t(0, 1), t02 = t(0, 2), t03 = t(0, 3), t04 = t(0, 4), t12 = t(1, 2), t13 = t(1, 3), t14 = t(1, 4),
+          t23 = t(2, 3), t24 = t(2, 4), t34 = t(3, 4);
+  const L u01 = u(0, 1), u02 = u(0, 2), u03 = u(0, 3), u04 = u(0, 4), u12 = u(1, 2), u13 = u(1, 3), u14 = u(1, 4),
+          u23 = u(2, 3), u24 = u(2, 4), u34 = u(3, 4);
   det = ((t01 * u23 - t02 * u13) + t03 * u12) + ((u01 * t23 - u02 * t13) + u03 * t12);
   numerator[0] = ((t24 * u13 - t14 * u23) - t34 * u12) + ((u24 * t13 - u14 * t23) - u34 * t12);
   numerator[1] = ((t04 * u23 + t02 * u34) - t03 * u24) + ((u04 * t23 + u02 * t34) - u03 * t24);

@@ -124,8 +124,7 @@ class IntegratorLanes {
         step[r] = acc;
       });
       for (int r = 0; r < Orders; ++r)
-        detail::accumulate<kCompensated>(state_[r * R + g],
-                                         compensation_[(kCompensated ? r : 0) * R + g], step[r]);
+        detail::accumulate<kCompensated>(state_[r * R + g], compensation_[(kCompensated ? r : 0) * R + g], step[r]);
     }
     return true;
   }

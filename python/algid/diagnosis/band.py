@@ -22,8 +22,16 @@ import numpy as np
 
 from ..noise import white_floor
 
-__all__ = ["BAND_DETECT", "BAND_HARMONICS", "BAND_MODES", "BAND_POWER", "Band", "derived_noise_limit",
-           "excitation_frequency", "signal_band"]
+__all__ = [
+    "BAND_DETECT",
+    "BAND_HARMONICS",
+    "BAND_MODES",
+    "BAND_POWER",
+    "Band",
+    "derived_noise_limit",
+    "excitation_frequency",
+    "signal_band",
+]
 
 #: Band rule (see the module docstring): a PSD bin carries signal above this multiple of
 #: the noise floor; f_exc holds this share of the above-floor power; the band edge is at
@@ -61,14 +69,20 @@ class Band:
         return bool(self.f_hi >= self.nyquist)
 
     def to_json(self) -> dict:
-        return {"band_hz": [0.0, self.f_hi], "f_excitation_hz": self.f_exc,
-                "f_natural_max_hz": self.f_modes, "nyquist_hz": self.nyquist, "source": self.source,
-                "f_derived_noise_hz": self.f_derived_noise,
-                "f_signals_hz": self.f_signals, "noise_floor_psd": self.floors,
-                "rule": f"f_hi = min(Nyquist, max({BAND_HARMONICS:g} f_exc, {BAND_MODES:g} f_n,max)); f_exc: "
-                        f"largest over the forces and accelerations of the frequency below which "
-                        f"{BAND_POWER:.0%} of the PSD power in bins above {BAND_DETECT:g}x the median PSD of "
-                        "the upper third of the spectrum lies"}
+        return {
+            "band_hz": [0.0, self.f_hi],
+            "f_excitation_hz": self.f_exc,
+            "f_natural_max_hz": self.f_modes,
+            "nyquist_hz": self.nyquist,
+            "source": self.source,
+            "f_derived_noise_hz": self.f_derived_noise,
+            "f_signals_hz": self.f_signals,
+            "noise_floor_psd": self.floors,
+            "rule": f"f_hi = min(Nyquist, max({BAND_HARMONICS:g} f_exc, {BAND_MODES:g} f_n,max)); f_exc: "
+            f"largest over the forces and accelerations of the frequency below which "
+            f"{BAND_POWER:.0%} of the PSD power in bins above {BAND_DETECT:g}x the median PSD of "
+            "the upper third of the spectrum lies",
+        }
 
 
 def excitation_frequency(x: np.ndarray, dt: float) -> tuple[float, float]:
@@ -140,6 +154,13 @@ def signal_band(a: np.ndarray, u: np.ndarray, dt: float, natural_hz=(), derived:
     if derived is not None:
         f_noise = derived_noise_limit(a, np.atleast_2d(np.asarray(derived[0], dtype=float).T).T, dt, derived[1])
         f_hi = min(f_hi, max(f_noise, f_exc if np.isfinite(f_exc) else 0.0))
-    return Band(f_hi=float(f_hi), f_exc=f_exc, f_modes=f_modes, nyquist=nyq, source=source,
-                floors=[fl for _, fl in res.values()], f_signals={k: f for k, (f, _) in res.items()},
-                f_derived_noise=f_noise)
+    return Band(
+        f_hi=float(f_hi),
+        f_exc=f_exc,
+        f_modes=f_modes,
+        nyquist=nyq,
+        source=source,
+        floors=[fl for _, fl in res.values()],
+        f_signals={k: f for k, (f, _) in res.items()},
+        f_derived_noise=f_noise,
+    )

@@ -8,7 +8,7 @@ The definitions are those of the simulator (the names are part of the interface)
 | effect | location | what it adds / changes | parameters (first = main) |
 |---|---|---|---|
 | coulomb_friction | dof i | ``+ force * tanh(v_i / v_scale)`` in eq. i | force [N], v_scale [m/s] |
-| stribeck_friction | dof i | ``+ (force + (static - force) exp(-(v_i/v_stribeck)^2)) sign(v_i)`` | force [N], static [N], v_stribeck [m/s] |
+| stribeck_friction | dof i | ``+ (force + (static - force) exp(-(v_i/v_s)^2)) sgn(v_i)`` | force, static [N], v_s |
 | amplitude_damping | spring j | ``f = c_amp * |d| d'`` (micro-slip: damping growing with amplitude) | c_amp [N s/m^2] |
 | quadratic_damping | dof i | ``+ c2 * v_i |v_i|`` in eq. i | c2 [N s^2/m^2] |
 | cubic_stiffness | spring j | ``f = k3 d^3`` | k3 [N/m^3] |
@@ -101,7 +101,7 @@ PHYSICAL = {
 }
 
 
-def physical(fit: "CandidateFit") -> bool:
+def physical(fit: CandidateFit) -> bool:
     """True when the fitted parameters have physical signs (:data:`PHYSICAL`); for a
     combination, every part's."""
     if "+" in fit.effect:
@@ -198,8 +198,15 @@ def lowpass(x: np.ndarray, cutoff_hz: float, dt: float) -> np.ndarray:
     return y if np.ndim(x) == 2 else y[:, 0]
 
 
-def _fit_linear_effect(ctx: Context, effect: str, location: dict, eq_forces: list[tuple[int, np.ndarray]],
-                       names: list[str], transform=None, signals: tuple | None = None) -> CandidateFit:
+def _fit_linear_effect(
+    ctx: Context,
+    effect: str,
+    location: dict,
+    eq_forces: list[tuple[int, np.ndarray]],
+    names: list[str],
+    transform=None,
+    signals: tuple | None = None,
+) -> CandidateFit:
     """Linear model plus one shared effect parameter: ``eq_forces`` gives, per equation,
     the effect force per unit parameter ``g`` (eq. 1 read as ``m a + c v + k x + g = u``,
     :func:`.equations.effect_column`); ``signals = (a, A1, A2)`` replaces the measured
@@ -212,24 +219,34 @@ def _fit_linear_effect(ctx: Context, effect: str, location: dict, eq_forces: lis
             specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=col[:, None], key=("base", e)))
         else:
             a, A1, A2 = signals
-            specs.append(EqSpec(e=e, X=base_design(P, e, A1, A2, a=a[:, e]), y=target(P, e, a=a[:, e]),
-                                E=col[:, None]))
+            specs.append(EqSpec(e=e, X=base_design(P, e, A1, A2, a=a[:, e]), y=target(P, e, a=a[:, e]), E=col[:, None]))
     cv = cross_validate(P, window_stats(P, specs))
     thetas = [cv.theta[s] for s in cv.stats.slices]
     gam = cv.theta[cv.stats.shared]
     gam_f = cv.theta_folds[:, cv.stats.shared]
     if transform is not None:
         vals = transform(gam, [to_physical(P, s.e, th) for s, th in zip(specs, thetas)])
-        vals_f = np.array([transform(gam_f[k], [to_physical(P, s.e, cv.theta_folds[k][sl])
-                                                for s, sl in zip(specs, cv.stats.slices)])
-                           for k in range(gam_f.shape[0])])
+        vals_f = np.array(
+            [
+                transform(
+                    gam_f[k], [to_physical(P, s.e, cv.theta_folds[k][sl]) for s, sl in zip(specs, cv.stats.slices)]
+                )
+                for k in range(gam_f.shape[0])
+            ]
+        )
     else:
         vals, vals_f = gam, gam_f
     std = jackknife_std(vals_f)
-    return CandidateFit(effect=effect, location=location, eqs=[s.e for s in specs], cv=cv,
-                        params={nm: float(vals[k]) for k, nm in enumerate(names)},
-                        params_std={nm: float(std[k]) for k, nm in enumerate(names)},
-                        thetas=thetas, specs=specs)
+    return CandidateFit(
+        effect=effect,
+        location=location,
+        eqs=[s.e for s in specs],
+        cv=cv,
+        params={nm: float(vals[k]) for k, nm in enumerate(names)},
+        params_std={nm: float(std[k]) for k, nm in enumerate(names)},
+        thetas=thetas,
+        specs=specs,
+    )
 
 
 def fit_dof_force(ctx: Context, effect: str, i: int) -> CandidateFit:
@@ -272,16 +289,20 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
         vs = np.exp(lg)
         # the friction's sign fades in as the Coulomb candidate found, or well inside the zone
         sgn = np.tanh(v / (v_sign if v_sign is not None else STRIBECK_SIGN * vs))
-        cols = np.stack([effect_column(P, i, sgn, ctx.mass),
-                         effect_column(P, i, np.exp(-((v / vs) ** 2)) * sgn, ctx.mass)], axis=1)
+        cols = np.stack(
+            [effect_column(P, i, sgn, ctx.mass), effect_column(P, i, np.exp(-((v / vs) ** 2)) * sgn, ctx.mass)], axis=1
+        )
         return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2), y=target(P, i), E=cols, key=("base", i))]
 
-    fit = _fit_grid(ctx, "stribeck_friction", {"dof": i + 1}, build, grid, np.exp, ["v_stribeck"],
-                    ["force", "excess"])
+    fit = _fit_grid(ctx, "stribeck_friction", {"dof": i + 1}, build, grid, np.exp, ["v_stribeck"], ["force", "excess"])
     p, sd = fit.params, fit.params_std
     fit.params = {"force": p["force"], "static": p["force"] + p["excess"], "v_stribeck": p["v_stribeck"]}
-    fit.params_std = {"force": sd["force"], "static": float(np.hypot(sd["force"], sd["excess"])),
-                      "v_stribeck": sd["v_stribeck"], "excess": sd["excess"]}
+    fit.params_std = {
+        "force": sd["force"],
+        "static": float(np.hypot(sd["force"], sd["excess"])),
+        "v_stribeck": sd["v_stribeck"],
+        "excess": sd["excess"],
+    }
     if not abs(p["excess"]) > STRIBECK_Z * sd["excess"]:
         fit.params["static"] = float("nan")  # no peak beyond noise: not Stribeck (PHYSICAL fails)
     return fit
@@ -293,8 +314,9 @@ def fit_amplitude_damping(ctx: Context, j: int) -> CandidateFit:
     d = spring_deformation(ctx.x, j, P.n)
     dd = spring_deformation(ctx.v, j, P.n)
     g = np.abs(d) * dd
-    return _fit_linear_effect(ctx, "amplitude_damping", {"spring": j}, [(e, s * g) for e, s in spring_sides(P.n, j)],
-                              ["c_amp"])
+    return _fit_linear_effect(
+        ctx, "amplitude_damping", {"spring": j}, [(e, s * g) for e, s in spring_sides(P.n, j)], ["c_amp"]
+    )
 
 
 def spring_k(P: Prepared, thetas: list[np.ndarray], eqs: list[int], j: int) -> float:
@@ -321,12 +343,21 @@ def fit_spring_linear(ctx: Context, effect: str, j: int) -> CandidateFit:
         def transform(gam, thetas):
             return np.atleast_1d(gam) / spring_k(P, thetas, sides, j)
 
-    return _fit_linear_effect(ctx, effect, {"spring": j}, [(e, s * f) for e, s in spring_sides(P.n, j)],
-                              [MAIN_PARAM[effect]], transform)
+    return _fit_linear_effect(
+        ctx, effect, {"spring": j}, [(e, s * f) for e, s in spring_sides(P.n, j)], [MAIN_PARAM[effect]], transform
+    )
 
 
-def _fit_grid(ctx: Context, effect: str, location: dict, build, grid: np.ndarray, to_param,
-              names: list[str], shared_names: list[str]) -> CandidateFit:
+def _fit_grid(
+    ctx: Context,
+    effect: str,
+    location: dict,
+    build,
+    grid: np.ndarray,
+    to_param,
+    names: list[str],
+    shared_names: list[str],
+) -> CandidateFit:
     """Grid search of one nonlinear parameter; ``build(g) -> specs``; ``to_param`` maps
     the search coordinate to the reported parameter.
 
@@ -343,7 +374,7 @@ def _fit_grid(ctx: Context, effect: str, location: dict, build, grid: np.ndarray
     idx = np.r_[cv.extra["g_index_folds"], cv.extra["g_index"]]
     lo, hi = max(int(idx.min()) - 1, 0), min(int(idx.max()) + 1, len(grid) - 1)
     if hi > lo:
-        cv = run(np.interp(np.arange(FINE * (hi - lo) + 1) / FINE, np.arange(hi - lo + 1), grid[lo:hi + 1]))
+        cv = run(np.interp(np.arange(FINE * (hi - lo) + 1) / FINE, np.arange(hi - lo + 1), grid[lo : hi + 1]))
     g = cv.extra["g"]
     specs = build(g)  # refit at the refined value
     cv_ref = cross_validate(P, window_stats(P, specs))
@@ -360,8 +391,16 @@ def _fit_grid(ctx: Context, effect: str, location: dict, build, grid: np.ndarray
         for k, nm in enumerate(shared_names):
             params[nm] = float(gam[k])
             stds[nm] = float(sd[k])
-    return CandidateFit(effect=effect, location=location, eqs=[s.e for s in specs], cv=cv,
-                        params=params, params_std=stds, thetas=thetas, specs=specs)
+    return CandidateFit(
+        effect=effect,
+        location=location,
+        eqs=[s.e for s in specs],
+        cv=cv,
+        params=params,
+        params_std=stds,
+        thetas=thetas,
+        specs=specs,
+    )
 
 
 def fit_clearance(ctx: Context, j: int) -> CandidateFit:
@@ -376,8 +415,10 @@ def fit_clearance(ctx: Context, j: int) -> CandidateFit:
 
     def build(g):
         f = np.sign(d) * np.maximum(ad - g, 0.0)
-        return [EqSpec(e=e, X=base[e], y=target(P, e), E=effect_column(P, e, s * f, ctx.mass)[:, None],
-                       key=("base", e)) for e, s in sides]
+        return [
+            EqSpec(e=e, X=base[e], y=target(P, e), E=effect_column(P, e, s * f, ctx.mass)[:, None], key=("base", e))
+            for e, s in sides
+        ]
 
     return _fit_grid(ctx, "clearance", {"spring": j}, build, grid, lambda g: g, ["gap"], ["stiffness"])
 
@@ -483,20 +524,32 @@ def all_candidates(P: Prepared) -> list[tuple[str, int]]:
 
 def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
     """Fit one candidate; ``loc`` is a 0-based DOF or a 1-based spring."""
-    fits = {"coulomb_friction": fit_coulomb, "stribeck_friction": fit_stribeck,
-            "amplitude_damping": fit_amplitude_damping, "clearance": fit_clearance, "input_delay": fit_delay,
-            "sensor_bias": fit_bias, "sensor_lowpass": fit_lowpass,
-            "quadratic_damping": lambda c, i: fit_dof_force(c, effect, i),
-            "cubic_stiffness": lambda c, j: fit_spring_linear(c, effect, j),
-            "parameter_drift": lambda c, j: fit_spring_linear(c, effect, j)}
+    fits = {
+        "coulomb_friction": fit_coulomb,
+        "stribeck_friction": fit_stribeck,
+        "amplitude_damping": fit_amplitude_damping,
+        "clearance": fit_clearance,
+        "input_delay": fit_delay,
+        "sensor_bias": fit_bias,
+        "sensor_lowpass": fit_lowpass,
+        "quadratic_damping": lambda c, i: fit_dof_force(c, effect, i),
+        "cubic_stiffness": lambda c, j: fit_spring_linear(c, effect, j),
+        "parameter_drift": lambda c, j: fit_spring_linear(c, effect, j),
+    }
     if effect not in fits:
         raise ValueError(f"unknown effect {effect!r}")
     return fits[effect](ctx, loc)
 
 
 #: Effects that only add a force column to the linear equations (their fits combine).
-ADDITIVE = ("coulomb_friction", "stribeck_friction", "quadratic_damping", "amplitude_damping", "cubic_stiffness",
-            "clearance")
+ADDITIVE = (
+    "coulomb_friction",
+    "stribeck_friction",
+    "quadratic_damping",
+    "amplitude_damping",
+    "cubic_stiffness",
+    "clearance",
+)
 
 
 def fit_combination(ctx: Context, fits: list[CandidateFit]) -> CandidateFit:
@@ -514,8 +567,11 @@ def fit_combination(ctx: Context, fits: list[CandidateFit]) -> CandidateFit:
         for f, wdt in zip(fits, widths):
             spec = next((sp for sp in f.specs if sp.e == e), None)
             cols.append(spec.E if spec is not None else np.zeros((P.y.shape[0], wdt)))
-        specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=np.concatenate(cols, axis=1),
-                            key=("base", e)))
+        specs.append(
+            EqSpec(
+                e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=np.concatenate(cols, axis=1), key=("base", e)
+            )
+        )
     cv = cross_validate(P, window_stats(P, specs))
     gam, sd = cv.theta[cv.stats.shared], jackknife_std(cv.theta_folds[:, cv.stats.shared])
     params, stds, off = {}, {}, 0
@@ -529,15 +585,23 @@ def fit_combination(ctx: Context, fits: list[CandidateFit]) -> CandidateFit:
             own["static"] = own["force"] + own.pop("excess")
         params[f.effect], stds[f.effect] = own, own_sd
         off += wdt
-    return CandidateFit(effect="+".join(f.effect for f in fits), location={"parts": [f.location for f in fits]},
-                        eqs=eqs, cv=cv, params=params, params_std=stds, thetas=[cv.theta[sl] for sl in cv.stats.slices],
-                        specs=specs)
+    return CandidateFit(
+        effect="+".join(f.effect for f in fits),
+        location={"parts": [f.location for f in fits]},
+        eqs=eqs,
+        cv=cv,
+        params=params,
+        params_std=stds,
+        thetas=[cv.theta[sl] for sl in cv.stats.slices],
+        specs=specs,
+    )
 
 
 def _coefficient_names(fit: CandidateFit) -> list[str]:
     """Names of a candidate's shared (linear) coefficients, in column order."""
-    return {"coulomb_friction": ["force"], "stribeck_friction": ["force", "excess"],
-            "clearance": ["stiffness"]}.get(fit.effect, [MAIN_PARAM[fit.effect]])
+    return {"coulomb_friction": ["force"], "stribeck_friction": ["force", "excess"], "clearance": ["stiffness"]}.get(
+        fit.effect, [MAIN_PARAM[fit.effect]]
+    )
 
 
 def raw_residual(ctx: Context, fit: CandidateFit) -> np.ndarray:
@@ -545,8 +609,7 @@ def raw_residual(ctx: Context, fit: CandidateFit) -> np.ndarray:
     equations replaced by the candidate's, in each equation's target units (for state
     reconstruction and plots)."""
     P = ctx.P
-    out = np.stack([target(P, e) - base_design(P, e, P.A1, P.A2) @ th for e, th in enumerate(ctx.lin.theta_a)],
-                   axis=1)
+    out = np.stack([target(P, e) - base_design(P, e, P.A1, P.A2) @ th for e, th in enumerate(ctx.lin.theta_a)], axis=1)
     q = fit.cv.stats.shared
     gam = fit.cv.theta[q]
     for s, th in zip(fit.specs, fit.thetas):

@@ -20,9 +20,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "diagnose",
         help="locate and explain the gap between a recording and the linear chain",
         description="Fit the linear chain to a recording, locate where it fails (per DOF, time, "
-                    "frequency, amplitude), fit every candidate unmodelled effect at every location "
-                    "on training windows, score it on withheld windows and report the best one that "
-                    "shrinks the gap beyond noise.",
+        "frequency, amplitude), fit every candidate unmodelled effect at every location "
+        "on training windows, score it on withheld windows and report the best one that "
+        "shrinks the gap beyond noise.",
     )
     p.add_argument("recording", metavar="RECORDING", help="CSV or .npz with t, u1..un, a1..an (or x1..xn)")
     p.add_argument("--json", required=True, metavar="OUT", help="where to write the JSON result")
@@ -52,8 +52,7 @@ def run(args: argparse.Namespace) -> int:
         if tty:  # one status line, rewritten in place
             print(f"\r\033[K[diagnose] {msg}", end="", file=sys.stderr, flush=True)
         elif not msg.startswith("candidate ") or msg.startswith("candidate 1/"):
-            print(f"[diagnose] {msg}" + (" ..." if msg.startswith("candidate 1/") else ""), file=sys.stderr,
-                  flush=True)
+            print(f"[diagnose] {msg}" + (" ..." if msg.startswith("candidate 1/") else ""), file=sys.stderr, flush=True)
 
     out = Path(args.json)
     if out.exists() and out.is_dir():

@@ -9,7 +9,8 @@ is linear in ``[1/m_i, c_i/m_i, k_i/m_i, k_{i+1}/m_i]`` with the (noisy) measure
 acceleration alone on the left: sensor noise stays out of the regressors, and the error
 is in acceleration units. A DOF without force (``u_i = 0`` throughout, e.g. a response
 point of a structure excited elsewhere) has no scale: its parameters are reported per
-unit mass (``m_i = 1``). The equation needs velocities and displacements, which are not measured. Integrating the measured
+unit mass (``m_i = 1``). The equation needs velocities and displacements, which are not
+measured. Integrating the measured
 accelerations from the start of the record gives ``A1 = int a`` and ``A2 = int int a``
 (the same exact-for-polynomials interpolatory quadrature as the estimator, 6 points);
 the true signals are ``v = A1 + p`` and ``x = A2 + q + p (t - t_w)`` on every window
@@ -59,8 +60,19 @@ from .gram import EqSpec, cross_validate, window_stats
 from .integrals import integrals
 from .windows import band_filter, detrend, prepare
 
-__all__ = ["METRIC", "METRIC_FORCE", "EqSpec", "band_filter", "cross_validate", "detrend", "integrals",
-           "prepare", "signal_band", "to_physical", "window_stats"]
+__all__ = [
+    "METRIC",
+    "METRIC_FORCE",
+    "EqSpec",
+    "band_filter",
+    "cross_validate",
+    "detrend",
+    "integrals",
+    "prepare",
+    "signal_band",
+    "to_physical",
+    "window_stats",
+]
 
 METRIC = (
     "nrms_accel_equation_error_in_band: RMS over the withheld windows and all DOF of "
@@ -80,4 +92,3 @@ METRIC_FORCE = (
     "acceleration-form error times its DOF's fitted mass), RMS over the forced DOFs divided by the RMS of their "
     "recorded forces: the error measure of drive and friction studies"
 )
-

@@ -78,8 +78,15 @@ COMBINATION_GAIN = 0.2
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
 #: Most refits of a state-dependent candidate with states reconstructed under it.
 STATE_REFITS = 4
-STATE_EFFECTS = ("coulomb_friction", "stribeck_friction", "quadratic_damping", "amplitude_damping",
-                 "cubic_stiffness", "clearance", "parameter_drift")
+STATE_EFFECTS = (
+    "coulomb_friction",
+    "stribeck_friction",
+    "quadratic_damping",
+    "amplitude_damping",
+    "cubic_stiffness",
+    "clearance",
+    "parameter_drift",
+)
 
 
 @dataclass
@@ -98,8 +105,9 @@ class Scored:
 
     @property
     def significant(self) -> bool:
-        return bool(self.z >= Z_CRIT and self.rel_reduction >= MIN_REL_REDUCTION and self.noise_param_ok
-                    and self.physical)
+        return bool(
+            self.z >= Z_CRIT and self.rel_reduction >= MIN_REL_REDUCTION and self.noise_param_ok and self.physical
+        )
 
 
 @dataclass
@@ -151,9 +159,14 @@ def score(P: Prepared, lin: LinearFit, fit: CandidateFit, denom: float) -> Score
     after_full = lin.cv.test_sub_full.sum() - (lin.cv.test_sub_full[:, :, fit.eqs].sum() - fit.cv.test_sub_full.sum())
     sd = red.std(ddof=1)
     t = float(red.mean() / (sd / np.sqrt(red.size))) if sd > 0 else (np.inf if red.mean() > 0 else 0.0)
-    return Scored(fit=fit, gap_after=float(np.sqrt(max(after, 0.0) / denom)),
-                  gap_after_full=float(np.sqrt(max(after_full, 0.0) / denom)), reduction=red, t_stat=t,
-                  rel_reduction=float(red.sum() / total_lin))
+    return Scored(
+        fit=fit,
+        gap_after=float(np.sqrt(max(after, 0.0) / denom)),
+        gap_after_full=float(np.sqrt(max(after_full, 0.0) / denom)),
+        reduction=red,
+        t_stat=t,
+        rel_reduction=float(red.sum() / total_lin),
+    )
 
 
 def _assess(P: Prepared, lin: LinearFit, fit: CandidateFit, denom: float, floor: np.ndarray) -> Scored:
@@ -190,7 +203,7 @@ def noise_z(P: Prepared, lin: LinearFit, fit: CandidateFit) -> float:
     st = fit.cv.stats
     total_d = 0.0
     var = 0.0
-    for k_eq, (spec, sl) in enumerate(zip(fit.specs, st.slices)):
+    for _k_eq, (spec, sl) in enumerate(zip(fit.specs, st.slices)):
         e = spec.e
         cols = [spec.X] + ([spec.E] if spec.E is not None and spec.E.shape[1] else [])
         Zc = detrend(P, np.concatenate(cols, axis=1))  # (nw, L, p+q)
@@ -247,8 +260,7 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     """The force form when some forced DOF is quasi-static: a first force-form fit puts its
     inertia force below :data:`QUASI_STATIC` of the force in the band (its acceleration-form
     equation, solved for an acceleration that carries no information, would be noise)."""
-    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form="force",
-                fit_band=True)
+    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form="force", fit_band=True)
     lin = fit_linear(P)
     shares = [d["inertia_share"] for d in inertia(P, lin, physical_uncertainty(P, lin), band.f_hi).values()]
     return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
@@ -276,8 +288,9 @@ def _prepare(rec: Recording, boundary: str, progress) -> Setup:
     else:
         f_low = lowest_frequency_hz(lin0, boundary)
         L = window_length(dt, f_low if np.isfinite(f_low) else 1.0, T - skip)
-    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form=form,
-                fit_band=order > 0)
+    P = prepare(
+        a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form=form, fit_band=order > 0
+    )
     lin = fit_linear(P)
     floor, floor_band = noise_floors(P, lin, motion if order else None, order)
     measured = None
@@ -285,9 +298,18 @@ def _prepare(rec: Recording, boundary: str, progress) -> Setup:
         xb = band_limited(rec.x, dt, band.f_hi)
         measured = (xb[P.sl], derivative(xb, dt, 1)[P.sl])
     states = measured if measured is not None else (lin.x, lin.v)
-    return Setup(P=P, lin=lin, band=band, denom=float(np.sum(P.y**2)), floor=floor, floor_band=floor_band,
-                 model=model_verdict(P, lin, band.f_hi, states), timings={"linear": time.perf_counter() - clock},
-                 measured=measured, hum=hum)
+    return Setup(
+        P=P,
+        lin=lin,
+        band=band,
+        denom=float(np.sum(P.y**2)),
+        floor=floor,
+        floor_band=floor_band,
+        model=model_verdict(P, lin, band.f_hi, states),
+        timings={"linear": time.perf_counter() - clock},
+        measured=measured,
+        hum=hum,
+    )
 
 
 def band_limited(x: np.ndarray, dt: float, f_hi: float) -> np.ndarray:
@@ -318,12 +340,16 @@ def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: 
 
     fs = 1.0 / P.dt
     f_hi = P.band_hz if P.band_hz is not None else 0.5 * fs
-    f, S = welch(np.column_stack([P.u_full] + ([motion] if motion is not None else [])), fs=fs,
-                 nperseg=min(P.L, 1024), axis=0)
+    f, S = welch(
+        np.column_stack([P.u_full] + ([motion] if motion is not None else [])), fs=fs, nperseg=min(P.L, 1024), axis=0
+    )
     white = white_floor(f, S)
     n = P.n
-    acc_band = np.sqrt(white[n:] * (2 * np.pi) ** (2 * order) * f_hi ** (2 * order + 1) / (2 * order + 1)) \
-        if motion is not None else band
+    acc_band = (
+        np.sqrt(white[n:] * (2 * np.pi) ** (2 * order) * f_hi ** (2 * order + 1) / (2 * order + 1))
+        if motion is not None
+        else band
+    )
     for e in range(n):
         if motion is not None and not force_form(P, e):
             band[e] = acc_band[e]
@@ -376,9 +402,13 @@ def _refit_leaders(st: Setup, ctx: Context, scored: list[Scored]) -> list[Scored
             for e, th in zip(s.fit.eqs, s.fit.thetas):
                 thetas[e] = th
             x, v = reconstruct_states(P, thetas, raw_residual(ctx, s.fit))
-            refit = _assess(P, lin, fit_candidate(Context(P=P, lin=lin, x=x, v=v, shared=ctx.shared), s.fit.effect,
-                                                  loc), st.denom,
-                            st.floor)
+            refit = _assess(
+                P,
+                lin,
+                fit_candidate(Context(P=P, lin=lin, x=x, v=v, shared=ctx.shared), s.fit.effect, loc),
+                st.denom,
+                st.floor,
+            )
             if refit.gap_after >= 0.999 * s.gap_after:
                 break
             s = refit
@@ -397,9 +427,15 @@ def _combination(st: Setup, ctx: Context, scored: list[Scored]) -> Scored | None
     best = next((s for s in scored if s.significant), None)
     if best is None or best.fit.effect not in ADDITIVE:
         return None
-    others = [s for s in scored if s.fit.effect in ADDITIVE and s is not best and s.physical
-              and not (s.fit.effect == best.fit.effect and s.fit.location == best.fit.location)
-              and not {s.fit.effect, best.fit.effect} <= {"coulomb_friction", "stribeck_friction"}]
+    others = [
+        s
+        for s in scored
+        if s.fit.effect in ADDITIVE
+        and s is not best
+        and s.physical
+        and not (s.fit.effect == best.fit.effect and s.fit.location == best.fit.location)
+        and not {s.fit.effect, best.fit.effect} <= {"coulomb_friction", "stribeck_friction"}
+    ]
     left = best.gap_after**2 * st.denom
     found = None
     for other in others[:COMBINATION_LEADERS]:
@@ -410,8 +446,12 @@ def _combination(st: Setup, ctx: Context, scored: list[Scored]) -> Scored | None
         diff = pair.reduction - best.reduction
         sd = diff.std(ddof=1)
         t = diff.mean() / (sd / np.sqrt(diff.size)) if sd > 0 else 0.0
-        if (pair.physical and t >= Z_CRIT and diff.sum() >= COMBINATION_GAIN * left
-                and (found is None or pair.gap_after < found.gap_after)):
+        if (
+            pair.physical
+            and t >= Z_CRIT
+            and diff.sum() >= COMBINATION_GAIN * left
+            and (found is None or pair.gap_after < found.gap_after)
+        ):
             found = pair
     return found
 
@@ -426,8 +466,12 @@ def force_gap(P: Prepared, lin: LinearFit, test_sse_eq: np.ndarray) -> float:
     return float(np.sqrt(num / den)) if den > 0 else float("nan")
 
 
-def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], None] | None = None,
-             effects: tuple[str, ...] = EFFECTS) -> Diagnosis:
+def diagnose(
+    rec: Recording,
+    boundary: str = "fixed",
+    progress: Callable[[str], None] | None = None,
+    effects: tuple[str, ...] = EFFECTS,
+) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
 
     Parameters
@@ -477,18 +521,37 @@ def diagnose(rec: Recording, boundary: str = "fixed", progress: Callable[[str], 
     gap_after_full = best.gap_after_full if best is not None else gap_before_full
     lin_sse = lin.cv.test_sse_eq.sum(axis=0)
     force = {"gap_before": force_gap(P, lin, lin_sse)}
-    force["gap_after"] = force["gap_before"] if best is None else force_gap(
-        P, lin, _candidate_sse_eq(lin, best))
+    force["gap_after"] = force["gap_before"] if best is None else force_gap(P, lin, _candidate_sse_eq(lin, best))
     st.timings["total"] = time.perf_counter() - clock
-    return Diagnosis(effect=effect, location=best.fit.location if best else None,
-                     params=best.fit.params if best else {}, params_std=best.fit.params_std if best else {},
-                     gap_before=gap_before, gap_after=gap_after, gap_before_full=gap_before_full,
-                     gap_after_full=gap_after_full, band=st.band, ranking=scored, P=P, lin=lin,
-                     best=best, timings=st.timings, where=where,
-                     extra={"natural_hz": natural.tolist(), "noise_floor": floor_rel,
-                            "noise_floor_full": floor_rel_full, "explained_excess": explained,
-                            "ctx": ctx, "model": st.model, "force": force, "form": P.form,
-                            "combination": combo if best is not None else None, "mains_hz": st.hum})
+    return Diagnosis(
+        effect=effect,
+        location=best.fit.location if best else None,
+        params=best.fit.params if best else {},
+        params_std=best.fit.params_std if best else {},
+        gap_before=gap_before,
+        gap_after=gap_after,
+        gap_before_full=gap_before_full,
+        gap_after_full=gap_after_full,
+        band=st.band,
+        ranking=scored,
+        P=P,
+        lin=lin,
+        best=best,
+        timings=st.timings,
+        where=where,
+        extra={
+            "natural_hz": natural.tolist(),
+            "noise_floor": floor_rel,
+            "noise_floor_full": floor_rel_full,
+            "explained_excess": explained,
+            "ctx": ctx,
+            "model": st.model,
+            "force": force,
+            "form": P.form,
+            "combination": combo if best is not None else None,
+            "mains_hz": st.hum,
+        },
+    )
 
 
 def coloured_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
@@ -519,8 +582,14 @@ def _candidate_sse_eq(lin: LinearFit, s: Scored) -> np.ndarray:
     return out
 
 
-def _verdict(gap_before: float, gap_before_full: float, floor_rel: float, best: Scored | None,
-             model: ModelVerdict, floor_white: float | None = None) -> dict:
+def _verdict(
+    gap_before: float,
+    gap_before_full: float,
+    floor_rel: float,
+    best: Scored | None,
+    model: ModelVerdict,
+    floor_white: float | None = None,
+) -> dict:
     """Effect verdict (module docstring, step 4): the best significant candidate unless it
     leaves most of a large gap unexplained (``unknown``), or, on a record with more modes
     than the chain, unless it brings the gap to the white noise floor; ``none`` only when

@@ -28,8 +28,9 @@ def target(P: Prepared, e: int, a: np.ndarray | None = None, u: np.ndarray | Non
     return P.a[:, e] if a is None else a
 
 
-def base_design(P: Prepared, e: int, v: np.ndarray, x: np.ndarray, u: np.ndarray | None = None,
-                a: np.ndarray | None = None) -> np.ndarray:
+def base_design(
+    P: Prepared, e: int, v: np.ndarray, x: np.ndarray, u: np.ndarray | None = None, a: np.ndarray | None = None
+) -> np.ndarray:
     """Columns of the linear equation of DOF ``e``.
 
     Acceleration form (target ``a_e``): ``[u_e, -v_e, -(x_e - x_other) ...]`` (the force
@@ -44,7 +45,7 @@ def base_design(P: Prepared, e: int, v: np.ndarray, x: np.ndarray, u: np.ndarray
         cols = [P.u[:, e] if u is None else u] if P.forced[e] else []
         cols.append(-v[:, e])
         sign = -1.0
-    for j, other in spring_columns(P.n, P.boundary)[e]:
+    for _j, other in spring_columns(P.n, P.boundary)[e]:
         cols.append(sign * (x[:, e] - (x[:, other] if other >= 0 else 0.0)))
     return np.stack(cols, axis=1)
 

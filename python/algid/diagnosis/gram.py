@@ -9,8 +9,18 @@ import numpy as np
 
 from .windows import N_SUB, Prepared, band_filter, detrend
 
-__all__ = ["CVResult", "EqSpec", "WindowStats", "cross_validate", "cross_validate_grid", "jackknife_std",
-           "refine_min", "solve_gram", "sse", "window_stats"]
+__all__ = [
+    "CVResult",
+    "EqSpec",
+    "WindowStats",
+    "cross_validate",
+    "cross_validate_grid",
+    "jackknife_std",
+    "refine_min",
+    "solve_gram",
+    "sse",
+    "window_stats",
+]
 
 
 @dataclass
@@ -86,8 +96,12 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
             Zx_w = detrend(P, s.X * s.w)
             Zx = sub(Zx_w)
             Zxb = sub(band_filter(P, Zx_w)) if band else Zx
-            cached = (Zx, np.matmul(Zx.swapaxes(-1, -2), Zx), Zxb,
-                      np.matmul(Zxb.swapaxes(-1, -2), Zxb) if band else None)
+            cached = (
+                Zx,
+                np.matmul(Zx.swapaxes(-1, -2), Zx),
+                Zxb,
+                np.matmul(Zxb.swapaxes(-1, -2), Zxb) if band else None,
+            )
             if s.key is not None:
                 P._cache[(s.key, s.w)] = cached
         Zx, gxx, Zxb, gxxb = cached
@@ -96,10 +110,22 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
         fill(per_sub[:, :, k], ix, ir, gxx, np.matmul(Zx.swapaxes(-1, -2), Zr), np.matmul(Zr.swapaxes(-1, -2), Zr))
         if band:
             Zrb = sub(band_filter(P, Zr_w))
-            fill(per_sub_band[:, :, k], ix, ir, gxxb, np.matmul(Zxb.swapaxes(-1, -2), Zrb),
-                 np.matmul(Zrb.swapaxes(-1, -2), Zrb))
-    return WindowStats(G=(per_sub_band if P.fit_band else per_sub).sum(axis=(1, 2)), slices=slices, shared=shared,
-                       eqs=[s.e for s in specs], per_sub=per_sub, per_sub_band=per_sub_band)
+            fill(
+                per_sub_band[:, :, k],
+                ix,
+                ir,
+                gxxb,
+                np.matmul(Zxb.swapaxes(-1, -2), Zrb),
+                np.matmul(Zrb.swapaxes(-1, -2), Zrb),
+            )
+    return WindowStats(
+        G=(per_sub_band if P.fit_band else per_sub).sum(axis=(1, 2)),
+        slices=slices,
+        shared=shared,
+        eqs=[s.e for s in specs],
+        per_sub=per_sub,
+        per_sub_band=per_sub_band,
+    )
 
 
 def solve_gram(G: np.ndarray) -> np.ndarray:
@@ -169,8 +195,9 @@ def cross_validate(P: Prepared, st: WindowStats) -> CVResult:
         thetas[k] = th
         full[mask] = sse(st.per_sub[mask], th)
         test[mask] = full[mask] if st.per_sub_band is st.per_sub else sse(st.per_sub_band[mask], th)
-    return CVResult(theta=theta, theta_folds=thetas, test_sub=test, fit_sse=sse(st.G, theta), stats=st,
-                    test_sub_full=full)
+    return CVResult(
+        theta=theta, theta_folds=thetas, test_sub=test, fit_sse=sse(st.G, theta), stats=st, test_sub_full=full
+    )
 
 
 def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray) -> CVResult:
@@ -209,8 +236,13 @@ def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray)
     res.theta_folds = thetas
     res.test_sub = test
     res.test_sub_full = full
-    res.extra = {"g": refine_min(grid, fit_all, best), "g_index": best, "g_folds": g_folds,
-                 "g_index_folds": gb_folds, "grid_sse": fit_all}
+    res.extra = {
+        "g": refine_min(grid, fit_all, best),
+        "g_index": best,
+        "g_folds": g_folds,
+        "g_index_folds": gb_folds,
+        "grid_sse": fit_all,
+    }
     return res
 
 

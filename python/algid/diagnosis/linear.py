@@ -68,8 +68,7 @@ class LinearFit:
 
 def linear_specs(P: Prepared) -> list[EqSpec]:
     """One :class:`EqSpec` per DOF: the acceleration equation on the raw integrals."""
-    return [EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=None, key=("base", e))
-            for e in range(P.n)]
+    return [EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=None, key=("base", e)) for e in range(P.n)]
 
 
 def stiffness_rows(P: Prepared, theta_a: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -82,15 +81,18 @@ def stiffness_rows(P: Prepared, theta_a: list[np.ndarray]) -> tuple[np.ndarray, 
     for e, th in enumerate(theta_a):
         off = 1 if P.forced[e] else 0
         C[e, e] = th[off]
-        for (j, other), k in zip(spring_columns(n, P.boundary)[e], th[off + 1:]):
+        for (_j, other), k in zip(spring_columns(n, P.boundary)[e], th[off + 1 :]):
             K[e, e] += k
             if other >= 0:
                 K[e, other] -= k
     return K, C
 
 
-def reconstruct_states(P: Prepared, theta_a: list[np.ndarray], raw_resid: np.ndarray,
-                       ) -> tuple[np.ndarray, np.ndarray]:
+def reconstruct_states(
+    P: Prepared,
+    theta_a: list[np.ndarray],
+    raw_resid: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """Velocities and displacements from the integrals and the per-window lines of the
     raw equation errors (in each equation's target units, like the rows of
     :func:`stiffness_rows`).
@@ -126,9 +128,17 @@ def fit_linear(P: Prepared) -> LinearFit:
     theta = [to_physical(P, e, th) for e, th in enumerate(theta_a)]
     resid = detrend(P, raw).reshape(raw.shape)
     names = [equation_parameter_names(P.n, P.boundary, e) for e in range(P.n)]
-    return LinearFit(theta_a=theta_a, theta=theta, names=names,
-                     forced=P.forced.copy(), cv=cv, x=x, v=v, resid=resid,
-                     resid_force=resid * force_scale(P, theta)[None, :])
+    return LinearFit(
+        theta_a=theta_a,
+        theta=theta,
+        names=names,
+        forced=P.forced.copy(),
+        cv=cv,
+        x=x,
+        v=v,
+        resid=resid,
+        resid_force=resid * force_scale(P, theta)[None, :],
+    )
 
 
 def force_scale(P: Prepared, theta: list[np.ndarray]) -> np.ndarray:

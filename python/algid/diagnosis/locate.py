@@ -54,15 +54,17 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
     floor = noise_floor(P, resid) if floor is None else floor
     per_dof = []
     for i in range(n):
-        per_dof.append({
-            "dof": i + 1,
-            "gap": float(np.sqrt(eq_sse[i] / (P.nw * P.L)) / a_rms[i]),
-            "share_of_gap": float(eq_sse[i] / eq_sse.sum()),
-            # White noise on the band bins: its band fraction of the full-band floor.
-            "noise_floor": float(floor[i] * np.sqrt(P.band_fraction) / a_rms[i]),
-            "gap_fullband": float(np.sqrt(eq_full[i] / (P.nw * P.L)) / a_rms[i]),
-            "noise_floor_fullband": float(floor[i] / a_rms[i]),
-        })
+        per_dof.append(
+            {
+                "dof": i + 1,
+                "gap": float(np.sqrt(eq_sse[i] / (P.nw * P.L)) / a_rms[i]),
+                "share_of_gap": float(eq_sse[i] / eq_sse.sum()),
+                # White noise on the band bins: its band fraction of the full-band floor.
+                "noise_floor": float(floor[i] * np.sqrt(P.band_fraction) / a_rms[i]),
+                "gap_fullband": float(np.sqrt(eq_full[i] / (P.nw * P.L)) / a_rms[i]),
+                "noise_floor_fullband": float(floor[i] / a_rms[i]),
+            }
+        )
     # Time: withheld gap per window.
     a_w = (P.windows(P.y) ** 2).sum(axis=(1, 2))
     gap_w = np.sqrt(lin.cv.test_sse / a_w)
@@ -84,8 +86,11 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
         half = np.nonzero(excess >= 0.5 * excess[k])[0]
         c = np.cumsum(excess) / excess.sum()
         band = [float(f[np.searchsorted(c, 0.1)]), float(f[min(np.searchsorted(c, 0.9), f.size - 1)])]
-        freq_info = {"peak_hz": float(f[k]), "half_power_hz": [float(f[half.min()]), float(f[half.max()])],
-                     "band_80pct_hz": band}
+        freq_info = {
+            "peak_hz": float(f[k]),
+            "half_power_hz": [float(f[half.min()]), float(f[half.max()])],
+            "band_80pct_hz": band,
+        }
     else:
         freq_info = {"peak_hz": None, "half_power_hz": None, "band_80pct_hz": None}
     freq_info["excess_share"] = float(excess.sum() / max(Ssum.sum(), 1e-300))
@@ -101,8 +106,12 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
     amp_masses = []
     for i in range(n):
         amp_masses.append({"dof": i + 1, "explained": binned_r2(lin.v[:, i], force_resid[:, i])})
-    return {"per_dof": per_dof, "time": time_info, "frequency": freq_info,
-            "amplitude": {"springs": amp_springs, "masses": amp_masses}}
+    return {
+        "per_dof": per_dof,
+        "time": time_info,
+        "frequency": freq_info,
+        "amplitude": {"springs": amp_springs, "masses": amp_masses},
+    }
 
 
 def window_parameters(P: Prepared, lin: LinearFit) -> dict:
@@ -111,8 +120,10 @@ def window_parameters(P: Prepared, lin: LinearFit) -> dict:
     eq. 7 estimate at the window end). Returns JSON-ready lists."""
     fits = per_window_fits(P, lin)
     t_mid = (P.t[0] + P.dt * P.L * (np.arange(P.nw) + 0.5)).tolist()
-    out = {"t_mid_s": t_mid, "least_squares": [
-        {"dof": e + 1, "names": lin.names[e], "values": fits[e].tolist()} for e in range(P.n)]}
+    out = {
+        "t_mid_s": t_mid,
+        "least_squares": [{"dof": e + 1, "names": lin.names[e], "values": fits[e].tolist()} for e in range(P.n)],
+    }
     try:
         from ..estimator import ChainEstimator
     except ImportError:
@@ -122,7 +133,12 @@ def window_parameters(P: Prepared, lin: LinearFit) -> dict:
         sl = slice(w * P.L, (w + 1) * P.L)
         est = ChainEstimator(P.n, P.dt, P.boundary)
         res = est.run(P.a[sl], P.u[sl])
-        rows.append({"mass": res["mass"][-1].tolist(), "damping": res["damping"][-1].tolist(),
-                     "stiffness": res["stiffness"][-1].tolist()})
+        rows.append(
+            {
+                "mass": res["mass"][-1].tolist(),
+                "damping": res["damping"][-1].tolist(),
+                "stiffness": res["stiffness"][-1].tolist(),
+            }
+        )
     out["online"] = rows
     return out

@@ -63,8 +63,12 @@ class ModelVerdict:
     evidence: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
-        return {"verdict": self.verdict, "admissible": self.admissible, "reasons": self.reasons,
-                "evidence": self.evidence}
+        return {
+            "verdict": self.verdict,
+            "admissible": self.admissible,
+            "reasons": self.reasons,
+            "evidence": self.evidence,
+        }
 
 
 def physical_uncertainty(P: Prepared, lin: LinearFit) -> list[np.ndarray]:
@@ -93,8 +97,12 @@ def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> d
     for e in np.nonzero(P.forced)[0]:
         m, s = float(lin.theta[e][0]), float(sd[e][0])
         share = abs(m) * a_rms[e] / u_rms[e] if u_rms[e] > 0 else float("inf")
-        out[int(e) + 1] = {"mass": m, "mass_sigma": s, "inertia_share": float(share),
-                           "determined": bool(share >= INERTIA_SHARE and m > 3 * s)}
+        out[int(e) + 1] = {
+            "mass": m,
+            "mass_sigma": s,
+            "inertia_share": float(share),
+            "determined": bool(share >= INERTIA_SHARE and m > 3 * s),
+        }
     return out
 
 
@@ -134,14 +142,18 @@ def resonances(P: Prepared, f_hi: float) -> dict:
         keep = (f > 2 * f[1]) & (f <= f_top) & powered & np.isfinite(H) & (H > 0)
         at = np.nonzero(keep)[0]  # the kept bins as one sequence: a line spectrum's lines are neighbours
         idx, props = find_peaks(np.log(H[at]), prominence=np.log(PEAK_PROMINENCE)) if at.size > 2 else ([], {})
-        peaks = [float(f[at[i]]) for i, pr in zip(idx, props.get("prominences", [])) if (
-            coh[at[i]] >= PEAK_COHERENCE or (pr >= np.log(PEAK_STRONG) and coh[at[i]] >= PEAK_COHERENCE_STRONG))]
+        peaks = [
+            float(f[at[i]])
+            for i, pr in zip(idx, props.get("prominences", []))
+            if (coh[at[i]] >= PEAK_COHERENCE or (pr >= np.log(PEAK_STRONG) and coh[at[i]] >= PEAK_COHERENCE_STRONG))
+        ]
         out[int(e) + 1] = {"peaks_hz": peaks, "count": len(peaks)}
     return out
 
 
-def admissibility(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float,
-                  states: tuple[np.ndarray, np.ndarray]) -> list[str]:
+def admissibility(
+    P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float, states: tuple[np.ndarray, np.ndarray]
+) -> list[str]:
     """Physically impossible parameters of the linear fit (question 3), one line each: below
     zero by three sigma and standing for at least :data:`NEGLIGIBLE` of the force in the
     band (a spring of -0.4 N/m on an axis that moves 50 mm under tens of newtons is no
@@ -181,12 +193,17 @@ def model_verdict(P: Prepared, lin: LinearFit, f_hi: float, states: tuple | None
     reasons = []
     for dof, d in ine.items():
         if not d["determined"]:
-            reasons.append(f"DOF {dof}: inertia not identifiable (inertia force {100 * d['inertia_share']:.2g} % of "
-                           f"the force in the band, mass {d['mass']:.4g} +- {d['mass_sigma']:.2g})")
+            reasons.append(
+                f"DOF {dof}: inertia not identifiable (inertia force {100 * d['inertia_share']:.2g} % of "
+                f"the force in the band, mass {d['mass']:.4g} +- {d['mass_sigma']:.2g})"
+            )
     many = {dof: r for dof, r in res.items() if r["count"] > P.n}
     for dof, r in many.items():
-        reasons.append(f"DOF {dof}: {r['count']} resonances in the band ("
-                       + ", ".join(f"{f:.3g}" for f in r["peaks_hz"]) + f" Hz) for a chain of {P.n} DOF")
+        reasons.append(
+            f"DOF {dof}: {r['count']} resonances in the band ("
+            + ", ".join(f"{f:.3g}" for f in r["peaks_hz"])
+            + f" Hz) for a chain of {P.n} DOF"
+        )
     reasons += bad
     if any(not d["determined"] for d in ine.values()):
         verdict = "inertia_not_identifiable"
@@ -196,6 +213,5 @@ def model_verdict(P: Prepared, lin: LinearFit, f_hi: float, states: tuple | None
         verdict = "not_a_chain"
     else:
         verdict = "chain"
-    evidence = {"inertia": ine, "resonances": res, "inadmissible": bad,
-                "parameters_sigma": [s.tolist() for s in sd]}
+    evidence = {"inertia": ine, "resonances": res, "inadmissible": bad, "parameters_sigma": [s.tolist() for s in sd]}
     return ModelVerdict(verdict=verdict, reasons=reasons, admissible=not bad, evidence=evidence)

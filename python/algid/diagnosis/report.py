@@ -9,8 +9,21 @@ import numpy as np
 from .candidates import MAIN_PARAM
 from .core import METRIC, METRIC_FORCE
 
-UNITS = {"force": "N", "v_scale": "m/s", "static": "N", "v_stribeck": "m/s", "c_amp": "N s/m^2", "c2": "N s^2/m^2", "k3": "N/m^3", "gap": "m", "stiffness": "N/m", "delay": "s",
-         "bias": "m/s^2", "cutoff_hz": "Hz", "rel_change": "-"}
+UNITS = {
+    "force": "N",
+    "v_scale": "m/s",
+    "static": "N",
+    "v_stribeck": "m/s",
+    "c_amp": "N s/m^2",
+    "c2": "N s^2/m^2",
+    "k3": "N/m^3",
+    "gap": "m",
+    "stiffness": "N/m",
+    "delay": "s",
+    "bias": "m/s^2",
+    "cutoff_hz": "Hz",
+    "rel_change": "-",
+}
 
 
 def _clean(x):
@@ -35,11 +48,21 @@ def to_json(d) -> dict:
     linear model, the location indicators and timings."""
     ranking = []
     for s in d.ranking:
-        ranking.append({"effect": s.fit.effect, "location": s.fit.location, "params": s.fit.params,
-                        "gap_after": s.gap_after, "gap_after_fullband": s.gap_after_full,
-                        "params_std": s.fit.params_std,
-                        "z_noise": s.z, "t_stat": s.t_stat, "rel_reduction": s.rel_reduction,
-                        "physical": s.physical, "significant": s.significant})
+        ranking.append(
+            {
+                "effect": s.fit.effect,
+                "location": s.fit.location,
+                "params": s.fit.params,
+                "gap_after": s.gap_after,
+                "gap_after_fullband": s.gap_after_full,
+                "params_std": s.fit.params_std,
+                "z_noise": s.z,
+                "t_stat": s.t_stat,
+                "rel_reduction": s.rel_reduction,
+                "physical": s.physical,
+                "significant": s.significant,
+            }
+        )
     lin = d.lin
     out = {
         "effect": d.effect,
@@ -57,21 +80,33 @@ def to_json(d) -> dict:
         "combination": _combination_json(d.extra.get("combination")),
         "equation_form": d.extra.get("form", "acceleration"),
         "mains_hum_removed_hz": d.extra.get("mains_hz", []),
-        "band": d.band.to_json() | {"window_bins_kept": int(d.P.band_mask.sum()),
-                                    "window_bins": int(d.P.band_mask.size),
-                                    "white_noise_fraction": d.P.band_fraction},
+        "band": d.band.to_json()
+        | {
+            "window_bins_kept": int(d.P.band_mask.sum()),
+            "window_bins": int(d.P.band_mask.size),
+            "white_noise_fraction": d.P.band_fraction,
+        },
         "ranking": ranking,
         "params_std": d.params_std,
         "main_param": MAIN_PARAM.get(d.effect),
-        "linear_model": {"n": d.P.n, "boundary": d.P.boundary,
-                         "mass": [float(m) if f else None for m, f in zip(lin.mass, lin.forced)],
-                         "damping": lin.damping().tolist(), "stiffness": lin.stiffness().tolist(),
-                         "unforced_dofs_per_unit_mass": [i + 1 for i, f in enumerate(lin.forced) if not f],
-                         "natural_frequencies_hz": d.extra.get("natural_hz", [])},
-        "analysis": {"windows": d.P.nw, "window_s": d.P.L * d.P.dt, "skipped_s": d.P.skip * d.P.dt,
-                     "folds": d.P.nfolds, "noise_floor": d.extra.get("noise_floor"),
-                     "noise_floor_fullband": d.extra.get("noise_floor_full"),
-                     "explained_excess": d.extra.get("explained_excess")},
+        "linear_model": {
+            "n": d.P.n,
+            "boundary": d.P.boundary,
+            "mass": [float(m) if f else None for m, f in zip(lin.mass, lin.forced)],
+            "damping": lin.damping().tolist(),
+            "stiffness": lin.stiffness().tolist(),
+            "unforced_dofs_per_unit_mass": [i + 1 for i, f in enumerate(lin.forced) if not f],
+            "natural_frequencies_hz": d.extra.get("natural_hz", []),
+        },
+        "analysis": {
+            "windows": d.P.nw,
+            "window_s": d.P.L * d.P.dt,
+            "skipped_s": d.P.skip * d.P.dt,
+            "folds": d.P.nfolds,
+            "noise_floor": d.extra.get("noise_floor"),
+            "noise_floor_fullband": d.extra.get("noise_floor_full"),
+            "explained_excess": d.extra.get("explained_excess"),
+        },
         "where": d.where,
         "timings_s": d.timings,
     }
@@ -82,8 +117,10 @@ def _combination_json(s) -> dict | None:
     """The reported combination of effects (``None`` if none beats the best single one)."""
     if s is None:
         return None
-    parts = [{"effect": eff, "location": loc, "params": s.fit.params[eff], "params_std": s.fit.params_std[eff]}
-             for eff, loc in zip(s.fit.effect.split("+"), s.fit.location["parts"])]
+    parts = [
+        {"effect": eff, "location": loc, "params": s.fit.params[eff], "params_std": s.fit.params_std[eff]}
+        for eff, loc in zip(s.fit.effect.split("+"), s.fit.location["parts"])
+    ]
     return {"effects": parts, "gap_after": s.gap_after, "gap_after_fullband": s.gap_after_full, "z_noise": s.z}
 
 
@@ -100,7 +137,7 @@ def _fmt_params(params: dict, std: dict | None = None) -> str:
 def _fmt_loc(loc) -> str:
     if not loc:
         return ""
-    (k, v), = loc.items()
+    ((k, v),) = loc.items()
     return f"{'DOF' if k == 'dof' else 'spring'} {v}"
 
 
@@ -109,8 +146,10 @@ def to_text(d, source: str = "") -> str:
     P, lin = d.P, d.lin
     L = []
     L.append(f"algid diagnose{': ' + source if source else ''}")
-    L.append(f"  {P.n} DOF, {P.a_full.shape[0]} samples at {1 / P.dt:g} Hz ({P.duration:.3g} s), "
-             f"{P.boundary} right end; {P.nw} windows of {P.L * P.dt:.3g} s in {P.nfolds} folds")
+    L.append(
+        f"  {P.n} DOF, {P.a_full.shape[0]} samples at {1 / P.dt:g} Hz ({P.duration:.3g} s), "
+        f"{P.boundary} right end; {P.nw} windows of {P.L * P.dt:.3g} s in {P.nfolds} folds"
+    )
     L.append("")
     L.append("Linear chain (windowed equation-error fit):")
     L.append("  DOF   m [kg]      c [N s/m]   springs [N/m]")
@@ -126,66 +165,89 @@ def to_text(d, source: str = "") -> str:
         L.append("  natural frequencies [Hz]: " + ", ".join(f"{f:.3g}" for f in nat))
     model = d.extra.get("model")
     if model is not None:
-        L.append(f"  model: {model.verdict}" + (" (the linear chain is a model of the record)"
-                                               if model.verdict == "chain" else ""))
+        L.append(
+            f"  model: {model.verdict}"
+            + (" (the linear chain is a model of the record)" if model.verdict == "chain" else "")
+        )
         for r in model.reasons:
             L.append(f"    {r}")
     L.append("")
     shrink = d.gap_before / d.gap_after if d.gap_after > 0 else float("inf")
     b = d.band
-    L.append(f"Gap (normalised RMS acceleration equation error on withheld windows, in the signal band "
-             f"0-{b.f_hi:.4g} Hz of 0-{b.nyquist:.4g}; full band in brackets):")
+    L.append(
+        f"Gap (normalised RMS acceleration equation error on withheld windows, in the signal band "
+        f"0-{b.f_hi:.4g} Hz of 0-{b.nyquist:.4g}; full band in brackets):"
+    )
     exc = f"{b.f_exc:.3g} Hz" if np.isfinite(b.f_exc) else "none found"
     modes = f", highest natural frequency {b.f_modes:.3g} Hz" if np.isfinite(b.f_modes) else ""
-    L.append(f"  band: signal up to {exc} ({b.source}){modes}; "
-             f"{P.band_fraction:.0%} of the white sensor noise")
+    L.append(f"  band: signal up to {exc} ({b.source}){modes}; {P.band_fraction:.0%} of the white sensor noise")
     L.append(f"  linear model        {d.gap_before:.4g}  [{d.gap_before_full:.4g}]")
     fg = d.extra.get("force", {})
     if fg.get("gap_before") is not None and np.isfinite(fg["gap_before"]):
-        L.append(f"  force-domain gap    {fg['gap_before']:.4g} -> {fg['gap_after']:.4g} "
-                 "(RMS force-equation error / RMS force, withheld, in band)")
+        L.append(
+            f"  force-domain gap    {fg['gap_before']:.4g} -> {fg['gap_after']:.4g} "
+            "(RMS force-equation error / RMS force, withheld, in band)"
+        )
     nf = d.extra.get("noise_floor")
     if nf is not None:
         L.append(f"  sensor-noise floor  {nf:.4g}  [{d.extra.get('noise_floor_full', float('nan')):.4g}]")
     if d.effect in ("none", "unknown"):
-        L.append(f"  diagnosis: {d.effect.upper()}"
-                 + (" - the linear model explains the data within noise" if d.effect == "none"
-                    else " - the gap is real but no candidate effect explains it"))
+        L.append(
+            f"  diagnosis: {d.effect.upper()}"
+            + (
+                " - the linear model explains the data within noise"
+                if d.effect == "none"
+                else " - the gap is real but no candidate effect explains it"
+            )
+        )
     else:
         shrink_f = d.gap_before_full / d.gap_after_full if d.gap_after_full > 0 else float("inf")
-        L.append(f"  with {d.effect} at {_fmt_loc(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)  "
-                 f"[{d.gap_after_full:.4g}, {shrink_f:.3g}x]")
+        L.append(
+            f"  with {d.effect} at {_fmt_loc(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)  "
+            f"[{d.gap_after_full:.4g}, {shrink_f:.3g}x]"
+        )
         L.append(f"  fitted: {_fmt_params(d.params, d.params_std)}")
         combo = d.extra.get("combination")
         if combo is not None:
-            parts = " + ".join(f"{eff} at {_fmt_loc(loc)} ({_fmt_params(combo.fit.params[eff])})"
-                               for eff, loc in zip(combo.fit.effect.split("+"), combo.fit.location["parts"]))
+            parts = " + ".join(
+                f"{eff} at {_fmt_loc(loc)} ({_fmt_params(combo.fit.params[eff])})"
+                for eff, loc in zip(combo.fit.effect.split("+"), combo.fit.location["parts"])
+            )
             sh = d.gap_before / combo.gap_after if combo.gap_after > 0 else float("inf")
             L.append(f"  together: {parts}: {combo.gap_after:.4g} ({sh:.3g}x smaller)")
     L.append("")
     w = d.where
     if w:
         L.append("Where the linear model fails:")
-        L.append("  per DOF equation (withheld NRMS / noise floor): " + ", ".join(
-            f"{p['dof']}: {p['gap']:.3g}/{p['noise_floor']:.2g}" for p in w["per_dof"]))
+        L.append(
+            "  per DOF equation (withheld NRMS / noise floor): "
+            + ", ".join(f"{p['dof']}: {p['gap']:.3g}/{p['noise_floor']:.2g}" for p in w["per_dof"])
+        )
         ti = w["time"]
-        L.append(f"  in time: window gap max/min {ti['max_over_min']:.3g}, trend over the record "
-                 f"{ti['relative_trend']:+.0%}")
+        L.append(
+            f"  in time: window gap max/min {ti['max_over_min']:.3g}, trend over the record {ti['relative_trend']:+.0%}"
+        )
         fr = w["frequency"]
         if fr.get("peak_hz") is not None:
-            L.append(f"  in frequency: excess over the noise floor peaks at {fr['peak_hz']:.3g} Hz "
-                     f"(80 % of it in {fr['band_80pct_hz'][0]:.3g}-{fr['band_80pct_hz'][1]:.3g} Hz)")
+            L.append(
+                f"  in frequency: excess over the noise floor peaks at {fr['peak_hz']:.3g} Hz "
+                f"(80 % of it in {fr['band_80pct_hz'][0]:.3g}-{fr['band_80pct_hz'][1]:.3g} Hz)"
+            )
         am = w["amplitude"]
         sp = max(am["springs"], key=lambda s: s["explained"])
         ms = max(am["masses"], key=lambda s: s["explained"])
-        L.append(f"  against amplitude: deformation of spring {sp['spring']} explains {sp['explained']:.0%} of "
-                 f"the error, velocity of DOF {ms['dof']} {ms['explained']:.0%}")
+        L.append(
+            f"  against amplitude: deformation of spring {sp['spring']} explains {sp['explained']:.0%} of "
+            f"the error, velocity of DOF {ms['dof']} {ms['explained']:.0%}"
+        )
         L.append("")
     L.append("Candidates (withheld gap; * = beyond noise):")
     for s in d.ranking[:10]:
         mark = "*" if s.significant else " "
-        L.append(f"  {mark} {s.fit.effect:<18s} {_fmt_loc(s.fit.location):<9s} {s.gap_after:.4g}  "
-                 f"z={s.z:6.1f}  {_fmt_params(s.fit.params)}")
+        L.append(
+            f"  {mark} {s.fit.effect:<18s} {_fmt_loc(s.fit.location):<9s} {s.gap_after:.4g}  "
+            f"z={s.z:6.1f}  {_fmt_params(s.fit.params)}"
+        )
     if len(d.ranking) > 10:
         L.append(f"  ... {len(d.ranking) - 10} more in the JSON")
     L.append(f"({d.timings.get('total', float('nan')):.2f} s)")

@@ -10,8 +10,18 @@ import numpy as np
 from .equations import target
 from .integrals import integrals
 
-__all__ = ["FORMS", "N_FOLDS", "N_SUB", "Prepared", "band_filter", "detrend", "parseval_weights", "prepare",
-           "window_length", "window_lines"]
+__all__ = [
+    "FORMS",
+    "N_FOLDS",
+    "N_SUB",
+    "Prepared",
+    "band_filter",
+    "detrend",
+    "parseval_weights",
+    "prepare",
+    "window_length",
+    "window_lines",
+]
 
 #: Which signal the forced DOFs' equations are solved for (:func:`target`).
 FORMS = ("acceleration", "force")
@@ -135,9 +145,19 @@ def parseval_weights(L: int) -> np.ndarray:
     return w
 
 
-def prepare(a: np.ndarray, u: np.ndarray, dt: float, L: int, boundary: str = "fixed",
-            skip: int = 0, nfolds: int = N_FOLDS, A: tuple[np.ndarray, np.ndarray] | None = None,
-            band_hz: float | None = None, form: str = "acceleration", fit_band: bool = False) -> Prepared:
+def prepare(
+    a: np.ndarray,
+    u: np.ndarray,
+    dt: float,
+    L: int,
+    boundary: str = "fixed",
+    skip: int = 0,
+    nfolds: int = N_FOLDS,
+    A: tuple[np.ndarray, np.ndarray] | None = None,
+    band_hz: float | None = None,
+    form: str = "acceleration",
+    fit_band: bool = False,
+) -> Prepared:
     """Integrate the accelerations (unless ``A = (A1, A2)`` is given) and cut the record
     into windows of ``L`` samples, starting ``skip`` samples in; withheld errors are
     scored on ``[0, band_hz]`` (the whole band if None) and, with ``fit_band``, fitted
@@ -151,8 +171,21 @@ def prepare(a: np.ndarray, u: np.ndarray, dt: float, L: int, boundary: str = "fi
     A1, A2 = integrals(a, dt) if A is None else A
     K = min(nfolds, nw)
     folds = np.arange(nw) % K
-    return Prepared(a_full=a, u_full=u, A1_full=A1, A2_full=A2, skip=skip, dt=dt, L=L, nw=nw,
-                    boundary=boundary, folds=folds, band_hz=band_hz, form=form, fit_band=fit_band)
+    return Prepared(
+        a_full=a,
+        u_full=u,
+        A1_full=A1,
+        A2_full=A2,
+        skip=skip,
+        dt=dt,
+        L=L,
+        nw=nw,
+        boundary=boundary,
+        folds=folds,
+        band_hz=band_hz,
+        form=form,
+        fit_band=fit_band,
+    )
 
 
 def detrend(P: Prepared, x: np.ndarray) -> np.ndarray:

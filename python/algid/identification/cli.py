@@ -25,20 +25,35 @@ class IdentifyError(Exception):
 
 def add_parser(sub) -> None:
     """Register ``algid identify``."""
-    p = sub.add_parser("identify", help="estimate m, c, k of a chain from a recording, with uncertainties",
-                       description="Estimate every mass, damping and spring of the chain in a recording, with "
-                                   "one standard deviation each and a verdict (valid, or why not). The "
-                                   "estimator is chosen from the recording unless --estimator says otherwise.")
+    p = sub.add_parser(
+        "identify",
+        help="estimate m, c, k of a chain from a recording, with uncertainties",
+        description="Estimate every mass, damping and spring of the chain in a recording, with "
+        "one standard deviation each and a verdict (valid, or why not). The "
+        "estimator is chosen from the recording unless --estimator says otherwise.",
+    )
     p.add_argument("recording", type=Path, help="CSV or .npz with t, u1..un, a1..an (or x1..xn)")
     p.add_argument("--json", type=Path, help="write the estimates, uncertainties and verdicts as JSON")
     p.add_argument("--trace", type=Path, help="write the estimate history (with sigma_ columns) as CSV")
     p.add_argument("--plots", type=Path, metavar="DIR", help="write estimates.png (histories with one-sigma bands)")
-    p.add_argument("--boundary", choices=("fixed", "free"), default="fixed",
-                   help="right end: wall (k_{n+1} estimated) or free (k_{n+1} = 0)")
-    p.add_argument("--estimator", choices=ESTIMATORS, default="auto",
-                   help="single growing window, continuous windows, or chosen from the recording (default)")
-    p.add_argument("--replicates", type=int, default=REPLICATES,
-                   help=f"bootstrap replicates for the uncertainties (default {REPLICATES})")
+    p.add_argument(
+        "--boundary",
+        choices=("fixed", "free"),
+        default="fixed",
+        help="right end: wall (k_{n+1} estimated) or free (k_{n+1} = 0)",
+    )
+    p.add_argument(
+        "--estimator",
+        choices=ESTIMATORS,
+        default="auto",
+        help="single growing window, continuous windows, or chosen from the recording (default)",
+    )
+    p.add_argument(
+        "--replicates",
+        type=int,
+        default=REPLICATES,
+        help=f"bootstrap replicates for the uncertainties (default {REPLICATES})",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress and no table")
     p.set_defaults(func=run)
 

@@ -64,16 +64,27 @@ def _surrogate_band(nm: NoiseModel, theta: np.ndarray, n: int, boundary: str) ->
     return max([nm.f_hi] + [1.25 * float(f) for f in natural_frequencies_hz(theta, n, boundary)])
 
 
-def _select_window(a, u, motion, nm: NoiseModel, plan: Plan, boundary: str, forced, duration: float,
-                   seed: int, progress: ProgressFn) -> tuple[Plan, Run]:
+def _select_window(
+    a, u, motion, nm: NoiseModel, plan: Plan, boundary: str, forced, duration: float, seed: int, progress: ProgressFn
+) -> tuple[Plan, Run]:
     """Try the window candidates of ``plan``; keep the one with the lowest bootstrap error."""
     n = u.shape[1]
     cands = window_candidates(plan, nm, duration)
 
     def score(cand: Plan) -> tuple[float, Run]:
         run = run_plan(a, u, nm.dt, boundary, cand)
-        boot = bootstrap(run.theta, motion, nm, cand, boundary, _surrogate_band(nm, run.theta, n, boundary),
-                         forced, SELECT_REPLICATES, seed, history=False)
+        boot = bootstrap(
+            run.theta,
+            motion,
+            nm,
+            cand,
+            boundary,
+            _surrogate_band(nm, run.theta, n, boundary),
+            forced,
+            SELECT_REPLICATES,
+            seed,
+            history=False,
+        )
         with np.errstate(invalid="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: parameters not estimated
             rmse = np.sqrt(np.nanmean((boot.replicates - run.theta) ** 2, axis=0))
@@ -87,9 +98,12 @@ def _select_window(a, u, motion, nm: NoiseModel, plan: Plan, boundary: str, forc
     best = min(range(len(cands)), key=lambda q: scored[q][0])
     lengths = sorted(c.window_s for c in cands)
     lo, hi = window_limits(nm, duration)
-    step = EXTEND_FACTOR if cands[best].window_s == lengths[-1] else (
-        1.0 / EXTEND_FACTOR if cands[best].window_s == lengths[0] else None)
-    for q in range(EXTEND_STEPS if step else 0):  # the best is at an end of the range: look beyond
+    step = (
+        EXTEND_FACTOR
+        if cands[best].window_s == lengths[-1]
+        else (1.0 / EXTEND_FACTOR if cands[best].window_s == lengths[0] else None)
+    )
+    for _ in range(EXTEND_STEPS if step else 0):  # the best is at an end of the range: look beyond
         L = float(np.clip(cands[best].window_s * step, lo, hi))
         if abs(L / cands[best].window_s - 1.0) < 0.05:
             break
@@ -105,8 +119,14 @@ def _select_window(a, u, motion, nm: NoiseModel, plan: Plan, boundary: str, forc
     return cands[best], scored[best][1]
 
 
-def identify(rec: Recording, boundary: str = "fixed", estimator: str = "auto", replicates: int = REPLICATES,
-             seed: int = 0, progress: ProgressFn = None) -> Identification:
+def identify(
+    rec: Recording,
+    boundary: str = "fixed",
+    estimator: str = "auto",
+    replicates: int = REPLICATES,
+    seed: int = 0,
+    progress: ProgressFn = None,
+) -> Identification:
     """Identify the chain of a whole recording, with one standard deviation per parameter
     and a verdict on each.
 
@@ -147,9 +167,19 @@ def identify(rec: Recording, boundary: str = "fixed", estimator: str = "auto", r
     if plan.estimator == "continuous":
         plan = make_plan(nm, duration, estimator, natural_frequencies_hz(run.theta, n, boundary))
         plan, run = _select_window(a, rec.u, motion, nm, plan, boundary, forced, duration, seed, progress)
-    boot = bootstrap(run.theta, motion, nm, plan, boundary, _surrogate_band(nm, run.theta, n, boundary), forced,
-                     int(replicates), seed, DEFAULT_DIFF_POINTS,
-                     progress=lambda f: _progress(progress, "uncertainty", f))
+    boot = bootstrap(
+        run.theta,
+        motion,
+        nm,
+        plan,
+        boundary,
+        _surrogate_band(nm, run.theta, n, boundary),
+        forced,
+        int(replicates),
+        seed,
+        DEFAULT_DIFF_POINTS,
+        progress=lambda f: _progress(progress, "uncertainty", f),
+    )
     stderr_bias = boot.sigma / np.sqrt(replicates)
     correct = np.isfinite(boot.bias) & (np.abs(boot.bias) > BIAS_Z * stderr_bias)
     theta = np.where(correct, run.theta - np.nan_to_num(boot.bias), run.theta)
@@ -162,8 +192,24 @@ def identify(rec: Recording, boundary: str = "fixed", estimator: str = "auto", r
     # estimator's systems were singular
     blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])
     theta, sigma = np.where(blank, np.nan, theta), np.where(blank, np.nan, sigma)
-    return Identification(n=n, boundary=boundary, dt=dt, samples=int(rec.t.size), plan=plan, noise=nm,
-                          theta=theta, sigma=sigma, raw=run.theta, bias=np.where(correct, boot.bias, 0.0),
-                          verdicts=verdicts, time_s=run.time_s, history=run.history,
-                          history_sigma=boot.history_sigma, windows=run.windows, replicates=int(replicates),
-                          motion=kind, path=rec.path, hum_hz=tuple(hum))
+    return Identification(
+        n=n,
+        boundary=boundary,
+        dt=dt,
+        samples=int(rec.t.size),
+        plan=plan,
+        noise=nm,
+        theta=theta,
+        sigma=sigma,
+        raw=run.theta,
+        bias=np.where(correct, boot.bias, 0.0),
+        verdicts=verdicts,
+        time_s=run.time_s,
+        history=run.history,
+        history_sigma=boot.history_sigma,
+        windows=run.windows,
+        replicates=int(replicates),
+        motion=kind,
+        path=rec.path,
+        hum_hz=tuple(hum),
+    )

@@ -62,12 +62,12 @@ ESTIMATORS = ("auto", "window", "continuous")
 class Plan:
     """Which estimator runs and with which settings, and why."""
 
-    estimator: str          #: "window" or "continuous"
-    reason: str             #: one line: why this estimator
-    window_s: float         #: continuous window length [s] (nan for the single window)
-    prefilter_hz: float     #: continuous prefilter cut-off [Hz] (0 = off; nan for the single window)
-    stagger: int            #: continuous windows in flight
-    window_basis: str       #: what set the window length
+    estimator: str  #: "window" or "continuous"
+    reason: str  #: one line: why this estimator
+    window_s: float  #: continuous window length [s] (nan for the single window)
+    prefilter_hz: float  #: continuous prefilter cut-off [Hz] (0 = off; nan for the single window)
+    stagger: int  #: continuous windows in flight
+    window_basis: str  #: what set the window length
 
     def to_json(self) -> dict:
         d = asdict(self)
@@ -89,7 +89,7 @@ def natural_frequencies_hz(theta: np.ndarray, n: int, boundary: str) -> np.ndarr
     """Undamped natural frequencies [Hz] of packed estimates ``m1..mn, c1..cn, k1..k{n+1}``;
     empty when the estimates are not a physical chain (a mass not positive, a spring
     negative or not finite)."""
-    m, k = theta[:n], theta[2 * n:].copy()
+    m, k = theta[:n], theta[2 * n :].copy()
     if n == 1 and boundary == "fixed":
         k = np.array([k[0], 0.0])
     if boundary == "free":
@@ -134,12 +134,12 @@ def prefilter_hz(nm: NoiseModel, f_natural: np.ndarray) -> float:
     return 0.0 if fc > PREFILTER_MAX / nm.dt else float(fc)
 
 
-def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto",
-              f_natural: np.ndarray = np.array([])) -> Plan:
+def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto", f_natural: np.ndarray | None = None) -> Plan:
     """The plan for a record of ``duration_s`` [s] with noise model ``nm``.
 
     ``f_natural``: natural frequencies [Hz] of a first estimate (empty if none yet).
     """
+    f_natural = np.array([]) if f_natural is None else f_natural
     if requested not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {requested!r}")
     L, basis = window_length(nm, duration_s, f_natural)
@@ -149,11 +149,13 @@ def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto",
         estimator, reason = requested, "requested (--estimator)"
     elif not fits:
         estimator = "window"
-        reason = (f"record of {duration_s:.3g} s too short for {MIN_WINDOW_RESULTS} continuous windows of "
-                  f"{L:.3g} s")
+        reason = f"record of {duration_s:.3g} s too short for {MIN_WINDOW_RESULTS} continuous windows of {L:.3g} s"
     elif is_clean and duration_s <= SHORT_S:
         estimator = "window"
-        reason = f"clean record (in-band SNR >= {CLEAN_SNR_DB:g} dB) of at most {SHORT_S:g} s: the paper's single window is exact"
+        reason = (
+            f"clean record (in-band SNR >= {CLEAN_SNR_DB:g} dB) of at most {SHORT_S:g} s: "
+            "the paper's single window is exact"
+        )
     else:
         estimator = "continuous"
         why = "noisy" if not is_clean else f"longer than {SHORT_S:g} s"

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 
@@ -56,7 +55,7 @@ class Identification(PackedParameters):
     windows: int
     replicates: int
     motion: str
-    path: Optional[Path] = None
+    path: Path | None = None
     hum_hz: tuple = ()  #: mains lines notched out of every channel [Hz]
 
     # ---- views -------------------------------------------------------------------------
@@ -112,30 +111,52 @@ class Identification(PackedParameters):
 
     def __repr__(self) -> str:
         ok = sum(v.valid for v in self.verdicts)
-        return (f"<Identification n={self.n} {self.boundary} estimator={self.plan.estimator} "
-                f"valid={self.valid} ({ok}/{len(self.verdicts)} parameters valid)>")
+        return (
+            f"<Identification n={self.n} {self.boundary} estimator={self.plan.estimator} "
+            f"valid={self.valid} ({ok}/{len(self.verdicts)} parameters valid)>"
+        )
 
     # ---- output ------------------------------------------------------------------------
     def to_json(self) -> dict:
         """The JSON document of ``algid identify``."""
         n = self.n
-        params = [{"name": v.name, "value": _num(self.theta[p]), "sigma": _num(self.sigma[p]),
-                   "status": v.status, "valid": v.valid, "reason": v.reason or None,
-                   "bias_corrected": _num(self.bias[p]), "force_share": _num(v.share),
-                   "sigma_force_share": _num(v.sigma_share)}
-                  for p, v in enumerate(self.verdicts)]
+        params = [
+            {
+                "name": v.name,
+                "value": _num(self.theta[p]),
+                "sigma": _num(self.sigma[p]),
+                "status": v.status,
+                "valid": v.valid,
+                "reason": v.reason or None,
+                "bias_corrected": _num(self.bias[p]),
+                "force_share": _num(v.share),
+                "sigma_force_share": _num(v.sigma_share),
+            }
+            for p, v in enumerate(self.verdicts)
+        ]
         doc = {
-            "n": n, "boundary": self.boundary,
-            "mass": [_num(v) for v in self.mass], "damping": [_num(v) for v in self.damping],
+            "n": n,
+            "boundary": self.boundary,
+            "mass": [_num(v) for v in self.mass],
+            "damping": [_num(v) for v in self.damping],
             "stiffness": [_num(v) for v in self.stiffness],
-            "sigma_mass": [_num(v) for v in self.sigma_mass], "sigma_damping": [_num(v) for v in self.sigma_damping],
+            "sigma_mass": [_num(v) for v in self.sigma_mass],
+            "sigma_damping": [_num(v) for v in self.sigma_damping],
             "sigma_stiffness": [_num(v) for v in self.sigma_stiffness],
-            "valid": self.valid, "valid_dof": [bool(v) for v in self.valid_dof],
-            "reasons": self.reasons, "parameters": params,
-            "estimator": self.plan.estimator, "estimator_reason": self.plan.reason, "plan": self.plan.to_json(),
-            "window_results": self.windows, "bootstrap_replicates": self.replicates,
-            "samples": self.samples, "dt_s": self.dt, "duration_s": self.samples * self.dt,
-            "motion": self.motion, "noise_model": self.noise.to_json(),
+            "valid": self.valid,
+            "valid_dof": [bool(v) for v in self.valid_dof],
+            "reasons": self.reasons,
+            "parameters": params,
+            "estimator": self.plan.estimator,
+            "estimator_reason": self.plan.reason,
+            "plan": self.plan.to_json(),
+            "window_results": self.windows,
+            "bootstrap_replicates": self.replicates,
+            "samples": self.samples,
+            "dt_s": self.dt,
+            "duration_s": self.samples * self.dt,
+            "motion": self.motion,
+            "noise_model": self.noise.to_json(),
             "mains_hum_removed_hz": list(self.hum_hz),
         }
         if n == 1 and self.boundary == "fixed":
@@ -165,9 +186,11 @@ class Identification(PackedParameters):
         """The table ``algid identify`` prints."""
         lines = [f"n = {self.n}, {self.plan.estimator} estimator ({self.plan.reason})"]
         if self.plan.estimator == "continuous":
-            lines.append(f"  windows of {self.plan.window_s:.3g} s ({self.plan.window_basis}), prefilter "
-                         + (f"{self.plan.prefilter_hz:.3g} Hz" if self.plan.prefilter_hz > 0 else "off")
-                         + f", {self.windows} window results")
+            lines.append(
+                f"  windows of {self.plan.window_s:.3g} s ({self.plan.window_basis}), prefilter "
+                + (f"{self.plan.prefilter_hz:.3g} Hz" if self.plan.prefilter_hz > 0 else "off")
+                + f", {self.windows} window results"
+            )
         units = {"m": "kg", "c": "N s/m", "k": "N/m"}
         for p, v in enumerate(self.verdicts):
             val, sg = self.theta[p], self.sigma[p]

@@ -95,12 +95,18 @@ def _spring_validity(valid: np.ndarray, boundary: str) -> np.ndarray:
     return ~ok
 
 
-def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan,
-                   history: bool = True) -> Run:
+def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan, history: bool = True) -> Run:
     """Reseeded staggered windows of the plan, aggregated over the whole record (and, with
     ``history``, over the window results up to each history instant)."""
-    est = ContinuousEstimator(a.shape[1], dt, boundary=boundary, window_s=plan.window_s,
-                              prefilter_hz=plan.prefilter_hz, stagger=plan.stagger, detect=False)
+    est = ContinuousEstimator(
+        a.shape[1],
+        dt,
+        boundary=boundary,
+        window_s=plan.window_s,
+        prefilter_hz=plan.prefilter_hz,
+        stagger=plan.stagger,
+        detect=False,
+    )
     out = est.run(a, u, stride=max(1, a.shape[0]))
     W, at = out["windows"], out["window_sample"]
     keep = np.any(np.isfinite(W), axis=1)
@@ -112,8 +118,7 @@ def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan:
     stops = np.unique(np.linspace(1, W.shape[0], rows).round().astype(int))
     history = np.array([aggregate(W[:s]) for s in stops])
     spread = 1.4826 * _column_median(np.abs(W - _column_median(W)))
-    return Run(theta=aggregate(W), time_s=at[stops - 1] * dt, history=history, windows=int(W.shape[0]),
-               spread=spread)
+    return Run(theta=aggregate(W), time_s=at[stops - 1] * dt, history=history, windows=int(W.shape[0]), spread=spread)
 
 
 def run_plan(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan, history: bool = True) -> Run:

@@ -36,7 +36,7 @@ import os
 import warnings
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
-from typing import Callable, Optional
+from typing import Callable
 
 import numpy as np
 
@@ -50,7 +50,7 @@ from .runner import run_plan
 REPLICATES = 8
 
 
-def parallel_map(fn: Callable, items: list, progress: Optional[Callable[[int], None]] = None) -> list:
+def parallel_map(fn: Callable, items: list, progress: Callable[[int], None] | None = None) -> list:
     """``[fn(x) for x in items]`` on a thread per core (the estimators release the GIL while
     they run), results in order; ``progress(done)`` after each."""
     workers = min(len(items), os.cpu_count() or 1)
@@ -126,7 +126,7 @@ def band_limited_motion(y: np.ndarray, kind: str, dt: float, f_cut: float) -> Mo
 def chain_forces(theta: np.ndarray, n: int, boundary: str, mo: Motion) -> np.ndarray:
     """``M a + C v + K x`` (T, n) [N] of packed parameters (NaN counts as 0)."""
     th = np.nan_to_num(np.asarray(theta, dtype=float))
-    m, c, k = th[:n], th[n:2 * n], th[2 * n:].copy()
+    m, c, k = th[:n], th[n : 2 * n], th[2 * n :].copy()
     if n == 1 and boundary == "fixed":
         k = np.array([k[0], 0.0])
     if boundary == "free":
@@ -135,8 +135,9 @@ def chain_forces(theta: np.ndarray, n: int, boundary: str, mo: Motion) -> np.nda
     return mo.a * m + mo.v * c + mo.x @ K.T
 
 
-def replicate_signals(mo: Motion, u_s: np.ndarray, nm: NoiseModel, rng: np.random.Generator,
-                      diff_points: int) -> tuple[np.ndarray, np.ndarray]:
+def replicate_signals(
+    mo: Motion, u_s: np.ndarray, nm: NoiseModel, rng: np.random.Generator, diff_points: int
+) -> tuple[np.ndarray, np.ndarray]:
     """One noisy replicate ``(a, u)`` of the surrogate (module docstring, 3)."""
     T, n = u_s.shape
     su = np.array([c.sigma for c in nm.forces])
@@ -176,10 +177,20 @@ class Bootstrap:
     motion: Motion
 
 
-def bootstrap(theta: np.ndarray, motion_rec: np.ndarray, nm: NoiseModel, plan: Plan, boundary: str,
-              f_cut: float, forced: np.ndarray, replicates: int = REPLICATES, seed: int = 0,
-              diff_points: int = 5, progress: Optional[Callable[[float], None]] = None,
-              history: bool = True) -> Bootstrap:
+def bootstrap(
+    theta: np.ndarray,
+    motion_rec: np.ndarray,
+    nm: NoiseModel,
+    plan: Plan,
+    boundary: str,
+    f_cut: float,
+    forced: np.ndarray,
+    replicates: int = REPLICATES,
+    seed: int = 0,
+    diff_points: int = 5,
+    progress: Callable[[float], None] | None = None,
+    history: bool = True,
+) -> Bootstrap:
     """Run ``plan`` on ``replicates`` surrogates of the chain ``theta`` (module docstring).
 
     ``motion_rec``: the recorded motion (T, n) of kind ``nm.motion``; ``f_cut``: band edge of
@@ -189,8 +200,11 @@ def bootstrap(theta: np.ndarray, motion_rec: np.ndarray, nm: NoiseModel, plan: P
     n = motion_rec.shape[1]
     mo = band_limited_motion(motion_rec, nm.motion, nm.dt, f_cut)
     u_s = chain_forces(theta, n, boundary, mo) * forced
-    a0 = {"acceleration": lambda: mo.a, "velocity": lambda: derivative(mo.v, nm.dt, 1, diff_points),
-          "displacement": lambda: second_derivative(mo.x, nm.dt, diff_points)}[nm.motion]()
+    a0 = {
+        "acceleration": lambda: mo.a,
+        "velocity": lambda: derivative(mo.v, nm.dt, 1, diff_points),
+        "displacement": lambda: second_derivative(mo.x, nm.dt, diff_points),
+    }[nm.motion]()
     seeds = np.random.SeedSequence(seed).spawn(replicates)  # one stream per replicate: any order
 
     def one(b: int):
@@ -199,8 +213,9 @@ def bootstrap(theta: np.ndarray, motion_rec: np.ndarray, nm: NoiseModel, plan: P
         a_b, u_b = replicate_signals(mo, u_s, nm, np.random.default_rng(seeds[b]), diff_points)
         return run_plan(a_b, u_b, nm.dt, boundary, plan, history)
 
-    runs = parallel_map(one, list(range(-1, replicates)),
-                        None if progress is None else (lambda k: progress(k / (replicates + 1))))
+    runs = parallel_map(
+        one, list(range(-1, replicates)), None if progress is None else (lambda k: progress(k / (replicates + 1)))
+    )
     theta0 = runs[0].theta
     thetas, hists = [r.theta for r in runs[1:]], [r.history for r in runs[1:]]
     R = np.array(thetas)

@@ -92,8 +92,10 @@ def _mass_reason(m: float, share: float, snr: float) -> str:
     if snr < ACCEL_SNR:
         return "mass not identifiable: the acceleration is at the noise floor in the forced band"
     if share < 0.05:
-        return (f"mass not identifiable: the inertia force is {100 * share:.2g} % of the force in the band "
-                "(the record is quasi-static)")
+        return (
+            f"mass not identifiable: the inertia force is {100 * share:.2g} % of the force in the band "
+            "(the record is quasi-static)"
+        )
     return "mass not identifiable: not determined by the record"
 
 
@@ -116,8 +118,17 @@ def scales(n: int, boundary: str, mo: Motion, u: np.ndarray, forced: np.ndarray)
     return np.array(ratio), dofs
 
 
-def judge(theta: np.ndarray, sigma: np.ndarray, n: int, boundary: str, mo: Motion, u: np.ndarray,
-          forced: np.ndarray, nm: NoiseModel, excess: np.ndarray | None = None) -> list[Verdict]:
+def judge(
+    theta: np.ndarray,
+    sigma: np.ndarray,
+    n: int,
+    boundary: str,
+    mo: Motion,
+    u: np.ndarray,
+    forced: np.ndarray,
+    nm: NoiseModel,
+    excess: np.ndarray | None = None,
+) -> list[Verdict]:
     """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``; ``excess``
     (3n+1,): window-result scatter of the record over its surrogates' (1 if not given)."""
     excess = np.ones(theta.shape) if excess is None else np.asarray(excess, dtype=float)
@@ -128,15 +139,37 @@ def judge(theta: np.ndarray, sigma: np.ndarray, n: int, boundary: str, mo: Motio
         if fam == "k" and idx == n and boundary == "free":
             out.append(Verdict(name, "known", f"free right end: k{n + 1} = 0", np.nan, np.nan))
         elif fam == "k" and n == 1 and boundary == "fixed" and idx == 1:
-            out.append(Verdict(name, "not_separable", "one DOF between walls: only k1 + k2 is identifiable, "
-                               "reported as k1", np.nan, np.nan))
+            out.append(
+                Verdict(
+                    name,
+                    "not_separable",
+                    "one DOF between walls: only k1 + k2 is identifiable, reported as k1",
+                    np.nan,
+                    np.nan,
+                )
+            )
         else:
-            v = _one(name, fam, float(theta[p]), float(sigma[p]), ratio[p], dofs[p],
-                     [i for i in dofs[p] if forced[i]], mo, nm)
+            v = _one(
+                name,
+                fam,
+                float(theta[p]),
+                float(sigma[p]),
+                ratio[p],
+                dofs[p],
+                [i for i in dofs[p] if forced[i]],
+                mo,
+                nm,
+            )
             if v.status in ("ok", "negligible", "inadmissible") and excess[p] > EXCESS_MAX:
-                v = Verdict(name, "model_misfit", f"{_WHAT[fam]} not determined: the record's window results scatter "
-                            f"{excess[p]:.3g}x more than its noise explains (an effect outside eq. 1, or noise that "
-                            "is not white); run `algid diagnose`", v.share, v.sigma_share)
+                v = Verdict(
+                    name,
+                    "model_misfit",
+                    f"{_WHAT[fam]} not determined: the record's window results scatter "
+                    f"{excess[p]:.3g}x more than its noise explains (an effect outside eq. 1, or noise that "
+                    "is not white); run `algid diagnose`",
+                    v.share,
+                    v.sigma_share,
+                )
             out.append(v)
     return out
 
@@ -148,11 +181,23 @@ def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm) -> Verdict:
     what = _WHAT[fam]
     if not dofs_f:
         where = " and ".join(str(i + 1) for i in dofs)
-        return Verdict(name, "not_identifiable", f"{what} not identifiable: no force on DOF {where} (its equation "
-                       "has no scale; only ratios of its parameters are determined)", np.nan, np.nan)
+        return Verdict(
+            name,
+            "not_identifiable",
+            f"{what} not identifiable: no force on DOF {where} (its equation "
+            "has no scale; only ratios of its parameters are determined)",
+            np.nan,
+            np.nan,
+        )
     if not (np.isfinite(th) and np.isfinite(sg)):
-        return Verdict(name, "not_identifiable", f"{what} not identifiable: the estimator's systems were singular "
-                       "throughout (the record does not excite this DOF enough)", np.nan, np.nan)
+        return Verdict(
+            name,
+            "not_identifiable",
+            f"{what} not identifiable: the estimator's systems were singular "
+            "throughout (the record does not excite this DOF enough)",
+            np.nan,
+            np.nan,
+        )
     share = abs(th) * ratio
     ss = sg * ratio
     tiny = share + 3 * ss <= NEGLIGIBLE
@@ -166,19 +211,40 @@ def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm) -> Verdict:
             return Verdict(name, "not_identifiable", _mass_reason(th, share, snr), share, ss)
         return Verdict(name, "ok", "", share, ss)
     if ss > UNDETERMINED:
-        return Verdict(name, "not_identifiable", f"{what} not identifiable: its uncertainty is "
-                       f"{100 * ss:.2g} % of the force in the band", share, ss)
+        return Verdict(
+            name,
+            "not_identifiable",
+            f"{what} not identifiable: its uncertainty is {100 * ss:.2g} % of the force in the band",
+            share,
+            ss,
+        )
     if th < -3 * sg and not tiny:
         return Verdict(name, "inadmissible", f"negative {what}: {DIAGNOSE}", share, ss)
     if abs(th) <= 3 * sg:
         if 3 * ss <= ZERO_BOUND:
-            return Verdict(name, "negligible", f"{what} consistent with zero: |{name}| < {3 * sg:.3g} (three "
-                           f"sigma), {100 * 3 * ss:.2g} % of the force at most", share, ss)
-        return Verdict(name, "not_identifiable", f"{what} not identifiable: consistent with zero within "
-                       f"{100 * 3 * ss:.2g} % of the force (three sigma)", share, ss)
+            return Verdict(
+                name,
+                "negligible",
+                f"{what} consistent with zero: |{name}| < {3 * sg:.3g} (three "
+                f"sigma), {100 * 3 * ss:.2g} % of the force at most",
+                share,
+                ss,
+            )
+        return Verdict(
+            name,
+            "not_identifiable",
+            f"{what} not identifiable: consistent with zero within {100 * 3 * ss:.2g} % of the force (three sigma)",
+            share,
+            ss,
+        )
     if tiny:
-        return Verdict(name, "negligible", f"{what} negligible: it stands for {100 * (share + 3 * ss):.2g} % "
-                       "of the force at most (three sigma)", share, ss)
+        return Verdict(
+            name,
+            "negligible",
+            f"{what} negligible: it stands for {100 * (share + 3 * ss):.2g} % of the force at most (three sigma)",
+            share,
+            ss,
+        )
     return Verdict(name, "ok", "", share, ss)
 
 

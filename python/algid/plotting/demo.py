@@ -23,8 +23,14 @@ import numpy as np
 from ..chain import parameter_names
 from . import subplots
 
-__all__ = ["FIGURES", "estimates_figure", "estimation_error_figure", "forces_figure", "positions_figure",
-           "write_figures"]
+__all__ = [
+    "FIGURES",
+    "estimates_figure",
+    "estimation_error_figure",
+    "forces_figure",
+    "positions_figure",
+    "write_figures",
+]
 
 _FAMILIES = (("mass", "mass [kg]"), ("damping", "damping [N s/m]"), ("stiffness", "stiffness [N/m]"))
 
@@ -53,9 +59,11 @@ def _families(res: Any) -> list[tuple[str, np.ndarray, np.ndarray, list[str]]]:
 
 def _title(res: Any, summary: dict[str, Any]) -> str:
     """What ran: DOF, mode, noise, estimator (and whether the estimates were substituted)."""
-    title = (f"n = {res.chain.n}, {res.mode} mode, "
-             + ("noise-free" if summary["noise_db"] is None else f"accel SNR {summary['noise_db']:.0f} dB")
-             + (f", {summary['estimator']} estimator" if summary.get("estimator") else ""))
+    title = (
+        f"n = {res.chain.n}, {res.mode} mode, "
+        + ("noise-free" if summary["noise_db"] is None else f"accel SNR {summary['noise_db']:.0f} dB")
+        + (f", {summary['estimator']} estimator" if summary.get("estimator") else "")
+    )
     if summary.get("estimates_substituted_s", 0.0) is None:
         title += "; estimates never substituted"
     return title
@@ -70,15 +78,16 @@ def estimates_figure(res: Any, summary: dict[str, Any]) -> Any:
         for col, mask in enumerate((zoom, np.ones_like(zoom))):
             ax = axes[row, col]
             for q in range(true.size):
-                line, = ax.plot(t[mask], est[mask, q], lw=1.3, label=f"{names[q]} estimate")
+                (line,) = ax.plot(t[mask], est[mask, q], lw=1.3, label=f"{names[q]} estimate")
                 ax.axhline(true[q], color=line.get_color(), ls="--", lw=0.9)
             ax.axvline(t_sw, color="k", ls=":", lw=1.0)
             spread = 0.5 if col == 0 else 0.1
             ax.set_ylim(true.min() * (1 - spread), true.max() * (1 + spread))
             ax.set_ylabel(label)
             ax.grid(alpha=0.3)
-        axes[row, 1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
-                            title="dashed: true value", title_fontsize=8)
+        axes[row, 1].legend(
+            loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title="dashed: true value", title_fontsize=8
+        )
     axes[0, 0].set_title("convergence and substitution (dotted line)")
     axes[0, 1].set_title("whole run (y range: true values +-10 %)")
     axes[-1, 0].set_xlabel("time [s]")
@@ -93,9 +102,8 @@ def positions_figure(res: Any, summary: dict[str, Any]) -> Any:
     t, t_sw = res.t, summary["switch_time_s"]
     fig, (ax1, ax2) = subplots(2, 1, figsize=(10, 7), sharex=True)
     for i in range(res.chain.n):
-        line, = ax1.plot(t, 1e3 * res.x[:, i], lw=1.4, label=f"x{i + 1} actual")
-        ax1.plot(t, 1e3 * res.x_ref[:, i], ls="--", color=line.get_color(), lw=1.0,
-                 label=f"x{i + 1} reference")
+        (line,) = ax1.plot(t, 1e3 * res.x[:, i], lw=1.4, label=f"x{i + 1} actual")
+        ax1.plot(t, 1e3 * res.x_ref[:, i], ls="--", color=line.get_color(), lw=1.0, label=f"x{i + 1} reference")
         ax2.plot(t, 1e6 * (res.x[:, i] - res.x_ref[:, i]), lw=1.0, label=f"x{i + 1} - x{i + 1}*")
     for ax in (ax1, ax2):
         ax.axvline(t_sw, color="k", ls=":", lw=1.0)
@@ -105,8 +113,10 @@ def positions_figure(res: Any, summary: dict[str, Any]) -> Any:
     ax2.set_ylabel("tracking error [um]")
     ax2.set_xlabel("time [s]")
     tr = summary["tracking"]
-    ax1.set_title(f"Reference tracking ({_title(res, summary)})\npeak error after 1 s "
-                  f"{1e6 * tr['peak_after_1s_m']:.3g} um = {tr['peak_after_1s_pct_stroke']:.2g} % of stroke")
+    ax1.set_title(
+        f"Reference tracking ({_title(res, summary)})\npeak error after 1 s "
+        f"{1e6 * tr['peak_after_1s_m']:.3g} um = {tr['peak_after_1s_pct_stroke']:.2g} % of stroke"
+    )
     fig.tight_layout()
     return fig
 
@@ -122,9 +132,14 @@ def forces_figure(res: Any, summary: dict[str, Any]) -> Any:
     fig, (ax1, ax2) = subplots(2, 1, figsize=(10, 7))
     zmask = (t >= max(0.0, t_sw - 0.05)) & (t <= t_sw + 0.2)
     for i in range(chain.n):
-        line, = ax1.plot(t, res.u_applied[:, i], lw=1.3, label=f"u{i + 1}")
-        ax2.plot(t[zmask], 1e3 * (res.u_applied[zmask, i] - u_ff[zmask, i]), lw=1.3,
-                 color=line.get_color(), label=f"u{i + 1} - exact-model force")
+        (line,) = ax1.plot(t, res.u_applied[:, i], lw=1.3, label=f"u{i + 1}")
+        ax2.plot(
+            t[zmask],
+            1e3 * (res.u_applied[zmask, i] - u_ff[zmask, i]),
+            lw=1.3,
+            color=line.get_color(),
+            label=f"u{i + 1} - exact-model force",
+        )
     for ax in (ax1, ax2):
         ax.axvline(t_sw, color="k", ls=":", lw=1.0)
         ax.grid(alpha=0.3)
@@ -134,8 +149,10 @@ def forces_figure(res: Any, summary: dict[str, Any]) -> Any:
     ax1.set_title(f"Control forces ({_title(res, summary)})")
     ax2.set_ylabel("force deviation [mN]")
     ax2.set_xlabel("time [s]")
-    ax2.set_title("deviation from the force an exact model needs along the reference, "
-                  "around the substitution (dotted line)", fontsize=10)
+    ax2.set_title(
+        "deviation from the force an exact model needs along the reference, around the substitution (dotted line)",
+        fontsize=10,
+    )
     fig.tight_layout()
     return fig
 
@@ -173,10 +190,12 @@ def estimation_error_figure(res: Any, summary: dict[str, Any]) -> Any:
 def _drift_panel(ax: Any, drift: dict[str, Any], tpos: np.ndarray, t_sw: float, y_lo: float) -> None:
     """Largest relative error of the single growing window and of the continuous running
     estimate, both open loop on the recorded samples."""
-    running = (f"{drift['running_from_s']:.2f} s)" if drift["running_from_s"] is not None else "-)")
+    running = f"{drift['running_from_s']:.2f} s)" if drift["running_from_s"] is not None else "-)"
     with np.errstate(invalid="ignore"):
-        for key, lab in (("single_history", "single growing window"),
-                         ("continuous_history", "continuous (running estimate from " + running)):
+        for key, lab in (
+            ("single_history", "single growing window"),
+            ("continuous_history", "continuous (running estimate from " + running),
+        ):
             h = np.asarray(drift[key], dtype=float)
             worst = np.where(np.all(np.isnan(h), axis=1), np.nan, np.nanmax(np.where(np.isnan(h), np.inf, h), axis=1))
             ax.plot(tpos, worst, lw=1.2, label=lab)
@@ -191,8 +210,12 @@ def _drift_panel(ax: Any, drift: dict[str, Any], tpos: np.ndarray, t_sw: float, 
 
 
 #: The demo's figures: file name -> ``make(res, summary)``.
-FIGURES = {"estimates.png": estimates_figure, "positions.png": positions_figure, "forces.png": forces_figure,
-           "estimation_error.png": estimation_error_figure}
+FIGURES = {
+    "estimates.png": estimates_figure,
+    "positions.png": positions_figure,
+    "forces.png": forces_figure,
+    "estimation_error.png": estimation_error_figure,
+}
 
 
 def write_figures(res: Any, summary: dict[str, Any], out: Path) -> list[Path]:

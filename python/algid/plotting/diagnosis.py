@@ -46,7 +46,7 @@ def _subsample(N: int, max_points: int = 6000, seed: int = 0) -> np.ndarray:
 def _label(d) -> str:
     if d.best is None:
         return d.effect
-    (k, v), = d.location.items()
+    ((k, v),) = d.location.items()
     return f"with {d.effect} ({'DOF' if k == 'dof' else 'spring'} {v})"
 
 
@@ -67,8 +67,11 @@ def fig_residuals_time(d):
         ax.grid(alpha=0.3)
     axes[0, 0].legend(loc="upper right", fontsize=7, ncol=3)
     axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(f"Acceleration equation error over time (in-band gap {d.gap_before:.3g} -> {d.gap_after:.3g}; "
-                 f"full band {d.gap_before_full:.3g} -> {d.gap_after_full:.3g})", fontsize=10)
+    fig.suptitle(
+        f"Acceleration equation error over time (in-band gap {d.gap_before:.3g} -> {d.gap_after:.3g}; "
+        f"full band {d.gap_before_full:.3g} -> {d.gap_after_full:.3g})",
+        fontsize=10,
+    )
     fig.tight_layout()
     return fig
 
@@ -84,15 +87,26 @@ def fig_residuals_spectrum(d):
     n = P.n
     fig, axes = subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
     for i, ax in enumerate(axes[:, 0]):
-        ax.loglog(f[1:], Sa[1:, i], color=C_MEAS, lw=0.8,
-                  label="measured force" if P.form == "force" and P.forced[i] else "measured acceleration")
+        ax.loglog(
+            f[1:],
+            Sa[1:, i],
+            color=C_MEAS,
+            lw=0.8,
+            label="measured force" if P.form == "force" and P.forced[i] else "measured acceleration",
+        )
         ax.loglog(f[1:], Sb[1:, i], color=C_BEFORE, lw=0.8, label="error, linear model")
         if d.best is not None:
             ax.loglog(f[1:], Sf[1:, i], color=C_AFTER, lw=0.8, label="error, " + _label(d))
         floor = d.where["per_dof"][i]["noise_floor_fullband"] * np.sqrt(np.mean(P.y[:, i] ** 2))
         ax.axhline(floor**2 / (fs / 2), color="k", ls="--", lw=0.8, label="sensor-noise floor")
-        ax.axvspan(f[1], d.band.f_hi, color="#f4d03f", alpha=0.18, lw=0,
-                   label=f"signal band 0-{d.band.f_hi:.3g} Hz (gap scored here)" if i == 0 else None)
+        ax.axvspan(
+            f[1],
+            d.band.f_hi,
+            color="#f4d03f",
+            alpha=0.18,
+            lw=0,
+            label=f"signal band 0-{d.band.f_hi:.3g} Hz (gap scored here)" if i == 0 else None,
+        )
         for fn in d.extra.get("natural_hz", []):
             ax.axvline(fn, color="k", ls=":", lw=0.6)
         ax.set_ylabel(f"DOF {i + 1}\n[(m/s$^2$)$^2$/Hz]")
@@ -157,8 +171,9 @@ def fig_restoring_force(d):
         r = np.mean([-s * force_resid[:, e] for e, s in spring_sides(P.n, j)], axis=0)
         name = f"spring {j}" + (" (k1+k2)" if P.n == 1 else "")
         items.append((f"{name}: binned law explains {expl.get(j, 0):.0%}", dj, k * dj, r, f"linear k = {k:.4g} N/m"))
-    return _force_panels("Restoring force per spring against its deformation", items, "deformation [mm]", 1e3,
-                         "restoring force")
+    return _force_panels(
+        "Restoring force per spring against its deformation", items, "deformation [mm]", 1e3, "restoring force"
+    )
 
 
 def fig_damping_force(d):
@@ -169,10 +184,16 @@ def fig_damping_force(d):
     items = []
     for i in range(P.n):
         v = lin.v[:, i]
-        items.append((f"DOF {i + 1}: binned law explains {expl.get(i + 1, 0):.0%}", v, c[i] * v, -force_resid[:, i],
-                      f"linear c = {c[i]:.3g} N s/m"))
-    return _force_panels("Damping force per mass against its velocity", items, "velocity [m/s]", 1.0,
-                         "damping force")
+        items.append(
+            (
+                f"DOF {i + 1}: binned law explains {expl.get(i + 1, 0):.0%}",
+                v,
+                c[i] * v,
+                -force_resid[:, i],
+                f"linear c = {c[i]:.3g} N s/m",
+            )
+        )
+    return _force_panels("Damping force per mass against its velocity", items, "velocity [m/s]", 1.0, "damping force")
 
 
 def fig_window_parameters(d):
@@ -208,7 +229,7 @@ def fig_ranking(d, top: int = 12):
     fig, ax = subplots(figsize=(8, 0.32 * len(rk) + 1.4))
     labels = []
     for s in rk:
-        (k, v), = s.fit.location.items()
+        ((k, v),) = s.fit.location.items()
         labels.append(f"{s.fit.effect} {'DOF' if k == 'dof' else 'spring'} {v}")
     y = np.arange(len(rk))[::-1]
     ax.barh(y, [s.gap_after for s in rk], color=[C_AFTER if s.significant else C_MEAS for s in rk])

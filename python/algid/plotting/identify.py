@@ -32,7 +32,7 @@ def estimates_figure(res):
             band = 100 * S[:, p] / abs(final)
             style = "-" if v.valid else "--"
             label = v.name if v.status == "ok" else f"{v.name} ({v.status})"
-            line, = ax.plot(t, rel, style, lw=1.2, label=label)
+            (line,) = ax.plot(t, rel, style, lw=1.2, label=label)
             ax.fill_between(t, rel - band, rel + band, color=line.get_color(), alpha=0.15, lw=0)
         ax.axhline(0.0, color="0.4", lw=0.6)
         ax.set_ylabel(f"{title} [% from final]")
@@ -43,7 +43,9 @@ def estimates_figure(res):
             ax.legend(loc="upper right", fontsize=8, ncol=4)
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("end of the data described [s]")
-    fig.suptitle(f"{res.plan.estimator} estimator, {res.samples} samples: estimate / final estimate - 1, one-sigma bands")
+    fig.suptitle(
+        f"{res.plan.estimator} estimator, {res.samples} samples: estimate / final estimate - 1, one-sigma bands"
+    )
     return fig
 
 
@@ -52,7 +54,7 @@ def _limits(ax):
     ys = []
     for line in ax.get_lines()[:-1] if ax.get_lines() else []:
         y = np.asarray(line.get_ydata(), dtype=float)
-        y = y[y.size // 2:]
+        y = y[y.size // 2 :]
         ys.append(y[np.isfinite(y)])
     ys = np.concatenate(ys) if ys else np.array([])
     if ys.size == 0:

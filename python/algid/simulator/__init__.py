@@ -68,7 +68,8 @@ terms, the parameters of a DOF come out biased by 10-60 % instead of a few 1e-4 
 multisine of 1.3-7.1 Hz held at 1 kHz, 0.5-2 s, estimated with the numpy reference
 :func:`algid.reference.estimate`; ``tests/test_simulator.py`` checks both; noise-free
 continuous forcing gives 1e-9, so the remaining few 1e-4 is what a held force costs
-the estimator's smooth quadrature, not the simulator). Positions and velocities are continuous and need no convention. The first sample
+the estimator's smooth quadrature, not the simulator). Positions and velocities are
+continuous and need no convention. The first sample
 (``t = 0``) takes the right limit, the recording starting there. The one-sided limits are
 kept in :attr:`SimulationResult.limits`.
 
@@ -110,7 +111,8 @@ what a run returns and :mod:`.protocol` what a controller provides.
 from __future__ import annotations
 
 import time
-from typing import Any, Callable, Mapping, Optional, Sequence, Union
+from collections.abc import Mapping, Sequence
+from typing import Any, Callable
 
 import numpy as np
 
@@ -144,19 +146,19 @@ def simulate(
     duration_s: float,
     fs_hz: float = 1000.0,
     *,
-    effects: Sequence[Union[Effect, Mapping[str, Any]]] = (),
-    noise_db: Optional[float] = None,
+    effects: Sequence[Effect | Mapping[str, Any]] = (),
+    noise_db: float | None = None,
     noise_on: Sequence[str] = ("accel",),
-    seed: Optional[int] = None,
-    controller: Optional[Controller] = None,
+    seed: int | None = None,
+    controller: Controller | None = None,
     mode: str = "continuous",
     actuator_lag_s: float = 0.0,
-    x0: Optional[np.ndarray] = None,
-    v0: Optional[np.ndarray] = None,
-    progress: Optional[Callable[[float], None]] = None,
-    noise: Optional[SensorNoise] = None,
+    x0: np.ndarray | None = None,
+    v0: np.ndarray | None = None,
+    progress: Callable[[float], None] | None = None,
+    noise: SensorNoise | None = None,
     force_interp: str = "cubic",
-    substeps: Optional[int] = None,
+    substeps: int | None = None,
     encoder_resolution_m: float = 0.0,
 ) -> SimulationResult:
     """Simulate the chain and sample its sensors (conventions in the module docstring).
@@ -209,10 +211,25 @@ def simulate(
     SimulationResult
     """
     wall0 = time.perf_counter()
-    inp = validate_inputs(chain, force, duration_s, fs_hz, effects=effects, noise_db=noise_db, noise_on=noise_on,
-                          seed=seed, noise=noise, controller=controller, mode=mode, actuator_lag_s=actuator_lag_s,
-                          x0=x0, v0=v0, force_interp=force_interp, substeps=substeps,
-                          encoder_resolution_m=encoder_resolution_m)
+    inp = validate_inputs(
+        chain,
+        force,
+        duration_s,
+        fs_hz,
+        effects=effects,
+        noise_db=noise_db,
+        noise_on=noise_on,
+        seed=seed,
+        noise=noise,
+        controller=controller,
+        mode=mode,
+        actuator_lag_s=actuator_lag_s,
+        x0=x0,
+        v0=v0,
+        force_interp=force_interp,
+        substeps=substeps,
+        encoder_resolution_m=encoder_resolution_m,
+    )
     run = build_run(inp, Progress(progress, inp.T))
     unit = inp.noise.unit_noise(inp.T, inp.n) if inp.noise is not None else {}
     noise_scale: dict[str, np.ndarray] = {}
@@ -234,14 +251,31 @@ def simulate(
 
 def _result(inp: RunInputs, samples: Samples, read: Readings) -> SimulationResult:
     return SimulationResult(
-        t=inp.t, x=samples.x, v=samples.v, a=read.a, a_true=samples.a_true, u=read.u, u_applied=samples.u_applied,
-        x_meas=read.x_meas, chain=inp.chain, effects=inp.effects, fs_hz=inp.fs_hz, mode=inp.mode,
-        limits=samples.limits, noise_rms=read.noise_rms, snr_db=read.snr_db)
+        t=inp.t,
+        x=samples.x,
+        v=samples.v,
+        a=read.a,
+        a_true=samples.a_true,
+        u=read.u,
+        u_applied=samples.u_applied,
+        x_meas=read.x_meas,
+        chain=inp.chain,
+        effects=inp.effects,
+        fs_hz=inp.fs_hz,
+        mode=inp.mode,
+        limits=samples.limits,
+        noise_rms=read.noise_rms,
+        snr_db=read.snr_db,
+    )
 
 
 def _stats(run: Run, wall_s: float) -> dict[str, Any]:
     """Integrator statistics of a finished run."""
     effs = run.inputs.effects
-    return {"substeps_per_sample": run.schedule.J, "refined_steps": run.stepper.refined,
-            "v_eps": {effs[q].dof + 1: v for q, v in run.schedule.v_eps.items()},
-            "integrator": "etdrk4" if run.rk else "exact", "wall_s": wall_s}
+    return {
+        "substeps_per_sample": run.schedule.J,
+        "refined_steps": run.stepper.refined,
+        "v_eps": {effs[q].dof + 1: v for q, v in run.schedule.v_eps.items()},
+        "integrator": "etdrk4" if run.rk else "exact",
+        "wall_s": wall_s,
+    }

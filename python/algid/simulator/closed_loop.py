@@ -4,7 +4,7 @@ estimator is fed the measured accelerations and recorded forces of every sample.
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
@@ -25,7 +25,7 @@ class ControlledDynamics:
         self.controller = controller
         self.run = run
         self.params: Any = None
-        self.force: Optional[np.ndarray] = None
+        self.force: np.ndarray | None = None
 
     def __call__(self, t: float, st: np.ndarray) -> np.ndarray:
         n, o_z, plant = self.run.inputs.n, self.run.layout.o_z, self.run.plant
@@ -34,7 +34,7 @@ class ControlledDynamics:
         self.force = u
         out = self.run.B_in @ u
         if plant.nonlinear:
-            out = out + self.run.Bg @ plant.effect_force(t, x, st[n:2 * n])
+            out = out + self.run.Bg @ plant.effect_force(t, x, st[n : 2 * n])
         out[o_z:] = dz
         return out
 
@@ -59,8 +59,8 @@ class ClosedLoop:
         self.out = Samples.empty(inp.T, inp.n)
         self.history = np.zeros((inp.T, inp.n))  # held commands so far (sampled mode)
         self.s = run.initial_state()
-        self.left_rec: Optional[np.ndarray] = None
-        self.left_app: Optional[np.ndarray] = None
+        self.left_rec: np.ndarray | None = None
+        self.left_app: np.ndarray | None = None
 
     def drive(self) -> Samples:
         """Run every sample; the noise-free samples and the readings the controller saw."""
@@ -77,7 +77,7 @@ class ClosedLoop:
             else:
                 self._ode_interval(k, params, pending)
             if self.run.layout.n_w:
-                self.left_app = self.left_rec = self.s[self.run.layout.o_w:o_z].copy()
+                self.left_app = self.left_rec = self.s[self.run.layout.o_w : o_z].copy()
             if not np.all(np.isfinite(self.s)):
                 raise RuntimeError(f"the simulation diverged before t = {inp.t[k + 1]:.6g} s")
         return self.out
@@ -99,20 +99,20 @@ class ClosedLoop:
         """Form the force at ``t_k+``, read the sensors at ``t_k`` and feed the controller."""
         inp, lay, plant, s = self.run.inputs, self.run.layout, self.run.plant, self.s
         n, tk = inp.n, inp.t[k]
-        x, v = s[:n], s[n:2 * n]
+        x, v = s[:n], s[n : 2 * n]
         base = -plant.c * v - plant.K @ x
         if plant.nonlinear:
             base = base + plant.effect_force(tk, x, v)
         x_read = self._position_reading(k, x)
         cmd_r, app_r, pending = self._command(k, x_read)
         if lay.n_w:
-            rec_r = app_r = s[lay.o_w:lay.o_z].copy()
+            rec_r = app_r = s[lay.o_w : lay.o_z].copy()
         else:
             rec_r = cmd_r
         a_r = (app_r + base) * plant.minv
         if k == 0:
             if lay.n_lp:  # the low-pass accelerometers start settled on a(0+)
-                s[lay.o_lp:lay.o_w] = a_r[lay.lp_idx]
+                s[lay.o_lp : lay.o_w] = a_r[lay.lp_idx]
             self.left_rec, self.left_app = rec_r, app_r
         a_l = (self.left_app + base) * plant.minv
         self._record(k, x, v, (a_l, a_r, self.left_rec, rec_r, self.left_app, app_r))
@@ -120,8 +120,9 @@ class ClosedLoop:
         out = self.out
         out.a_meas[k], out.u_meas[k], out.x_meas[k] = a_read, u_read, x_read
         in_ode = inp.controller_in_ode
-        self.controller.observe(k, tk, a_read, u_read, x.copy() if in_ode else x_read,
-                                s[lay.o_z:].copy() if in_ode else None)
+        self.controller.observe(
+            k, tk, a_read, u_read, x.copy() if in_ode else x_read, s[lay.o_z :].copy() if in_ode else None
+        )
         return pending
 
     def _position_reading(self, k: int, x: np.ndarray) -> np.ndarray:
@@ -149,7 +150,7 @@ class ClosedLoop:
         lay, out, s = self.run.layout, self.out, self.s
         am = out.a_true[k].copy()
         if lay.n_lp:
-            am[lay.lp_idx] = s[lay.o_lp:lay.o_w]
+            am[lay.lp_idx] = s[lay.o_lp : lay.o_w]
         am += self.run.bias
         out.a_clean[k] = am
         if "accel" in self.noise_scale:
@@ -189,5 +190,5 @@ class ClosedLoop:
             s = run.stepper.step(q, s, tq, None, zero_w, zero_w, zero_w, self.dynamics, n0 if q == 0 else None)
             tq += run.schedule.lengths_s[q]
         self.s = s
-        u_l, _ = self.controller.continuous(inp.t[k + 1], s[:inp.n], s[o_z:], params)
+        u_l, _ = self.controller.continuous(inp.t[k + 1], s[: inp.n], s[o_z:], params)
         self.left_app = self.left_rec = u_l

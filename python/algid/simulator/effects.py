@@ -4,8 +4,9 @@ parameters (:class:`Effect`), validated when an effect is made."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Mapping, Optional, Union
+from typing import Any
 
 from ..chain import Chain
 
@@ -96,9 +97,11 @@ class Effect:
         missing = [p for p in required if p not in params]
         unknown = [p for p in params if p not in required + optional]
         if missing or unknown:
-            raise ValueError(f"effect {self.name!r} takes params {required}"
-                             + (f" (optional {optional})" if optional else "")
-                             + f"; missing {missing}, unknown {unknown}")
+            raise ValueError(
+                f"effect {self.name!r} takes params {required}"
+                + (f" (optional {optional})" if optional else "")
+                + f"; missing {missing}, unknown {unknown}"
+            )
         clean = {}
         for p, val in params.items():
             try:
@@ -113,12 +116,12 @@ class Effect:
         object.__setattr__(self, "params", clean)
 
     @property
-    def dof(self) -> Optional[int]:
+    def dof(self) -> int | None:
         """0-based DOF index, or None for a spring effect."""
         return self.location["dof"] - 1 if "dof" in self.location else None
 
     @property
-    def spring(self) -> Optional[int]:
+    def spring(self) -> int | None:
         """1-based spring index, or None for a DOF effect."""
         return self.location.get("spring")
 
@@ -133,8 +136,7 @@ class Effect:
             j = self.location["spring"]
             top = n + 1 if chain.boundary == "fixed" else n
             if not 1 <= j <= top:
-                raise ValueError(f"effect {self.name!r}: spring {j} outside 1..{top} "
-                                 f"({chain.boundary} right end)")
+                raise ValueError(f"effect {self.name!r}: spring {j} outside 1..{top} ({chain.boundary} right end)")
 
     def to_dict(self) -> dict:
         """JSON-friendly ``{"effect", "location", "params"}``."""
@@ -155,7 +157,7 @@ def _check_param_ranges(name: str, p: dict) -> None:
         raise ValueError(f"effect 'parameter_drift': rel_change must be > -1, got {p['rel_change']}")
 
 
-def as_effect(e: Union[Effect, Mapping[str, Any]]) -> Effect:
+def as_effect(e: Effect | Mapping[str, Any]) -> Effect:
     """``e`` as an :class:`Effect` (dicts ``{"name" or "effect", "location", "params"}``)."""
     if isinstance(e, Effect):
         return e

@@ -5,8 +5,9 @@ force source resolved and the input delays collected."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Optional, Sequence, Union
+from typing import Any, Callable, Union
 
 import numpy as np
 
@@ -37,15 +38,15 @@ class RunInputs:
     mode: str
     force_interp: str
     actuator_lag_s: float
-    substeps: Optional[int]
+    substeps: int | None
     encoder_resolution_m: float
     effects: tuple[Effect, ...]
-    noise: Optional[SensorNoise]
+    noise: SensorNoise | None
     x0: np.ndarray
     v0: np.ndarray
-    force_samples: Optional[np.ndarray]
-    force_fn: Optional[Callable[[float], np.ndarray]]
-    controller: Optional[Controller]
+    force_samples: np.ndarray | None
+    force_fn: Callable[[float], np.ndarray] | None
+    controller: Controller | None
     delays: np.ndarray
 
     @property
@@ -73,12 +74,26 @@ class RunInputs:
         return self.closed and self.mode == "continuous"
 
 
-def validate_inputs(chain: Chain, force: ForceInput, duration_s: float, fs_hz: float, *,
-                    effects: Sequence[Union[Effect, Mapping[str, Any]]], noise_db: Optional[float],
-                    noise_on: Sequence[str], seed: Optional[int], noise: Optional[SensorNoise],
-                    controller: Optional[Controller], mode: str, actuator_lag_s: float,
-                    x0: Optional[np.ndarray], v0: Optional[np.ndarray], force_interp: str,
-                    substeps: Optional[int], encoder_resolution_m: float) -> RunInputs:
+def validate_inputs(
+    chain: Chain,
+    force: ForceInput,
+    duration_s: float,
+    fs_hz: float,
+    *,
+    effects: Sequence[Effect | Mapping[str, Any]],
+    noise_db: float | None,
+    noise_on: Sequence[str],
+    seed: int | None,
+    noise: SensorNoise | None,
+    controller: Controller | None,
+    mode: str,
+    actuator_lag_s: float,
+    x0: np.ndarray | None,
+    v0: np.ndarray | None,
+    force_interp: str,
+    substeps: int | None,
+    encoder_resolution_m: float,
+) -> RunInputs:
     """Check the arguments of :func:`algid.simulator.simulate` (same names and units) and
     raise ``ValueError`` on the first one that is wrong."""
     if not isinstance(chain, Chain):
@@ -101,13 +116,26 @@ def validate_inputs(chain: Chain, force: ForceInput, duration_s: float, fs_hz: f
     if controller is not None and force is not None:
         raise ValueError("give either a force or a controller, not both")
     U, f_call = _force_source(force, chain.n, T)
-    delays = _input_delays(effs, chain.n, duration_s, actuator_lag_s,
-                           controller is not None and mode == "continuous")
-    return RunInputs(chain=chain, duration_s=duration_s, fs_hz=fs_hz, t=np.arange(T) / fs_hz, mode=mode,
-                     force_interp=force_interp, actuator_lag_s=actuator_lag_s,
-                     substeps=None if substeps is None else int(substeps),
-                     encoder_resolution_m=encoder_resolution_m, effects=effs, noise=noise, x0=x_init, v0=v_init,
-                     force_samples=U, force_fn=f_call, controller=controller, delays=delays)
+    delays = _input_delays(effs, chain.n, duration_s, actuator_lag_s, controller is not None and mode == "continuous")
+    return RunInputs(
+        chain=chain,
+        duration_s=duration_s,
+        fs_hz=fs_hz,
+        t=np.arange(T) / fs_hz,
+        mode=mode,
+        force_interp=force_interp,
+        actuator_lag_s=actuator_lag_s,
+        substeps=None if substeps is None else int(substeps),
+        encoder_resolution_m=encoder_resolution_m,
+        effects=effs,
+        noise=noise,
+        x0=x_init,
+        v0=v_init,
+        force_samples=U,
+        force_fn=f_call,
+        controller=controller,
+        delays=delays,
+    )
 
 
 def _record_length(duration_s: float, fs_hz: float) -> tuple[float, float, int]:
@@ -131,7 +159,7 @@ def _non_negative(name: str, value: float) -> float:
     return value
 
 
-def _checked_effects(chain: Chain, effects: Sequence[Union[Effect, Mapping[str, Any]]]) -> tuple[Effect, ...]:
+def _checked_effects(chain: Chain, effects: Sequence[Effect | Mapping[str, Any]]) -> tuple[Effect, ...]:
     effs = tuple(as_effect(e) for e in effects)
     for e in effs:
         e.check(chain)
@@ -142,7 +170,7 @@ def _checked_effects(chain: Chain, effects: Sequence[Union[Effect, Mapping[str, 
     return effs
 
 
-def _initial_state(n: int, x0: Optional[np.ndarray], v0: Optional[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def _initial_state(n: int, x0: np.ndarray | None, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     x_init = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float).reshape(-1)
     v_init = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).reshape(-1)
     if x_init.size != n or v_init.size != n:
@@ -150,7 +178,7 @@ def _initial_state(n: int, x0: Optional[np.ndarray], v0: Optional[np.ndarray]) -
     return x_init, v_init
 
 
-def _force_source(force: ForceInput, n: int, T: int) -> tuple[Optional[np.ndarray], Optional[Callable]]:
+def _force_source(force: ForceInput, n: int, T: int) -> tuple[np.ndarray | None, Callable | None]:
     """``(samples (T, n), None)``, ``(None, callable)`` or ``(None, None)``."""
     if force is None:
         return None, None
@@ -172,8 +200,9 @@ def _force_source(force: ForceInput, n: int, T: int) -> tuple[Optional[np.ndarra
     return U, None
 
 
-def _input_delays(effs: tuple[Effect, ...], n: int, duration_s: float, actuator_lag_s: float,
-                  controller_in_ode: bool) -> np.ndarray:
+def _input_delays(
+    effs: tuple[Effect, ...], n: int, duration_s: float, actuator_lag_s: float, controller_in_ode: bool
+) -> np.ndarray:
     """Input delay [s] of every DOF (n,), checked against what the integrator supports."""
     delays = np.zeros(n)
     for e in effs:
@@ -183,8 +212,9 @@ def _input_delays(effs: tuple[Effect, ...], n: int, duration_s: float, actuator_
     if has_delay and actuator_lag_s > 0:
         raise ValueError("input_delay together with actuator_lag_s is not supported")
     if has_delay and controller_in_ode:
-        raise ValueError("input_delay inside a continuous-time control loop makes a delay "
-                         "differential equation; use mode='sampled'")
+        raise ValueError(
+            "input_delay inside a continuous-time control loop makes a delay differential equation; use mode='sampled'"
+        )
     if np.any(delays >= duration_s):
         raise ValueError("input_delay must be shorter than the record")
     return delays

@@ -3,8 +3,6 @@ step is computed for the whole record at once and the state is stepped sample by
 
 from __future__ import annotations
 
-from typing import Optional
-
 import numpy as np
 
 from .pieces import peval, recorded_pieces
@@ -53,14 +51,15 @@ def _input_terms(P: list[Propagator], app: np.ndarray, nonlinear: bool) -> tuple
 def _settle_lowpass(run: Run, s: np.ndarray, u0: np.ndarray) -> None:
     """Start the low-pass accelerometers settled on ``a(0+)`` (``u0``: the applied force at 0+)."""
     n, lay, plant = run.inputs.n, run.layout, run.plant
-    f0 = (s[lay.o_w:lay.o_z] if lay.n_w else u0) - plant.c * s[n:2 * n] - plant.K @ s[:n]
+    f0 = (s[lay.o_w : lay.o_z] if lay.n_w else u0) - plant.c * s[n : 2 * n] - plant.K @ s[:n]
     if plant.nonlinear:
-        f0 = f0 + plant.effect_force(0.0, s[:n], s[n:2 * n])
-    s[lay.o_lp:lay.o_w] = (f0 * plant.minv)[lay.lp_idx]
+        f0 = f0 + plant.effect_force(0.0, s[:n], s[n : 2 * n])
+    s[lay.o_lp : lay.o_w] = (f0 * plant.minv)[lay.lp_idx]
 
 
-def _integrate(run: Run, s: np.ndarray, app: np.ndarray, Wf: np.ndarray, Wh: Optional[np.ndarray],
-               W2: Optional[np.ndarray]) -> np.ndarray:
+def _integrate(
+    run: Run, s: np.ndarray, app: np.ndarray, Wf: np.ndarray, Wh: np.ndarray | None, W2: np.ndarray | None
+) -> np.ndarray:
     """States (T, m) at the sample instants."""
     inp, P, lens = run.inputs, run.stepper.P, run.schedule.lengths_s
     T, J = inp.T, run.schedule.J
@@ -91,11 +90,11 @@ def _samples(run: Run, S: np.ndarray, rec: np.ndarray, app_l: np.ndarray, app_r:
     their one-sided limits (sampling convention of :mod:`algid.simulator`)."""
     inp, lay, plant = run.inputs, run.layout, run.plant
     n = inp.n
-    X, V = S[:, :n], S[:, n:2 * n]
+    X, V = S[:, :n], S[:, n : 2 * n]
     g_all = plant.effect_force(inp.t, X, V) if plant.nonlinear else 0.0
     if lay.n_w:
-        app_l = app_r = S[:, lay.o_w:lay.o_z]
-        rec_l = rec_r = S[:, lay.o_w:lay.o_z]
+        app_l = app_r = S[:, lay.o_w : lay.o_z]
+        rec_l = rec_r = S[:, lay.o_w : lay.o_z]
     else:
         rec_r = rec[:, 0]
         rec_l = np.empty((inp.T, n))
@@ -107,8 +106,14 @@ def _samples(run: Run, S: np.ndarray, rec: np.ndarray, app_l: np.ndarray, app_r:
     A_true = 0.5 * (lim["a_minus"] + lim["a_plus"])
     A_clean = A_true.copy()
     if lay.n_lp:
-        A_clean[:, lay.lp_idx] = S[:, lay.o_lp:lay.o_w]
+        A_clean[:, lay.lp_idx] = S[:, lay.o_lp : lay.o_w]
     A_clean += run.bias
-    return Samples(x=X.copy(), v=V.copy(), a_true=A_true, a_clean=A_clean, u_rec=0.5 * (rec_l + rec_r),
-                   u_applied=0.5 * (app_l + app_r), limits=lim)
-
+    return Samples(
+        x=X.copy(),
+        v=V.copy(),
+        a_true=A_true,
+        a_clean=A_clean,
+        u_rec=0.5 * (rec_l + rec_r),
+        u_applied=0.5 * (app_l + app_r),
+        limits=lim,
+    )

@@ -4,8 +4,6 @@ sampled from a callable) and as applied to each DOF behind its input delay."""
 
 from __future__ import annotations
 
-from typing import Union
-
 import numpy as np
 
 from .inputs import RunInputs
@@ -13,13 +11,18 @@ from .inputs import RunInputs
 __all__ = ["InputRouting", "peval", "recorded_pieces", "shift"]
 
 
-def shift(c: np.ndarray, tau0: Union[float, np.ndarray]) -> np.ndarray:
+def shift(c: np.ndarray, tau0: float | np.ndarray) -> np.ndarray:
     """Re-expand cubic pieces ``c[..., j, :]`` (coefficient of ``tau^j``) about ``tau0``."""
     c0, c1, c2, c3 = c[..., 0, :], c[..., 1, :], c[..., 2, :], c[..., 3, :]
-    return np.stack([c0 + tau0 * (c1 + tau0 * (c2 + tau0 * c3)),
-                     c1 + tau0 * (2.0 * c2 + 3.0 * tau0 * c3),
-                     c2 + 3.0 * tau0 * c3,
-                     c3], axis=-2)
+    return np.stack(
+        [
+            c0 + tau0 * (c1 + tau0 * (c2 + tau0 * c3)),
+            c1 + tau0 * (2.0 * c2 + 3.0 * tau0 * c3),
+            c2 + 3.0 * tau0 * c3,
+            c3,
+        ],
+        axis=-2,
+    )
 
 
 def peval(c: np.ndarray, tau: float) -> np.ndarray:
@@ -101,7 +104,7 @@ class InputRouting:
             for i in range(n):
                 src = kk + self.offset[q, i]
                 ok = src >= 0
-                out[ok, q, :, i] = shift(recp[src[ok], :, i:i + 1], self.tau[q, i])[..., 0]
+                out[ok, q, :, i] = shift(recp[src[ok], :, i : i + 1], self.tau[q, i])[..., 0]
         return out
 
     def held(self, history: np.ndarray, k: int) -> np.ndarray:

@@ -4,7 +4,8 @@ switched-on mechanical effects, in the integrator's scalar form and vectorised o
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping, Optional, Sequence, Union
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -27,14 +28,14 @@ class Plant:
         n = self.n
         vals = state.tolist()
         xs = vals[:n]
-        vs = vals[n:2 * n]
+        vs = vals[n : 2 * n]
         f = [0.0] * n
         for kind, i, a, fs, vs_, eps in self.dof_terms:
             vi = vs[i]
             if kind == "fo":
                 f[i] += a
             elif kind == "cf":
-                level = a if fs == a else a + (fs - a) * math.exp(-(vi / vs_) ** 2)
+                level = a if fs == a else a + (fs - a) * math.exp(-((vi / vs_) ** 2))
                 f[i] -= level * math.tanh(vi / eps)
             else:
                 f[i] -= a * vi * abs(vi)
@@ -56,8 +57,7 @@ class Plant:
                 f[j - 1] += s
         return np.array(f)
 
-    def __init__(self, chain: Chain, effects: Sequence[Effect], duration_s: float,
-                 v_eps: dict[int, float]) -> None:
+    def __init__(self, chain: Chain, effects: Sequence[Effect], duration_s: float, v_eps: dict[int, float]) -> None:
         n = chain.n
         _, _, K = chain.matrices()
         self.n = n
@@ -79,7 +79,7 @@ class Plant:
             elif e.name == "force_offset":
                 self.dof_terms.append(("fo", e.dof, p["offset"], 0.0, 0.0, 0.0))
 
-        def rows(kind: str) -> tuple[Optional[np.ndarray], list[Effect]]:
+        def rows(kind: str) -> tuple[np.ndarray | None, list[Effect]]:
             sel = [e for e in effects if e.name == kind]
             return (D[[e.spring - 1 for e in sel]] if sel else None), sel
 
@@ -89,15 +89,15 @@ class Plant:
         self.cl_gap = np.array([e.params["gap"] for e in cl])
         self.cl_k = np.array([e.params["stiffness"] for e in cl])
         self.dr_D, dr = rows("parameter_drift")
-        self.dr_rate = np.array([chain.stiffness[e.spring - 1] * e.params["rel_change"] / duration_s
-                                 for e in dr])
+        self.dr_rate = np.array([chain.stiffness[e.spring - 1] * e.params["rel_change"] / duration_s for e in dr])
         self.ad_D, ad = rows("amplitude_damping")
         self.ad_c = np.array([e.params["c_amp"] for e in ad])
         self.spring_terms: list[tuple[str, int, float, float]] = (
             [("cs", e.spring - 1, e.params["k3"], 0.0) for e in cs]
             + [("cl", e.spring - 1, e.params["gap"], e.params["stiffness"]) for e in cl]
             + [("dr", e.spring - 1, r, 0.0) for e, r in zip(dr, self.dr_rate)]
-            + [("ad", e.spring - 1, e.params["c_amp"], 0.0) for e in ad])
+            + [("ad", e.spring - 1, e.params["c_amp"], 0.0) for e in ad]
+        )
         self.nonlinear = bool(self.dof_terms or cs or cl or dr or ad)
         self.has_switches = bool(cl) or any(kind == "cf" for kind, *_ in self.dof_terms)
 
@@ -114,7 +114,7 @@ class Plant:
                 out.append(abs(d) > gap)
         return tuple(out)
 
-    def effect_force(self, t: Union[float, np.ndarray], x: np.ndarray, v: np.ndarray) -> np.ndarray:
+    def effect_force(self, t: float | np.ndarray, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Sum of the effect forces [N] on each mass; ``x, v`` (n,) or (T, n) with ``t``
         scalar or (T,)."""
         if np.ndim(x) == 1:
@@ -125,7 +125,7 @@ class Plant:
             if kind == "fo":
                 f[..., i] += a
             elif kind == "cf":
-                f[..., i] -= (a + (fs - a) * np.exp(-(vi / vs_) ** 2)) * np.tanh(vi / eps)
+                f[..., i] -= (a + (fs - a) * np.exp(-((vi / vs_) ** 2))) * np.tanh(vi / eps)
             else:
                 f[..., i] -= a * vi * np.abs(vi)
         if self.cs_D is not None:
@@ -144,8 +144,14 @@ class Plant:
         return f
 
 
-def effect_forces(chain: Chain, effects: Sequence[Union[Effect, Mapping[str, Any]]], t: np.ndarray,
-                  x: np.ndarray, v: np.ndarray, duration_s: Optional[float] = None) -> np.ndarray:
+def effect_forces(
+    chain: Chain,
+    effects: Sequence[Effect | Mapping[str, Any]],
+    t: np.ndarray,
+    x: np.ndarray,
+    v: np.ndarray,
+    duration_s: float | None = None,
+) -> np.ndarray:
     """The forces [N] (T, n) the effects put on the masses along a prescribed motion
     ``x`` [m], ``v`` [m/s] (T, n) at times ``t`` [s] (T,): what the simulator adds to eq. 1.
     A device driven in displacement needs ``M a + C v + K x - effect_forces(...)`` from its
@@ -154,8 +160,11 @@ def effect_forces(chain: Chain, effects: Sequence[Union[Effect, Mapping[str, Any
     for e in effs:
         e.check(chain)
     duration = float(t[-1] - t[0]) if duration_s is None else float(duration_s)
-    v_eps = {q: e.params.get("v_eps", COULOMB_V_EPS) for q, e in enumerate(effs)
-             if e.name in ("coulomb_friction", "stribeck_friction")}
-    return Plant(chain, effs, duration, v_eps).effect_force(np.asarray(t, dtype=float), np.asarray(x, dtype=float),
-                                                             np.asarray(v, dtype=float))
-
+    v_eps = {
+        q: e.params.get("v_eps", COULOMB_V_EPS)
+        for q, e in enumerate(effs)
+        if e.name in ("coulomb_friction", "stribeck_friction")
+    }
+    return Plant(chain, effs, duration, v_eps).effect_force(
+        np.asarray(t, dtype=float), np.asarray(x, dtype=float), np.asarray(v, dtype=float)
+    )

@@ -3,7 +3,7 @@ the simulator calls these methods and nothing else of a controller."""
 
 from __future__ import annotations
 
-from typing import Any, Optional, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -18,19 +18,21 @@ class Controller(Protocol):
     :meth:`log`; :meth:`reference_motion` sets the noise level of a noisy loop beforehand.
     """
 
-    def start(self, chain_n: int, dt: float, boundary: str = "fixed", samples: int = 0,
-              mode: str = "continuous") -> None:
+    def start(
+        self, chain_n: int, dt: float, boundary: str = "fixed", samples: int = 0, mode: str = "continuous"
+    ) -> None:
         """Prepare a run of ``samples`` samples every ``dt`` [s] on a ``chain_n``-DOF chain."""
 
-    def params_for_sample(self, k: int, z: Optional[np.ndarray] = None) -> Any:
+    def params_for_sample(self, k: int, z: np.ndarray | None = None) -> Any:
         """The parameters the law uses on ``[t_k, t_{k+1})`` (``z``: the controller states
         at ``t_k`` in continuous mode); passed back to :meth:`ContinuousController.continuous`."""
 
     def sampled_force(self, k: int, t: float, x_meas: np.ndarray) -> np.ndarray:
         """Force command [N] (n,) held on ``[t_k, t_{k+1})`` from measured positions [m]."""
 
-    def observe(self, k: int, t: float, accel: np.ndarray, force: np.ndarray, x_meas: np.ndarray,
-                z: Optional[np.ndarray] = None) -> None:
+    def observe(
+        self, k: int, t: float, accel: np.ndarray, force: np.ndarray, x_meas: np.ndarray, z: np.ndarray | None = None
+    ) -> None:
         """Sample ``k`` as measured: accelerations [m/s^2], recorded forces [N], positions [m]
         (and the controller states ``z`` in continuous mode)."""
 

@@ -4,7 +4,7 @@ driver hands to the sensors (:class:`Samples`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
@@ -62,9 +62,9 @@ class SimulationResult:
     limits: dict[str, np.ndarray] = field(default_factory=dict)
     noise_rms: dict[str, np.ndarray] = field(default_factory=dict)
     snr_db: dict[str, np.ndarray] = field(default_factory=dict)
-    x_ref: Optional[np.ndarray] = None
-    estimates: Optional[dict[str, np.ndarray]] = None
-    controller_log: Optional[dict[str, Any]] = None
+    x_ref: np.ndarray | None = None
+    estimates: dict[str, np.ndarray] | None = None
+    controller_log: dict[str, Any] | None = None
     stats: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -105,14 +105,26 @@ class Samples:
     u_rec: np.ndarray
     u_applied: np.ndarray
     limits: dict[str, np.ndarray]
-    a_meas: Optional[np.ndarray] = None
-    u_meas: Optional[np.ndarray] = None
-    x_meas: Optional[np.ndarray] = None
+    a_meas: np.ndarray | None = None
+    u_meas: np.ndarray | None = None
+    x_meas: np.ndarray | None = None
 
     @classmethod
-    def empty(cls, T: int, n: int) -> "Samples":
+    def empty(cls, T: int, n: int) -> Samples:
         """Room for a closed loop's ``T`` samples of ``n`` DOF, filled sample by sample."""
+
         def room() -> np.ndarray:
             return np.empty((T, n))
-        return cls(x=room(), v=room(), a_true=room(), a_clean=room(), u_rec=room(), u_applied=room(),
-                   limits={name: room() for name in LIMIT_NAMES}, a_meas=room(), u_meas=room(), x_meas=room())
+
+        return cls(
+            x=room(),
+            v=room(),
+            a_true=room(),
+            a_clean=room(),
+            u_rec=room(),
+            u_applied=room(),
+            limits={name: room() for name in LIMIT_NAMES},
+            a_meas=room(),
+            u_meas=room(),
+            x_meas=room(),
+        )

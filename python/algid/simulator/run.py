@@ -5,7 +5,7 @@ progress report."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Optional
+from typing import Callable
 
 import numpy as np
 
@@ -22,7 +22,7 @@ __all__ = ["Progress", "Run", "build_run"]
 class Progress:
     """Reports the fraction of the samples done about every 1 % to ``callback`` (if any)."""
 
-    def __init__(self, callback: Optional[Callable[[float], None]], samples: int) -> None:
+    def __init__(self, callback: Callable[[float], None] | None, samples: int) -> None:
         self.callback = callback
         self.samples = samples
         self.every = max(1, samples // 100)
@@ -63,7 +63,7 @@ class Run:
         n = self.inputs.n
         s = np.zeros(self.layout.size)
         s[:n] = self.inputs.x0
-        s[n:2 * n] = self.inputs.v0
+        s[n : 2 * n] = self.inputs.v0
         return s
 
 
@@ -78,6 +78,15 @@ def build_run(inp: RunInputs, report: Progress) -> Run:
     Lm, Bg, B_in = linear_system(plant, lay, inp.actuator_lag_s)
     rk = plant.nonlinear or inp.controller_in_ode
     stepper = Stepper(Lm, B_in, None if inp.controller_in_ode else Bg, sched.lengths_s, inp.fs_hz, rk, plant)
-    return Run(inputs=inp, schedule=sched, plant=plant, layout=lay, Bg=Bg, B_in=B_in, stepper=stepper,
-               routing=InputRouting(sched.bounds, inp.delays, inp.fs_hz, inp.h),
-               bias=accelerometer_bias(inp.effects, inp.n), report=report)
+    return Run(
+        inputs=inp,
+        schedule=sched,
+        plant=plant,
+        layout=lay,
+        Bg=Bg,
+        B_in=B_in,
+        stepper=stepper,
+        routing=InputRouting(sched.bounds, inp.delays, inp.fs_hz, inp.h),
+        bias=accelerometer_bias(inp.effects, inp.n),
+        report=report,
+    )

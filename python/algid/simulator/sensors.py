@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
@@ -15,8 +14,16 @@ from .effects import Effect
 from .protocol import Controller
 from .result import Samples
 
-__all__ = ["CHANNELS", "Readings", "SensorNoise", "accelerometer_bias", "closed_loop_noise_scale", "encoder",
-           "nominal_closed_loop_rms", "readings"]
+__all__ = [
+    "CHANNELS",
+    "Readings",
+    "SensorNoise",
+    "accelerometer_bias",
+    "closed_loop_noise_scale",
+    "encoder",
+    "nominal_closed_loop_rms",
+    "readings",
+]
 
 #: The sensor kinds, in the order their noise streams are drawn.
 CHANNELS = ("accel", "force", "position")
@@ -38,7 +45,7 @@ class SensorNoise:
 
     snr_db: float
     channels: tuple[str, ...] = ("accel",)
-    seed: Optional[int] = None
+    seed: int | None = None
 
     def __post_init__(self) -> None:
         if not math.isfinite(float(self.snr_db)):
@@ -97,8 +104,9 @@ def nominal_closed_loop_rms(chain: Chain, controller: Controller, t: np.ndarray)
     return {"position": rms(xs), "accel": rms(xdd), "force": rms(u)}
 
 
-def closed_loop_noise_scale(chain: Chain, controller: Controller, noise: Optional[SensorNoise],
-                            t: np.ndarray) -> dict[str, np.ndarray]:
+def closed_loop_noise_scale(
+    chain: Chain, controller: Controller, noise: SensorNoise | None, t: np.ndarray
+) -> dict[str, np.ndarray]:
     """Noise RMS per noisy channel kind (n,) of a closed loop, from its nominal signals
     (the noise has to exist while the loop runs); empty without noise."""
     if noise is None:
@@ -119,8 +127,13 @@ class Readings:
     snr_db: dict[str, np.ndarray]
 
 
-def readings(samples: Samples, unit: dict[str, np.ndarray], noise: Optional[SensorNoise],
-             noise_scale: dict[str, np.ndarray], encoder_resolution_m: float) -> Readings:
+def readings(
+    samples: Samples,
+    unit: dict[str, np.ndarray],
+    noise: SensorNoise | None,
+    noise_scale: dict[str, np.ndarray],
+    encoder_resolution_m: float,
+) -> Readings:
     """The sensor readings of a run. A closed loop measured while it ran (``samples.a_meas``
     etc., noise of RMS ``noise_scale``); an open loop gets noise of ``noise.ratio`` times
     each clean channel's RMS over the whole record. ``unit``: unit-RMS noise per channel kind."""

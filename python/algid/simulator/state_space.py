@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from math import factorial
-from typing import Callable, Optional
+from typing import Callable
 
 import numpy as np
 
@@ -29,9 +29,9 @@ def phi(Z: np.ndarray, p: int) -> list[np.ndarray]:
     big = np.zeros(((p + 1) * m, (p + 1) * m))
     big[:m, :m] = Z
     for j in range(p):
-        big[j * m:(j + 1) * m, (j + 1) * m:(j + 2) * m] = np.eye(m)
+        big[j * m : (j + 1) * m, (j + 1) * m : (j + 2) * m] = np.eye(m)
     Eb = expm(big)
-    return [Eb[:m, j * m:(j + 1) * m] for j in range(p + 1)]
+    return [Eb[:m, j * m : (j + 1) * m] for j in range(p + 1)]
 
 
 class Propagator:
@@ -42,8 +42,7 @@ class Propagator:
     Matthews 2002) for the nonlinear part, which enters as ``Bn @ N(t, s)``.
     """
 
-    def __init__(self, L: np.ndarray, B: np.ndarray, ell: float, rk: bool,
-                 Bn: Optional[np.ndarray] = None) -> None:
+    def __init__(self, L: np.ndarray, B: np.ndarray, ell: float, rk: bool, Bn: np.ndarray | None = None) -> None:
         ph = phi(ell * L, 4)
         self.ell = ell
         self.E = ph[0]
@@ -64,8 +63,16 @@ class Propagator:
             self.E2Q = np.hstack((self.E2, self.Q))
             self.EF = np.hstack((self.E, self.F1, self.F2, self.F3))
 
-    def step(self, s: np.ndarray, t0: float, wf: np.ndarray, wh: np.ndarray, w2: np.ndarray,
-             N: Callable[[float, np.ndarray], np.ndarray], n0: Optional[np.ndarray] = None) -> np.ndarray:
+    def step(
+        self,
+        s: np.ndarray,
+        t0: float,
+        wf: np.ndarray,
+        wh: np.ndarray,
+        w2: np.ndarray,
+        N: Callable[[float, np.ndarray], np.ndarray],
+        n0: np.ndarray | None = None,
+    ) -> np.ndarray:
         """One ETDRK4 step from ``s`` at ``t0``; ``wf``, ``wh`` are the exact polynomial-input
         contributions over the step and its first half, ``w2 = wf - E2 wh`` over the second
         half; ``n0 = N(t0, s)`` if already known."""
@@ -122,8 +129,13 @@ class StateLayout:
 def state_layout(inp: RunInputs, n_z: int) -> StateLayout:
     """The layout of a run with ``n_z`` controller states."""
     lp = sorted((e.dof, 2 * np.pi * e.params["cutoff_hz"]) for e in inp.effects if e.name == "sensor_lowpass")
-    return StateLayout(n=inp.n, lp_idx=np.array([i for i, _ in lp], dtype=int), lp_wc=np.array([w for _, w in lp]),
-                       n_w=inp.n if inp.actuator_lag_s > 0 else 0, n_z=n_z)
+    return StateLayout(
+        n=inp.n,
+        lp_idx=np.array([i for i, _ in lp], dtype=int),
+        lp_wc=np.array([w for _, w in lp]),
+        n_w=inp.n if inp.actuator_lag_s > 0 else 0,
+        n_z=n_z,
+    )
 
 
 def linear_system(plant: Plant, lay: StateLayout, actuator_lag_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -133,13 +145,13 @@ def linear_system(plant: Plant, lay: StateLayout, actuator_lag_s: float) -> tupl
     n, minv = lay.n, plant.minv
     o_lp, o_w, o_z, lp_idx, lp_wc = lay.o_lp, lay.o_w, lay.o_z, lay.lp_idx, lay.lp_wc
     Lm = np.zeros((lay.size, lay.size))
-    Lm[:n, n:2 * n] = np.eye(n)
-    Lm[n:2 * n, :n] = -minv[:, None] * plant.K
-    Lm[n:2 * n, n:2 * n] = -np.diag(minv * plant.c)
+    Lm[:n, n : 2 * n] = np.eye(n)
+    Lm[n : 2 * n, :n] = -minv[:, None] * plant.K
+    Lm[n : 2 * n, n : 2 * n] = -np.diag(minv * plant.c)
     Bg = np.zeros((lay.size, n))
-    Bg[n:2 * n] = np.diag(minv)
+    Bg[n : 2 * n] = np.diag(minv)
     if lay.n_w:
-        Lm[n:2 * n, o_w:o_z] = np.diag(minv)
+        Lm[n : 2 * n, o_w:o_z] = np.diag(minv)
         Lm[o_w:o_z, o_w:o_z] = -np.eye(n) / actuator_lag_s
     if lay.n_lp:
         Lm[o_lp:o_w] = lp_wc[:, None] * Lm[n + lp_idx]
@@ -152,8 +164,15 @@ def linear_system(plant: Plant, lay: StateLayout, actuator_lag_s: float) -> tupl
     return Lm, Bg, B_in
 
 
-def _propagators(Lm: np.ndarray, B_in: np.ndarray, lengths_s: list[float], fs_hz: float, rk: bool,
-                 Bn: Optional[np.ndarray], parts: int = 1) -> list[Propagator]:
+def _propagators(
+    Lm: np.ndarray,
+    B_in: np.ndarray,
+    lengths_s: list[float],
+    fs_hz: float,
+    rk: bool,
+    Bn: np.ndarray | None,
+    parts: int = 1,
+) -> list[Propagator]:
     """One propagator per sub-interval, each of its length over ``parts`` (shared between
     sub-intervals of the same length)."""
     by_length: dict[float, Propagator] = {}
@@ -181,18 +200,36 @@ class Stepper:
 
     REFINE = 8
 
-    def __init__(self, Lm: np.ndarray, B_in: np.ndarray, Bn: Optional[np.ndarray], lengths_s: list[float],
-                 fs_hz: float, rk: bool, plant: Plant) -> None:
+    def __init__(
+        self,
+        Lm: np.ndarray,
+        B_in: np.ndarray,
+        Bn: np.ndarray | None,
+        lengths_s: list[float],
+        fs_hz: float,
+        rk: bool,
+        plant: Plant,
+    ) -> None:
         self.P = _propagators(Lm, B_in, lengths_s, fs_hz, rk, Bn)
         self.P_fine = _propagators(Lm, B_in, lengths_s, fs_hz, True, Bn, self.REFINE) if plant.has_switches else []
         self.plant = plant
         #: steps redone in sub-steps so far
         self.refined = 0
-        self._last_state: Optional[np.ndarray] = None  # the latest state reached without a switch
+        self._last_state: np.ndarray | None = None  # the latest state reached without a switch
         self._last_switch: tuple = ()  # its switch state
 
-    def step(self, q: int, s0: np.ndarray, t0: float, coef: Optional[np.ndarray], wf: np.ndarray,
-             wh: np.ndarray, w2: np.ndarray, N: Nonlinear, n0: Optional[np.ndarray] = None) -> np.ndarray:
+    def step(
+        self,
+        q: int,
+        s0: np.ndarray,
+        t0: float,
+        coef: np.ndarray | None,
+        wf: np.ndarray,
+        wh: np.ndarray,
+        w2: np.ndarray,
+        N: Nonlinear,
+        n0: np.ndarray | None = None,
+    ) -> np.ndarray:
         """One ETDRK4 step over sub-interval ``q`` from ``s0`` at ``t0`` [s], redone finely
         across a switch; ``coef`` (4, n) is the polynomial input on the sub-interval (None:
         no input), ``wf, wh, w2`` its contributions (:meth:`Propagator.step`)."""
@@ -207,8 +244,17 @@ class Stepper:
         self.refined += 1
         return self._refined(q, s0, t0, coef, wf, wh, w2, N)
 
-    def _refined(self, q: int, s0: np.ndarray, t0: float, coef: Optional[np.ndarray], wf: np.ndarray,
-                 wh: np.ndarray, w2: np.ndarray, N: Nonlinear) -> np.ndarray:
+    def _refined(
+        self,
+        q: int,
+        s0: np.ndarray,
+        t0: float,
+        coef: np.ndarray | None,
+        wf: np.ndarray,
+        wh: np.ndarray,
+        w2: np.ndarray,
+        N: Nonlinear,
+    ) -> np.ndarray:
         Pf = self.P_fine[q]
         ell = Pf.ell
         s1 = s0

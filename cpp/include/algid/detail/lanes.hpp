@@ -60,8 +60,8 @@ struct LaneOps {
   /// The SIMD register type that holds PW lanes (W is a multiple of PW when vectorised).
   using Packet = typename Eigen::internal::find_best_packet<Scalar, W>::type;
   static constexpr int PW = Eigen::internal::unpacket_traits<Packet>::size;
-  static constexpr bool kVector =
-      PW > 1 && W % PW == 0 && static_cast<bool>(Eigen::internal::packet_traits<Scalar>::Vectorizable);
+  static constexpr bool kVector = PW > 1 && W % PW == 0 &&
+                                  static_cast<bool>(Eigen::internal::packet_traits<Scalar>::Vectorizable);
 
   /// a * b + c, fused where the build has FMA (one rounding), else multiply then add.
   static L madd(const L& a, const L& b, const L& c) noexcept {
@@ -69,8 +69,8 @@ struct LaneOps {
       using namespace Eigen::internal;
       L out;
       for (int k = 0; k < W; k += PW)
-        pstoreu(out.data() + k, pmadd(ploadu<Packet>(a.data() + k), ploadu<Packet>(b.data() + k),
-                                      ploadu<Packet>(c.data() + k)));
+        pstoreu(out.data() + k,
+                pmadd(ploadu<Packet>(a.data() + k), ploadu<Packet>(b.data() + k), ploadu<Packet>(c.data() + k)));
       return out;
     } else {
       return a * b + c;
@@ -79,18 +79,18 @@ struct LaneOps {
 
 // (a OP b) ? x : y, lane by lane; comparisons with NaN are false.
 #define ALGID_LANE_SELECT(NAME, PCMP, OP)                                                                   \
-  static L NAME(const L& a, const L& b, const L& x, const L& y) noexcept {                                 \
-    L out;                                                                                                   \
-    if constexpr (kVector) {                                                                                 \
-      using namespace Eigen::internal;                                                                       \
-      for (int k = 0; k < W; k += PW) {                                                                      \
-        const Packet mask = PCMP(ploadu<Packet>(a.data() + k), ploadu<Packet>(b.data() + k));                \
-        pstoreu(out.data() + k, pselect(mask, ploadu<Packet>(x.data() + k), ploadu<Packet>(y.data() + k)));  \
-      }                                                                                                      \
-    } else {                                                                                                 \
-      for (int k = 0; k < W; ++k) out(k) = a(k) OP b(k) ? x(k) : y(k);                                       \
-    }                                                                                                        \
-    return out;                                                                                              \
+  static L NAME(const L& a, const L& b, const L& x, const L& y) noexcept {                                  \
+    L out;                                                                                                  \
+    if constexpr (kVector) {                                                                                \
+      using namespace Eigen::internal;                                                                      \
+      for (int k = 0; k < W; k += PW) {                                                                     \
+        const Packet mask = PCMP(ploadu<Packet>(a.data() + k), ploadu<Packet>(b.data() + k));               \
+        pstoreu(out.data() + k, pselect(mask, ploadu<Packet>(x.data() + k), ploadu<Packet>(y.data() + k))); \
+      }                                                                                                     \
+    } else {                                                                                                \
+      for (int k = 0; k < W; ++k) out(k) = a(k) OP b(k) ? x(k) : y(k);                                      \
+    }                                                                                                       \
+    return out;                                                                                             \
   }
   /// (a < b) ? x : y, lane by lane (false where either is NaN).
   ALGID_LANE_SELECT(if_less, pcmp_lt, <)
@@ -131,7 +131,9 @@ struct LaneOps {
  private:
 #if ALGID_LANE_SHUFFLE
   // Lane k of the result: from_previous (Up) or from_next, as indices into (x, y).
-  static constexpr int source(bool up, int k) noexcept { return up ? (k == 0 ? 2 * W - 1 : k - 1) : (k == W - 1 ? W : k + 1); }
+  static constexpr int source(bool up, int k) noexcept {
+    return up ? (k == 0 ? 2 * W - 1 : k - 1) : (k == W - 1 ? W : k + 1);
+  }
   // Lanes of the concatenation (x, y) picked by source(), in registers.
   template <bool Up, std::size_t... K>
   static L shuffled(const L& x, const L& y, std::index_sequence<K...>) noexcept {

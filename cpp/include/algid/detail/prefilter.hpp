@@ -57,9 +57,7 @@ class ButterworthLowpass {
   }
 
   /// Zero the states. @realtime no allocation, no throw
-  void reset() noexcept {
-    state_.fill({});
-  }
+  void reset() noexcept { state_.fill({}); }
 
   /// Filter one sample of every channel, `in` -> `out` (may alias).
   /// @realtime no allocation, no throw
