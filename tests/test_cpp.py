@@ -1,4 +1,5 @@
-"""Build the C++ tests with CMake and run each binary: one pytest command runs everything.
+"""Build the C++ tests with CMake and run each binary, in a Release build and again under
+AddressSanitizer and UndefinedBehaviorSanitizer: one pytest command runs everything.
 
 Needs cmake and Eigen (system libeigen3-dev, or cmeel-eigen from the ``test`` extra).
 """
@@ -10,6 +11,7 @@ import re
 import shutil
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -32,28 +34,35 @@ BINARIES = [
 WIDE_BINARIES = [f"{name}_{level}" for level in ("v3", "v4") for name in ("test_lanes", "test_sizes")]
 
 
-@pytest.fixture(scope="session")
-def cpp_build() -> Path:
+SANITIZED_BUILD = REPO / "build" / "cpp-tests-sanitized"
+
+
+def _configure_and_build(build: Path, *options: str) -> Path:
     cmake = shutil.which("cmake")
     if cmake is None:
         pytest.fail("cmake not found: install the test extra (pip install '.[test]')")
-    cmd = [
-        cmake,
-        "-S",
-        str(REPO),
-        "-B",
-        str(BUILD),
-        "-DALGID_BUILD_TESTS=ON",
-        "-DCMAKE_BUILD_TYPE=Release",
-        f"-DPython_EXECUTABLE={sys.executable}",
-    ]
-    if shutil.which("ninja") and not (BUILD / "CMakeCache.txt").exists():
+    cmd = [cmake, "-S", str(REPO), "-B", str(build), "-DALGID_BUILD_TESTS=ON", f"-DPython_EXECUTABLE={sys.executable}"]
+    cmd += list(options)
+    if shutil.which("ninja") and not (build / "CMakeCache.txt").exists():
         cmd += ["-G", "Ninja"]
-    for step in (cmd, [cmake, "--build", str(BUILD), "-j", str(os.cpu_count() or 2)]):
+    for step in (cmd, [cmake, "--build", str(build), "-j", str(os.cpu_count() or 2)]):
         proc = subprocess.run(step, capture_output=True, text=True)
         if proc.returncode != 0:
             pytest.fail(f"{' '.join(step[:3])} failed:\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}")
-    return BUILD
+    return build
+
+
+@pytest.fixture(scope="session")
+def cpp_build() -> Path:
+    return _configure_and_build(BUILD, "-DCMAKE_BUILD_TYPE=Release")
+
+
+@pytest.fixture(scope="session")
+def sanitized_build() -> Path:
+    """The same tests under AddressSanitizer and UndefinedBehaviorSanitizer, in a Debug build
+    (-O0, Eigen's and the library's assertions on): it compiles in about 3.5 minutes on 2 cores,
+    where -O1 took several times longer for the heaviest tests."""
+    return _configure_and_build(SANITIZED_BUILD, "-DCMAKE_BUILD_TYPE=Debug", "-DALGID_SANITIZE=ON")
 
 
 def _binary(build: Path, name: str) -> Path | None:
@@ -63,9 +72,10 @@ def _binary(build: Path, name: str) -> Path | None:
     return None
 
 
-@pytest.mark.parametrize("name", BINARIES + WIDE_BINARIES)
-def test_cpp_binary(cpp_build: Path, name: str) -> None:
-    exe = _binary(cpp_build, name)
+def _locate(build: Path, name: str) -> Path:
+    """The binary `name` of `build`; skips (a wide build the compiler or CPU lacks, a source not in
+    this tree) or fails (not built)."""
+    exe = _binary(build, name)
     if exe is None and name in WIDE_BINARIES:
         pytest.skip(f"{name}: the compiler or the architecture has no {name.rsplit('_', 1)[1]} build")
     if exe is None:
@@ -76,13 +86,55 @@ def test_cpp_binary(cpp_build: Path, name: str) -> None:
         if source is not None and not source.exists():
             pytest.skip(f"{source.name} is not part of this tree")
         pytest.fail(f"{name} was not built")
-    proc = subprocess.run([str(exe)], capture_output=True, text=True, timeout=600)
+    return exe
+
+
+def _run(exe: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([str(exe)], capture_output=True, text=True, timeout=900)
+
+
+def _check(proc: subprocess.CompletedProcess) -> None:
     print(proc.stdout)
     if proc.returncode == 77:
         pytest.skip(proc.stdout.strip())
     summary = re.search(r"(\d+) passed, (\d+) failed", proc.stdout)
-    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-2000:]
+    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-4000:]
     assert summary is not None and int(summary.group(2)) == 0 and int(summary.group(1)) > 0
+
+
+@pytest.mark.parametrize("name", BINARIES + WIDE_BINARIES)
+def test_cpp_binary(cpp_build: Path, name: str) -> None:
+    _check(_run(_locate(cpp_build, name)))
+
+
+@pytest.fixture(scope="session")
+def sanitized_runs(sanitized_build: Path) -> dict[str, subprocess.CompletedProcess]:
+    """Every sanitized binary run once, as many at a time as there are cores (they are slow:
+    test_continuous takes about 3 minutes under the sanitizers), the longest first."""
+    names = sorted(BINARIES + WIDE_BINARIES, key=lambda name: name != "test_continuous")
+    exes = {name: exe for name in names if (exe := _binary(sanitized_build, name)) is not None}
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
+        futures = {name: pool.submit(_run, exe) for name, exe in exes.items()}
+        return {name: future.result() for name, future in futures.items()}
+
+
+@pytest.mark.parametrize("name", BINARIES + WIDE_BINARIES)
+def test_cpp_binary_sanitized(sanitized_build: Path, sanitized_runs: dict, name: str) -> None:
+    """Every C++ test again under ASan + UBSan: a sanitizer report aborts the binary (non-zero exit)."""
+    _locate(sanitized_build, name)
+    _check(sanitized_runs[name])
+
+
+@pytest.mark.parametrize(
+    ("mode", "report"),
+    [("heap-overflow", "AddressSanitizer: heap-buffer-overflow"), ("signed-overflow", "runtime error: signed integer")],
+)
+def test_sanitizers_catch_the_negative_control(sanitized_build: Path, mode: str, report: str) -> None:
+    exe = _binary(sanitized_build, "sanitizer_control")
+    assert exe is not None, "sanitizer_control was not built"
+    proc = subprocess.run([str(exe), mode], capture_output=True, text=True, timeout=60)
+    assert proc.returncode != 0, proc.stdout
+    assert report in proc.stderr, proc.stderr[-2000:]
 
 
 def test_installed_package_is_found_by_cmake(cpp_build: Path, tmp_path: Path) -> None:
