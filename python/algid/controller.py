@@ -84,6 +84,7 @@ from .continuous import PackedParameters
 from .control_law import DEFAULT_POLES, ControlLaw, LawParameters, pole_placement_gains
 from .controller_log import ControllerLog
 from .estimate_gate import ACCEPT_RULES, EstimateGate
+from .held_input import HeldLaggedInput
 from .trajectories import BezierReference, bezier
 
 __all__ = [
@@ -280,7 +281,11 @@ class TrackingController:
         settle_tol: float = 0.02,
         hold: bool = False,
         excitation: Callable[[float], np.ndarray] | None = None,
+        actuator_lag_s: float | None = None,
     ) -> None:
+        if actuator_lag_s is not None and not actuator_lag_s >= 0:
+            raise ValueError("actuator_lag_s must be >= 0 or None")
+        self.actuator_lag_s = actuator_lag_s
         self.excitation = excitation
         if accept not in ACCEPT_RULES:
             raise ValueError(f"accept must be 'settled', 'valid' or 'sigma', got {accept!r}")
@@ -325,6 +330,9 @@ class TrackingController:
             n, boundary, self.dt, self.accept, self.settle_window_s, self.settle_tol, self.hold, self.nominal_mass_kg
         )
         self.history = ControllerLog(int(samples), n, self.estimator)
+        lag = self.actuator_lag_s
+        self.input_model = HeldLaggedInput(n, self.dt, lag) if lag is not None and mode == "sampled" else None
+        self._command = np.zeros(n)  # the command held from the latest sample [N]
         self._nominal = LawParameters.pack(np.full(n, self.nominal_mass_kg), np.zeros(n), np.zeros(n + 1))
         self._used_accepted = np.zeros(n, bool)  # DOFs whose estimates the law used so far
         self._p_prev = self._nominal  # parameters of the interval before
@@ -374,6 +382,7 @@ class TrackingController:
         ``t_{k+1}``. Integrals: trapezoidal for positions, exact for the held force."""
         u, xd = self.law.sampled(k, t, x_meas, self._p_k)
         self.history.law(k, xd, u)
+        self._command = u
         return u
 
     def observe(
@@ -385,6 +394,13 @@ class TrackingController:
         if z is not None and k < self.history.T:
             u, xd, _ = self.law.force(t, x_meas, z[:n], z[n : 2 * n], z[2 * n : 3 * n], z[3 * n :], self._p_k)
             self.history.law(k, xd, u)
+        if z is None:
+            self.law.measured(force)
+        if self.input_model is not None:
+            # (H4) with the masses the law uses once it has accepted them (early growing-window
+            # masses fed back into their own window spoil it)
+            mass = np.where(self.gate.accepted, self.gate.good_m, np.nan)
+            accel, force = self.input_model.smooth(self._command, accel, force, mass)
         status = self.estimator.update(accel, force)
         m = np.asarray(self.estimator.mass, dtype=float)
         c = np.asarray(self.estimator.damping, dtype=float)

@@ -223,10 +223,11 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: float | None = N
     }
 
 
-def resolve_estimator(estimator: str, noise_db: float | None) -> str:
-    """``"single"`` or ``"continuous"`` for ``--estimator`` (``auto``: continuous when noisy)."""
+def resolve_estimator(estimator: str, noise_db: float | None, mode: str = "continuous") -> str:
+    """``"single"`` or ``"continuous"`` for ``--estimator`` (``auto``: continuous when noisy
+    or on a rig, ``mode="sampled"``)."""
     if estimator == "auto":
-        return "single" if noise_db is None else "continuous"
+        return "single" if noise_db is None and mode == "continuous" else "continuous"
     if estimator not in ("single", "continuous"):
         raise ValueError(f"estimator must be single, continuous or auto, got {estimator!r}")
     return estimator
@@ -311,6 +312,7 @@ def run_scenario(
     estimator: str = "auto",
     excitation_n: float | None = None,
     drift: bool = True,
+    actuator_lag_s: float = 0.0,
 ) -> tuple[Any, dict[str, Any]]:
     """Simulate the demo's closed loop and summarise it; returns ``(result, summary)``.
 
@@ -321,9 +323,9 @@ def run_scenario(
     from .simulator import simulate
     from .trajectories import BezierReference, Multisine
 
-    kind = resolve_estimator(estimator, noise_db)
+    kind = resolve_estimator(estimator, noise_db, mode)
     if excitation_n is None:
-        excitation_n = 0.0 if noise_db is None else DEFAULT_EXCITATION_N
+        excitation_n = 0.0 if noise_db is None and mode == "continuous" else DEFAULT_EXCITATION_N
     chain = demo_chain(n)
     t_out, t_back = (0.0, 0.4 * duration_s), (0.5 * duration_s, 0.9 * duration_s)
     ref = BezierReference.paper(n, t_out=t_out, t_back=t_back)
@@ -334,6 +336,8 @@ def run_scenario(
             kw.update(estimator_factory=_continuous_factory, accept="sigma")
         if excitation_n > 0:
             kw["excitation"] = Multisine(n, excitation_n)
+        if mode == "sampled":
+            kw["actuator_lag_s"] = actuator_lag_s  # the rig's actuator, known to the controller
         return TrackingController(**kw)
 
     t0 = time.perf_counter()
@@ -343,10 +347,20 @@ def run_scenario(
         from .simulator.sensors import nominal_closed_loop_rms
 
         ctrl0 = controller()
-        cal = simulate(chain, None, duration_s, 1000.0, controller=ctrl0, mode=mode)
+        cal = simulate(chain, None, duration_s, 1000.0, controller=ctrl0, mode=mode, actuator_lag_s=actuator_lag_s)
         planned = nominal_closed_loop_rms(chain, ctrl0, cal.t)["accel"]
         noise = _actual_snr_noise(noise_db, seed, np.sqrt(np.mean(cal.a_true**2, axis=0)) / planned)
-    res = simulate(chain, None, duration_s, 1000.0, controller=controller(), mode=mode, noise=noise, progress=progress)
+    res = simulate(
+        chain,
+        None,
+        duration_s,
+        1000.0,
+        controller=controller(),
+        mode=mode,
+        noise=noise,
+        progress=progress,
+        actuator_lag_s=actuator_lag_s,
+    )
     s = summarize(res, time.perf_counter() - t0, noise_db)
     s["estimator"] = kind
     s["excitation_n"] = float(excitation_n)
