@@ -10,9 +10,11 @@ from scipy.integrate import quad
 import algid
 from algid.chain import TABLE1
 from algid.controller import BezierReference, TrackingController
-from algid.demo import run_scenario
-from algid.held_input import HeldLaggedInput
+from algid.demo import _continuous_factory, run_scenario
+from algid.estimate_gate import EstimateGate
+from algid.held_input import HeldLaggedInput, LagEstimator
 from algid.simulator import simulate
+from algid.trajectories import Multisine
 
 H = 1e-3
 
@@ -109,3 +111,71 @@ def test_noisy_rig_loop_tracks():
     assert s["estimates_substituted_s"] is not None
     assert s["tracking"]["peak_after_1s_pct_stroke"] < 5.0
     assert s["max_rel_err_at_end"] < 0.1
+
+
+@pytest.mark.parametrize("tau", [0.0, 2e-3, 5e-3])
+def test_lag_estimator_recovers_the_actuator_time_constant(tau):
+    """(H5) on a held random command behind the simulator's first-order actuator: the lag
+    from the commands and the measured forces alone."""
+    rng = np.random.default_rng(3)
+    cmd = rng.standard_normal((400, 3))
+    held = lambda t: cmd[min(int(round(t * 1000)), 399)]  # noqa: E731
+    res = simulate(TABLE1, held, 0.4, 1000.0, mode="sampled", actuator_lag_s=tau)
+    est = LagEstimator(H)
+    for k in range(len(res.t)):
+        est.update(cmd[k], res.u[k])
+    assert est.tau == pytest.approx(tau, abs=1e-6)
+
+
+def test_a_wrong_lag_spoils_the_rig_loop_and_the_estimated_one_does_not():
+    """Table 1, 5 ms lag, 2 s: told 4 ms (20 % off) the smooth samples are wrong enough to
+    bias the estimates by several percent; estimating the lag on line matches knowing it."""
+    ref = BezierReference.paper(3, t_out=(0.0, 0.8), t_back=(1.0, 1.8))
+    errs = {}
+    for told in (4e-3, 5e-3, "estimate"):
+        ctrl = TrackingController(
+            reference=ref,
+            estimator_factory=_continuous_factory,
+            accept="sigma",
+            excitation=Multisine(3, 0.05),
+            actuator_lag_s=told,
+        )
+        res = simulate(TABLE1, None, 2.0, 1000.0, controller=ctrl, mode="sampled", actuator_lag_s=5e-3)
+        E = res.estimates
+        th = np.concatenate([E["mass"], E["damping"], E["stiffness"]], axis=1)[res.t >= 1.0]
+        errs[told] = float(np.max(np.abs(th / TABLE1.identifiable() - 1)))
+    assert errs[4e-3] > 0.02
+    assert errs[5e-3] < 0.005
+    assert errs["estimate"] == pytest.approx(errs[5e-3], abs=1e-4)
+
+
+def _offer(gate, k, theta, rel, sigma, rank=1):
+    n = gate.n
+    gate.offer(k, theta[:n], theta[n : 2 * n], theta[2 * n :], np.ones(n, bool), (rel, sigma, rank))
+
+
+def test_the_better_rule_never_takes_worse_or_inconsistent_estimates():
+    """Rule ``better``: a DOF's accepted estimates change only for ones with a smaller
+    uncertainty that agree with them within 3 sigma, or that stay better but inconsistent
+    for ``confirm_s``; a statistical source outranks a steadiness proxy."""
+    n, dt = 2, 1e-3
+    gate = EstimateGate(n, "fixed", dt, "better", 0.02, 0.02, False, 1.0, consistency_z=3.0, confirm_s=0.005)
+    theta = np.array([2.0, 3.0, 5.0, 4.0, 1000.0, 900.0, 700.0])
+    rel = np.full(7, 0.02)
+    _offer(gate, 0, theta, rel, rel * theta, rank=0)
+    assert gate.accepted.all() and gate.good_m == pytest.approx([2.0, 3.0])
+    worse = theta * 1.001
+    _offer(gate, 1, worse, rel * 2, rel * 2 * theta, rank=0)  # larger uncertainty: kept out
+    assert gate.good_m == pytest.approx([2.0, 3.0])
+    better = theta * 1.01
+    _offer(gate, 2, better, rel / 2, rel / 2 * theta, rank=0)  # smaller and consistent: taken
+    assert gate.good_m == pytest.approx([2.02, 3.03])
+    running = theta * 1.2
+    _offer(gate, 3, running, rel, rel * theta, rank=1)  # the running estimate outranks the proxy
+    assert gate.good_m == pytest.approx([2.4, 3.6])
+    jump = theta.copy()  # better but 20 % away from the accepted (10 sigma): waits confirm_s
+    for k in range(4, 8):
+        _offer(gate, k, jump, rel / 4, rel / 4 * theta)
+        assert gate.good_m == pytest.approx([2.4, 3.6])
+    _offer(gate, 8, jump, rel / 4, rel / 4 * theta)
+    assert gate.good_m == pytest.approx([2.0, 3.0])

@@ -90,7 +90,7 @@ from .continuous import PackedParameters
 from .control_law import DEFAULT_POLES, ControlLaw, LawParameters, pole_placement_gains
 from .controller_log import ControllerLog
 from .estimate_gate import ACCEPT_RULES, EstimateGate
-from .held_input import HeldLaggedInput
+from .held_input import HeldLaggedInput, LagEstimator
 from .trajectories import BezierReference, bezier
 
 __all__ = [
@@ -261,11 +261,13 @@ class TrackingController:
         A known probing force added to the commanded force of eq. 8 (see
         :class:`~algid.trajectories.Multisine`); it is part of ``u`` in eq. 10 and in what
         the estimator sees.
-    actuator_lag_s : float or None
+    actuator_lag_s : float, "estimate" or None
         Sampled mode on a rig: the time constant [s] of the first-order actuator behind the
-        held command (0: none). The estimator is then fed the smooth-equivalent samples of
-        :class:`~algid.held_input.HeldLaggedInput` (with the accepted masses) instead of the
-        raw ones. None (default) feeds the raw samples.
+        held command (0: none), or ``"estimate"``: identify it on line from the commands and
+        the measured forces (:class:`~algid.held_input.LagEstimator`). The estimator is then
+        fed the smooth-equivalent samples of :class:`~algid.held_input.HeldLaggedInput`
+        (with the accepted masses) instead of the raw ones. None (default) feeds the raw
+        samples.
 
     Notes
     -----
@@ -292,14 +294,14 @@ class TrackingController:
         settle_tol: float = 0.02,
         hold: bool = False,
         excitation: Callable[[float], np.ndarray] | None = None,
-        actuator_lag_s: float | None = None,
+        actuator_lag_s: float | str | None = None,
     ) -> None:
-        if actuator_lag_s is not None and not actuator_lag_s >= 0:
-            raise ValueError("actuator_lag_s must be >= 0 or None")
+        if actuator_lag_s is not None and actuator_lag_s != "estimate" and not actuator_lag_s >= 0:
+            raise ValueError("actuator_lag_s must be >= 0, 'estimate' or None")
         self.actuator_lag_s = actuator_lag_s
         self.excitation = excitation
         if accept not in ACCEPT_RULES:
-            raise ValueError(f"accept must be 'settled', 'valid' or 'sigma', got {accept!r}")
+            raise ValueError(f"accept must be one of {ACCEPT_RULES}, got {accept!r}")
         if not (settle_window_s > 0 and settle_tol > 0):
             raise ValueError("settle_window_s and settle_tol must be > 0")
         self.accept = accept
@@ -342,7 +344,9 @@ class TrackingController:
         )
         self.history = ControllerLog(int(samples), n, self.estimator)
         lag = self.actuator_lag_s
-        self.input_model = HeldLaggedInput(n, self.dt, lag) if lag is not None and mode == "sampled" else None
+        rig = lag is not None and mode == "sampled"
+        self.input_model = HeldLaggedInput(n, self.dt, 0.0 if lag == "estimate" else lag) if rig else None
+        self.lag_estimator = LagEstimator(self.dt) if rig and lag == "estimate" else None
         self._command = np.zeros(n)  # the command held from the latest sample [N]
         self._nominal = LawParameters.pack(np.full(n, self.nominal_mass_kg), np.zeros(n), np.zeros(n + 1))
         self._used_accepted = np.zeros(n, bool)  # DOFs whose estimates the law used so far
@@ -411,6 +415,8 @@ class TrackingController:
             # (H4) with the masses the law uses once it has accepted them (early growing-window
             # masses fed back into their own window spoil it)
             mass = np.where(self.gate.accepted, self.gate.good_m, np.nan)
+            if self.lag_estimator is not None:
+                self.input_model.set_lag(self.lag_estimator.update(self._command, force))
             accel, force = self.input_model.smooth(self._command, accel, force, mass)
         status = self.estimator.update(accel, force)
         m = np.asarray(self.estimator.mass, dtype=float)
@@ -418,7 +424,14 @@ class TrackingController:
         kk = np.asarray(self.estimator.stiffness, dtype=float)
         valid = np.asarray(self.estimator.valid, dtype=bool)
         self.history.estimates(k, self.estimator, m, c, kk, valid, status)
-        self.gate.offer(k, m, c, kk, valid)
+        unc = None
+        if self.accept == "better":
+            rel = getattr(self.estimator, "rel_sigma", None)
+            sig = getattr(self.estimator, "sigma", None)
+            if rel is not None and sig is not None:
+                rank = int(getattr(self.estimator, "phase", "running") == "running")
+                unc = (np.asarray(rel, float), np.asarray(sig, float), rank)
+        self.gate.offer(k, m, c, kk, valid, unc)
 
     def log(self) -> dict[str, Any]:
         """History of the run (``T`` samples): reference ``x_ref``, ``xd_ref``, ``xdd_ref``

@@ -32,13 +32,27 @@ divided by the mass, so the smooth acceleration is::
 with the estimator's current mass ``m_i`` (masses are the best-determined parameters:
 within 0.1 % from the first 50 ms on Table 1 even with the lag; a DOF without a finite
 positive mass yet is passed unchanged, force and acceleration alike).
+
+**The lag from the rig's own records.** (H1) at ``s = h`` ties consecutive force samples
+to the command held between them::
+
+    w_{k+1} - u_k = a (w_k - u_k),      a = exp(-h / tau)                                (H5)
+
+so the least-squares ``a = sum (w_{k+1} - u_k)(w_k - u_k) / sum (w_k - u_k)^2`` over all
+samples and DOF, and ``tau = -h / ln a``, come from the recorded commands and the measured
+forces alone (:class:`LagEstimator`). Without lag the force jumps at the samples and a
+sample reads the mean of the one-sided limits, ``w_k = (u_{k-1} + u_k) / 2``, which (H5)
+would take for a lag of about ``h / ln 2``; the estimator therefore reports no lag when
+that model leaves the smaller residual. The smooth samples need ``tau`` well: Table 1's loop
+behind 5 ms of lag, told 4 or 6 ms, gets estimates 11-13 % off and tracks within 5-13 %
+of the stroke instead of 1 %.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["HeldLaggedInput"]
+__all__ = ["HeldLaggedInput", "LagEstimator"]
 
 
 class HeldLaggedInput:
@@ -56,10 +70,15 @@ class HeldLaggedInput:
             raise ValueError("dt must be > 0")
         if not actuator_lag_s >= 0:
             raise ValueError("actuator_lag_s must be >= 0")
-        self.n, self.dt, self.tau = int(n), float(dt), float(actuator_lag_s)
+        self.n, self.dt = int(n), float(dt)
+        self.set_lag(actuator_lag_s)
+        self._wbar_prev: np.ndarray | None = None
+
+    def set_lag(self, actuator_lag_s: float) -> None:
+        """Use the time constant ``actuator_lag_s`` [s] from the next sample on."""
+        self.tau = float(actuator_lag_s)
         #: g of (H2): the weight of the start value w_k in the interval mean [-]
         self.g = 0.0 if self.tau == 0 else self.tau / self.dt * -np.expm1(-self.dt / self.tau)
-        self._wbar_prev: np.ndarray | None = None
 
     def interval_mean(self, command: np.ndarray, force: np.ndarray) -> np.ndarray:
         """(H2): mean force [N] over ``[t_k, t_{k+1})`` from the command held there and the
@@ -83,3 +102,52 @@ class HeldLaggedInput:
         # a DOF without a mass keeps both raw samples: its force and acceleration ripples
         # then cancel in the mass column of eq. 5 at least
         return accel - ripple, np.where(known, w_s, force)
+
+
+class LagEstimator:
+    """The actuator's time constant from the held commands and the measured forces (H5).
+
+    Parameters
+    ----------
+    dt : sample interval h [s].
+
+    Feed every sample with :meth:`update`; :attr:`tau` [s] is the running least-squares
+    estimate (0 until the commands have moved the force, when ``a <= 0``, and when the
+    no-lag model fits the samples better).
+    """
+
+    def __init__(self, dt: float) -> None:
+        if not dt > 0:
+            raise ValueError("dt must be > 0")
+        self.dt = float(dt)
+        self.sxy = 0.0  # sum (w_{k+1} - u_k)(w_k - u_k) [N^2]
+        self.sxx = 0.0  # sum (w_k - u_k)^2 [N^2]
+        self.syy = 0.0  # sum (w_{k+1} - u_k)^2 [N^2]
+        self.r0 = 0.0  # residual of the no-lag model, sum (w_{k+1} - (u_k + u_{k+1}) / 2)^2 [N^2]
+        self._prev: tuple[np.ndarray, np.ndarray] | None = None  # (u_k, w_k)
+
+    def update(self, command: np.ndarray, force: np.ndarray) -> float:
+        """Sample ``k``: the command held from ``t_k`` and the force measured at ``t_k``
+        [N] (n,); returns :attr:`tau` [s]."""
+        u, w = np.asarray(command, float), np.asarray(force, float)
+        if self._prev is not None:
+            u0, w0 = self._prev
+            self.sxy += float(np.dot(w - u0, w0 - u0))
+            self.sxx += float(np.dot(w0 - u0, w0 - u0))
+            self.syy += float(np.dot(w - u0, w - u0))
+            self.r0 += float(np.sum((w - 0.5 * (u0 + u)) ** 2))
+        self._prev = (u.copy(), w.copy())
+        return self.tau
+
+    @property
+    def pole(self) -> float:
+        """``a = exp(-h / tau)`` of (H5) [-] (NaN before any information)."""
+        return self.sxy / self.sxx if self.sxx > 0 else float("nan")
+
+    @property
+    def tau(self) -> float:
+        """Estimated time constant [s] (0 without information or lag)."""
+        a = self.pole
+        if not np.isfinite(a) or a <= 0 or self.r0 <= self.syy - a * self.sxy:
+            return 0.0
+        return -self.dt / np.log(min(a, 1.0 - 1e-12))
