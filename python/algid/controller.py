@@ -244,12 +244,15 @@ class TrackingController:
     eq10 : {"integrated", "product"}
         Stiffness estimates inside the integrals of eq. 10 (default) or multiplying them
         (the paper's literal form); see the module docstring.
-    accept : {"settled", "valid", "sigma"}
+    accept : {"settled", "valid", "sigma", "better"}
         Which estimates of a DOF the law takes (see the module docstring): ``"settled"``
         (default) needs them physically admissible and steady within ``settle_tol`` over
         the last ``settle_window_s``; ``"valid"`` takes every finite estimate the estimator
         flags valid with a positive mass; ``"sigma"`` every physically admissible one the
-        estimator flags valid (its validity carries an uncertainty test).
+        estimator flags valid (its validity carries an uncertainty test); ``"better"`` those
+        of ``"sigma"`` that never replace accepted ones by ones of larger uncertainty or
+        inconsistent ones (the estimator's ``rel_sigma``, ``sigma`` and ``phase``; see
+        :mod:`algid.estimate_gate`).
     settle_window_s : float
         Window [s] of the steadiness test.
     settle_tol : float
