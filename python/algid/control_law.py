@@ -59,8 +59,12 @@ class ControlLaw:
     (``"integrated"``: stiffness estimates inside the integrals, ``K int x = S + R`` with
     ``R`` re-based at a first substitution, :meth:`rebase`; ``"product"``: ``K int x``);
     ``excitation`` an optional known force ``t -> (n,)`` [N] added to eq. 8. Sampled mode
-    keeps the integrals ``E = int (x - x*)``, ``X = int x``, ``S = int K x`` and ``U = int u``
-    (trapezoidal for positions, exact for the held force).
+    keeps the integrals ``E = int (x - x*)``, ``X = int x``, ``S = int K x`` (trapezoidal)
+    and ``U = int u``. ``force_source`` says which force ``U`` integrates in sampled mode:
+    ``"measured"`` (a rig's eq. 10: the force sensor's samples, trapezoidal up to the
+    latest one, :meth:`measured`, plus the command held since) or ``"commanded"`` (the
+    held commands, exact; wrong by ``tau w`` behind an actuator lag ``tau``, see
+    :mod:`algid.controller`).
     """
 
     def __init__(
@@ -71,7 +75,11 @@ class ControlLaw:
         excitation: Callable[[float], np.ndarray] | None,
         n: int,
         dt: float,
+        force_source: str = "measured",
     ) -> None:
+        if force_source not in ("measured", "commanded"):
+            raise ValueError(f"force_source must be 'measured' or 'commanded', got {force_source!r}")
+        self.force_source = force_source
         self.reference = reference
         self.beta0, self.beta1, self.beta2 = gains
         self.eq10 = eq10
@@ -83,6 +91,8 @@ class ControlLaw:
         self._kx_prev = np.zeros(n)
         self._e_prev = np.zeros(n)
         self._u_prev = np.zeros(n)
+        self.U_meas = np.zeros(n)  # int_0^{t_j} u_meas up to the latest force sample t_j [N s]
+        self._f_prev: np.ndarray | None = None
 
     def force(
         self, t: float, x: np.ndarray, E: np.ndarray, X: np.ndarray, S: np.ndarray, U: np.ndarray, p: LawParameters
@@ -118,10 +128,20 @@ class ControlLaw:
             self.E = self.E + h2 * (self._e_prev + e)
             self.X = self.X + h2 * (self._x_prev + x_meas)
             self.S = self.S + h2 * (self._kx_prev + kx)
-            self.U = self.U + self.dt * self._u_prev
+            if self.force_source == "measured" and self._f_prev is not None:
+                # int_0^{t_k} u = (measured up to t_{k-1}) + (command held on [t_{k-1}, t_k))
+                self.U = self.U_meas + self.dt * self._u_prev
+            else:
+                self.U = self.U + self.dt * self._u_prev
         u, xd, _ = self.force(t, x_meas, self.E, self.X, self.S, self.U, p)
         self._x_prev, self._kx_prev, self._e_prev, self._u_prev = x_meas.copy(), kx, e, u
         return u, xd
+
+    def measured(self, force: np.ndarray) -> None:
+        """The force sensors' next sample [N] (n,): extends ``int u_meas`` by a trapezoid."""
+        if self._f_prev is not None:
+            self.U_meas = self.U_meas + 0.5 * self.dt * (self._f_prev + force)
+        self._f_prev = np.array(force, dtype=float)
 
     def rebase(self, K_new: np.ndarray, K_old: np.ndarray, X: np.ndarray) -> None:
         """A first substitution in the integrated form: the new stiffnesses model the whole
