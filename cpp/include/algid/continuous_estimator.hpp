@@ -57,12 +57,14 @@
 #include "algid/detail/robust.hpp"
 #include "algid/detail/storage.hpp"
 #include "algid/types.hpp"
+#include "algid/weak_form.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <utility>
 
 namespace algid {
@@ -84,6 +86,12 @@ struct ChangeEvent {
   Scalar after = Scalar(0);               ///< running estimate right after it [parameter units]
 };
 
+/// Where the window results come from.
+enum class WindowMethod : int {
+  kWeakForm = 0,   ///< WeakFormWindows: GLS over all test-function rows, bias-compensated (default)
+  kAlgebraic = 1,  ///< ChainEstimator: the paper's exactly determined windows behind the prefilter
+};
+
 /// Configuration of a ContinuousEstimator. The defaults are the ones benchmarked in
 /// bench/continuous.py (1 kHz, broadband forcing, 20-60 dB SNR).
 template <class Scalar>
@@ -91,7 +99,8 @@ struct ContinuousConfig {
   Scalar dt = Scalar(1e-3);                       ///< sample period [s]
   Boundary boundary = Boundary::kFixed;           ///< right end: wall or free (see ChainEstimator)
   ValidityRule<Scalar> validity{};                ///< validity rule of every window
-  Scalar window_s = Scalar(0.3);                  ///< window length L [s] (rounded to samples)
+  WindowMethod method = WindowMethod::kWeakForm;  ///< source of the window results
+  Scalar window_s = Scalar(-1);  ///< window length L [s] (rounded to samples); -1: 0.5 (weak form), 0.3 (algebraic)
   int stagger = 4;                                ///< windows in flight K, started L/K apart (<= MaxStagger)
   int block = 16;                                 ///< window results per block median (<= Capacity)
   int confirm = 0;                                ///< window results in the step test; 0: 2K+1 (<= Capacity)
@@ -105,6 +114,12 @@ struct ContinuousConfig {
   Scalar horizon_s = Scalar(0);                   ///< forgetting time constant of the block mean [s]; 0: none
   Scalar prefilter_hz = Scalar(-1);  ///< low-pass on accelerations and forces alike [Hz]; -1: 0.05 / dt, 0: off
   int prefilter_order = 4;  ///< Butterworth order of the prefilter: 2 or 4
+  Scalar band_hz = Scalar(-1);      ///< weak form: highest test-function frequency [Hz]; -1: 0.05 / dt
+  Scalar accel_noise = Scalar(-1);  ///< weak form: acceleration noise RMS [m/s^2]; -1: estimated
+  Scalar force_noise = Scalar(-1);  ///< weak form: force noise RMS [N]; -1: estimated
+  bool bias_compensation = true;    ///< weak form: subtract the regressor-noise term
+  bool weighted_mean = true;        ///< weak form: blocks by variance-weighted trimmed mean (false: median)
+  Scalar trim = Scalar(4);          ///< weighted mean: results beyond trim x spread from the block median left out
   bool detect = true;  ///< run the change detector
   bool amortize = true;  ///< spread the per-parameter work over the samples
 };
@@ -126,6 +141,9 @@ enum class ContinuousConfigError {
   kBadHorizon,
   kBadPrefilter,
   kBadDofs,
+  kBadBand,
+  kBadNoise,
+  kBadTrim,
 };
 
 /// Human-readable text of a ContinuousConfigError.
@@ -149,6 +167,9 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
     case ContinuousConfigError::kBadPrefilter:
       return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in (0, 0.45/dt) [Hz], prefilter_order 2 or 4";
     case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
+    case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
+    case ContinuousConfigError::kBadNoise: return to_string(WeakFormConfigError::kBadNoise);
+    case ContinuousConfigError::kBadTrim: return "trim must be finite and > 0";
   }
   return "unknown";
 }
@@ -169,6 +190,8 @@ class ContinuousEstimator {
  public:
   /// The estimator run on each window.
   using Window = ChainEstimator<N, Scalar, P>;
+  /// The weak-form windows (WindowMethod::kWeakForm).
+  using WeakForm = WeakFormWindows<N, Scalar, MaxStagger>;
   /// Configuration type.
   using Config = ContinuousConfig<Scalar>;
   /// Change event type.
@@ -191,8 +214,9 @@ class ContinuousEstimator {
       case ConfigError::kBadMinHadamard: return ContinuousConfigError::kBadMinHadamard;
       case ConfigError::kBadDofs: return ContinuousConfigError::kBadDofs;
     }
-    if (!std::isfinite(c.window_s) || !(c.window_s > Scalar(0))) return ContinuousConfigError::kBadWindow;
-    const Scalar samples = c.window_s / c.dt;
+    const Scalar window_s = resolved_window(c);
+    if (!std::isfinite(window_s) || !(window_s > Scalar(0))) return ContinuousConfigError::kBadWindow;
+    const Scalar samples = window_s / c.dt;
     if (!std::isfinite(samples) || samples > Scalar(1e9)) return ContinuousConfigError::kBadWindow;
     const long m = std::lround(samples);
     if (m < static_cast<long>(P) + c.validity.min_samples) return ContinuousConfigError::kBadWindow;
@@ -212,6 +236,18 @@ class ContinuousEstimator {
     if (!std::isfinite(c.prefilter_hz) || (c.prefilter_hz < Scalar(0) && c.prefilter_hz != Scalar(-1)) ||
         !(c.prefilter_hz * c.dt < Scalar(0.45)) || (c.prefilter_order != 2 && c.prefilter_order != 4))
       return ContinuousConfigError::kBadPrefilter;
+    if (!std::isfinite(c.trim) || !(c.trim > Scalar(0))) return ContinuousConfigError::kBadTrim;
+    if (c.method == WindowMethod::kWeakForm) {
+      switch (WeakForm::validate(weak_config(c), n)) {
+        case WeakFormConfigError::kNone: break;
+        case WeakFormConfigError::kBadSamplePeriod: return ContinuousConfigError::kBadSamplePeriod;
+        case WeakFormConfigError::kBadWindow: return ContinuousConfigError::kBadWindow;
+        case WeakFormConfigError::kBadStagger: return ContinuousConfigError::kBadStagger;
+        case WeakFormConfigError::kBadBand: return ContinuousConfigError::kBadBand;
+        case WeakFormConfigError::kBadNoise: return ContinuousConfigError::kBadNoise;
+        case WeakFormConfigError::kBadDofs: return ContinuousConfigError::kBadDofs;
+      }
+    }
     return ContinuousConfigError::kNone;
   }
 
@@ -226,10 +262,17 @@ class ContinuousEstimator {
     known_.resize(params_);
     tracks_.resize(params_);
     events_.resize(params_);
-    for (auto* v : {&estimate_, &sigma_, &last_window_, &pending_}) v->setZero(params_);
+    for (auto* v : {&estimate_, &sigma_, &last_window_, &last_variance_, &pending_, &pending_var_}) v->setZero(params_);
+    config_.window_s = resolved_window(config_);
+    weak_form_ = config_.method == WindowMethod::kWeakForm;
     window_samples_ = std::lround(config_.window_s / config_.dt);
     const Scalar fc = config_.prefilter_hz < Scalar(0) ? Scalar(0.05) / config_.dt : config_.prefilter_hz;
-    if (fc > Scalar(0)) {
+    if (weak_form_) {
+      // The test functions are the low-pass; a prefilter would colour the noise the weights
+      // and the bias correction assume white.
+      weak_ = std::make_unique<WeakForm>(weak_config(config_), n_);
+      window_samples_ = weak_->window_samples();
+    } else if (fc > Scalar(0)) {
       filter_.configure(fc, config_.dt, config_.prefilter_order);
       filtered_ = true;
       // ln(1e6) / decay: the start-up transient is below 1e-6 of the signal when windows start
@@ -246,7 +289,8 @@ class ContinuousEstimator {
     const Scalar block_s = static_cast<Scalar>(config_.block) * static_cast<Scalar>(window_samples_) /
                            static_cast<Scalar>(config_.stagger) * config_.dt;
     forget_ = config_.horizon_s > Scalar(0) ? std::exp(-block_s / config_.horizon_s) : Scalar(1);
-    block_scale_ = detail::kMedianInefficiency<Scalar> /
+    weighted_blocks_ = weak_form_ && config_.weighted_mean;
+    block_scale_ = (weighted_blocks_ ? Scalar(1) : detail::kMedianInefficiency<Scalar>) /
                    std::sqrt(static_cast<Scalar>(config_.block) * config_.overlap_efficiency);
     for (int j = 0; j < params_; ++j) known_[j] = Known::kEstimated;
     if (config_.boundary == Boundary::kFree) known_[params_ - 1] = Known::kZero;
@@ -258,6 +302,7 @@ class ContinuousEstimator {
   /// @realtime no allocation, no throw
   void reset() noexcept {
     restart_windows();
+    if (weak_) weak_->reset();
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     for (int j = 0; j < params_; ++j) {
       tracks_[j] = Track{};
@@ -265,7 +310,9 @@ class ContinuousEstimator {
       estimate_(j) = fixed;
       sigma_(j) = known_[j] == Known::kZero ? Scalar(0) : nan;
       last_window_(j) = fixed;
+      last_variance_(j) = nan;
       pending_(j) = nan;
+      pending_var_(j) = nan;
     }
     pending_next_ = params_;
     samples_ = 0;
@@ -299,6 +346,12 @@ class ContinuousEstimator {
       a = io_.data();
       f = io_.data() + n_;
     }
+    if (weak_form_) {
+      weak_->set_model(estimate_.data());
+      if (weak_->update(a, f)) harvest(weak_->result(), weak_->variance());
+      work();
+      return ready() ? Status::kOk : Status::kWarmup;
+    }
     for (int e = 0; e < config_.stagger; ++e) {
       if (phase_[e] < 0) {
         ++phase_[e];
@@ -306,7 +359,7 @@ class ContinuousEstimator {
       }
       windows_[e].update(a, f);
       if (++phase_[e] == window_samples_) {
-        harvest(windows_[e]);
+        harvest(windows_[e].mass(), windows_[e].damping(), windows_[e].stiffness());
         windows_[e].reseed();
         phase_[e] = 0;
       }
@@ -356,6 +409,10 @@ class ContinuousEstimator {
 
   /// The latest window result (fused as in ChainEstimator; NaN where that window was not valid).
   const Vector<Scalar, kParams>& last_window() const noexcept { return last_window_; }
+  /// Its variance per parameter (weak form; NaN for algebraic windows) [parameter units^2].
+  const Vector<Scalar, kParams>& last_variance() const noexcept { return last_variance_; }
+  /// The weak-form windows (nullptr with algebraic windows), e.g. for noise_rms().
+  const WeakForm* weak_form() const noexcept { return weak_.get(); }
   /// Window results harvested since construction or reset().
   long window_results() const noexcept { return results_; }
   /// Window results aggregated into parameter j's estimate since its last restart.
@@ -366,6 +423,8 @@ class ContinuousEstimator {
   long samples() const noexcept { return samples_; }
   /// Window length M [samples].
   long window_samples() const noexcept { return window_samples_; }
+  /// Samples between two window results.
+  long hop_samples() const noexcept { return weak_form_ ? weak_->hop_samples() : window_samples_ / config_.stagger; }
   /// Samples skipped after a (re)start while the prefilter settles (0 without prefilter).
   long settle_samples() const noexcept { return settle_; }
   /// Prefilter cut-off in force [Hz] (0: off).
@@ -390,13 +449,15 @@ class ContinuousEstimator {
   struct Track {
     std::array<Scalar, Capacity> value{};  // window results since the restart, newest at head - 1
     std::array<Scalar, Capacity> z{};  // their z-scores against the estimate before them
+    std::array<Scalar, Capacity> w{};  // their weights (1 / variance; 1 for the median path)
     int head = 0;
     int count = 0;  // entries since the restart, <= Capacity
     int z_count = 0;  // consecutive newest entries with a finite z, <= Capacity
     long since = 0;  // window results aggregated since the restart (kept ones included)
     long fresh = 0;  // window results that arrived after the restart
     int in_block = 0;  // results in the current block
-    Scalar s0 = Scalar(0), s1 = Scalar(0), s2 = Scalar(0), s0sq = Scalar(0);  // block-median moments
+    Scalar s0 = Scalar(0), s1 = Scalar(0), s2 = Scalar(0), s0sq = Scalar(0);  // block-statistic moments
+    Scalar p0 = Scalar(0), p1 = Scalar(0);  // weighted sums of the block in progress (weighted mean)
     Scalar cusum_hi = Scalar(0), cusum_lo = Scalar(0);
     Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();  // per-window sigma
     Scalar relative_spread = std::numeric_limits<Scalar>::quiet_NaN();  // carried over a restart
@@ -408,6 +469,24 @@ class ContinuousEstimator {
     w.dt = c.dt;
     w.boundary = c.boundary;
     w.validity = c.validity;
+    return w;
+  }
+
+  static Scalar resolved_window(const Config& c) noexcept {
+    if (c.window_s != Scalar(-1)) return c.window_s;
+    return c.method == WindowMethod::kWeakForm ? Scalar(0.5) : Scalar(0.3);
+  }
+
+  static typename WeakForm::Config weak_config(const Config& c) noexcept {
+    typename WeakForm::Config w;
+    w.dt = c.dt;
+    w.boundary = c.boundary;
+    w.window_s = resolved_window(c);
+    w.stagger = c.stagger;
+    w.band_hz = c.band_hz;
+    w.accel_noise = c.accel_noise;
+    w.force_noise = c.force_noise;
+    w.bias_compensation = c.bias_compensation;
     return w;
   }
 
@@ -424,6 +503,7 @@ class ContinuousEstimator {
   }
 
   void restart_windows() noexcept {
+    if (weak_) weak_->restart();
     filter_.reset();
     for (int e = 0; e < MaxStagger; ++e) {
       windows_[e].reseed();
@@ -431,18 +511,35 @@ class ContinuousEstimator {
     }
   }
 
-  void harvest(const Window& w) noexcept {
-    // Finish the previous result first (only if the budget was too small, e.g. a bad sample
-    // shifted the schedule), so no result is lost.
-    while (pending_next_ < params_) process(pending_next_++);
+  template <class M, class C, class K>
+  void harvest(const M& mass, const C& damping, const K& stiffness) noexcept {
+    finish_pending();
     for (int i = 0; i < n_; ++i) {
-      last_window_(i) = w.mass()(i);
-      last_window_(n_ + i) = w.damping()(i);
+      last_window_(i) = mass(i);
+      last_window_(n_ + i) = damping(i);
     }
-    for (int j = 0; j <= n_; ++j) last_window_(2 * n_ + j) = w.stiffness()(j);
+    for (int j = 0; j <= n_; ++j) last_window_(2 * n_ + j) = stiffness(j);
+    last_variance_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
     pending_ = last_window_;
+    pending_var_ = last_variance_;
     pending_next_ = 0;
     ++results_;
+  }
+
+  void harvest(const Vector<Scalar, kParams>& result, const Vector<Scalar, kParams>& variance) noexcept {
+    finish_pending();
+    last_window_ = result;
+    last_variance_ = variance;
+    pending_ = result;
+    pending_var_ = variance;
+    pending_next_ = 0;
+    ++results_;
+  }
+
+  // Finish the previous result first (only if the budget was too small, e.g. a bad sample
+  // shifted the schedule), so no result is lost.
+  void finish_pending() noexcept {
+    while (pending_next_ < params_) process(pending_next_++);
   }
 
   void work() noexcept {
@@ -455,6 +552,34 @@ class ContinuousEstimator {
       scratch_[static_cast<std::size_t>(count - 1 - i)] =
           ring[static_cast<std::size_t>((head - 1 - i + Capacity) % Capacity)];
     return count;
+  }
+
+  // Weight of a window result: 1 / the per-window variance, estimated by the spread of the
+  // ring (1 before it exists). Not the window's own variance (diagonal of its inverse normal
+  // matrix): that one is computed from the same noisy rows, correlates with the window's
+  // error, and weighting by it biased the springs (8x the Cramer-Rao bound instead of 2.6x).
+  Scalar weight_of(const Track& t, Scalar) const noexcept {
+    if (!weighted_blocks_) return Scalar(1);
+    if (std::isfinite(t.spread) && t.spread > Scalar(0)) return Scalar(1) / (t.spread * t.spread);
+    return Scalar(1);
+  }
+
+  // Weighted mean of the last `block` results within trim spreads of their median `bm`
+  // (replaced by the mean); `bw` receives the sum of their weights.
+  void block_mean(const Track& t, Scalar& bm, Scalar& bw) const noexcept {
+    const Scalar reach = config_.trim * floor_spread(t, bm);
+    Scalar s0 = Scalar(0), s1 = Scalar(0);
+    for (int i = 0; i < config_.block; ++i) {
+      const std::size_t slot = static_cast<std::size_t>((t.head - 1 - i + Capacity) % Capacity);
+      const Scalar x = t.value[slot];
+      if (!(std::abs(x - bm) <= reach) && std::isfinite(reach)) continue;
+      s0 += t.w[slot];
+      s1 += t.w[slot] * x;
+    }
+    if (s0 > Scalar(0)) {
+      bm = s1 / s0;
+      bw = s0;
+    }
   }
 
   Scalar floor_spread(const Track& t, Scalar estimate) const noexcept {
@@ -474,6 +599,7 @@ class ContinuousEstimator {
     }
     t.value[static_cast<std::size_t>(t.head)] = x;
     t.z[static_cast<std::size_t>(t.head)] = z;
+    t.w[static_cast<std::size_t>(t.head)] = weight_of(t, pending_var_(j));
     t.head = (t.head + 1) % Capacity;
     t.count = std::min(t.count + 1, Capacity);
     t.z_count = std::isfinite(z) ? std::min(t.z_count + 1, Capacity) : 0;
@@ -490,11 +616,20 @@ class ContinuousEstimator {
       }
     }
 
-    // Blocks: median of the last `block` results into the running mean; drift test on it.
+    // Blocks: median (or weighted trimmed mean) of the last `block` results into the running
+    // mean; drift test on it.
+    if (weighted_blocks_ && t.s0 > Scalar(0) && std::abs(x - est) <= config_.trim * floor_spread(t, est)) {
+      const Scalar w = t.w[static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity)];
+      t.p0 += w;
+      t.p1 += w * x;
+    }
     if (++t.in_block == config_.block) {
       t.in_block = 0;
+      t.p0 = t.p1 = Scalar(0);
       newest(t.value, t.head, config_.block);
-      const Scalar bm = detail::median_inplace(scratch_.data(), config_.block);
+      Scalar bm = detail::median_inplace(scratch_.data(), config_.block);
+      Scalar bw = Scalar(1);
+      if (weighted_blocks_) block_mean(t, bm, bw);
       if (config_.detect && t.s0 > Scalar(0) && t.spread_ok) {
         const Scalar sb = block_scale_ * floor_spread(t, est);
         if (sb > Scalar(0)) {
@@ -507,10 +642,10 @@ class ContinuousEstimator {
           }
         }
       }
-      t.s0 = forget_ * t.s0 + Scalar(1);
-      t.s1 = forget_ * t.s1 + bm;
-      t.s2 = forget_ * t.s2 + bm * bm;
-      t.s0sq = forget_ * forget_ * t.s0sq + Scalar(1);
+      t.s0 = forget_ * t.s0 + bw;
+      t.s1 = forget_ * t.s1 + bw * bm;
+      t.s2 = forget_ * t.s2 + bw * bm * bm;
+      t.s0sq = forget_ * forget_ * t.s0sq + bw * bw;
     }
     refresh(j, t);
   }
@@ -534,7 +669,7 @@ class ContinuousEstimator {
     }
     Scalar est;
     if (t.s0 > Scalar(0)) {
-      est = t.s1 / t.s0;
+      est = (t.s1 + t.p1) / (t.s0 + t.p0);
     } else {
       if (!std::isfinite(ring_median)) {
         newest(t.value, t.head, t.count);
@@ -546,7 +681,8 @@ class ContinuousEstimator {
     Scalar sig;
     if (t.s0 > Scalar(0)) {
       const Scalar n_eff = t.s0 * t.s0 / t.s0sq;
-      sig = block_scale_ * t.spread / std::sqrt(n_eff);
+      sig = weighted_blocks_ ? Scalar(1) / std::sqrt((t.s0 + t.p0) * config_.overlap_efficiency)
+                             : block_scale_ * t.spread / std::sqrt(n_eff);
       if (n_eff >= Scalar(4)) {
         const Scalar var = (t.s2 / t.s0 - est * est) * n_eff / (n_eff - Scalar(1));
         sig = std::max(sig, std::sqrt(std::max(var, Scalar(0)) / n_eff));
@@ -565,6 +701,7 @@ class ContinuousEstimator {
     t.z_count = 0;
     t.in_block = 0;
     t.s0 = t.s1 = t.s2 = t.s0sq = Scalar(0);
+    t.p0 = t.p1 = Scalar(0);
     t.cusum_hi = t.cusum_lo = Scalar(0);
   }
 
@@ -576,15 +713,20 @@ class ContinuousEstimator {
     for (int i = n - 1; i >= 0; --i) {  // oldest first into scratch_
       const std::size_t slot = static_cast<std::size_t>((t.head - 1 - i + Capacity) % Capacity);
       const Scalar zi = t.z[slot];
-      if ((zi > Scalar(0)) == (mz > Scalar(0)) && std::abs(zi) > Scalar(0.5) * config_.step_threshold)
+      if ((zi > Scalar(0)) == (mz > Scalar(0)) && std::abs(zi) > Scalar(0.5) * config_.step_threshold) {
+        weights_[static_cast<std::size_t>(kept)] = t.w[slot];
         scratch_[static_cast<std::size_t>(kept++)] = t.value[slot];
+      }
     }
-    if (kept == 0)
-      scratch_[static_cast<std::size_t>(kept++)] =
-          t.value[static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity)];
+    if (kept == 0) {
+      const std::size_t slot = static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity);
+      weights_[static_cast<std::size_t>(kept)] = t.w[slot];
+      scratch_[static_cast<std::size_t>(kept++)] = t.value[slot];
+    }
     for (int i = 0; i < kept; ++i) {
       const std::size_t slot = static_cast<std::size_t>((t.head - kept + i + Capacity) % Capacity);
       t.value[slot] = scratch_[static_cast<std::size_t>(i)];
+      t.w[slot] = weights_[static_cast<std::size_t>(i)];
     }
     t.count = kept;
     clear_aggregation(t);
@@ -630,7 +772,11 @@ class ContinuousEstimator {
   detail::Storage<Known, kParams> known_{};
   detail::Storage<Track, kParams> tracks_{};
   std::array<Scalar, Capacity> scratch_{};
-  Vector<Scalar, kParams> estimate_, sigma_, last_window_, pending_;
+  std::array<Scalar, Capacity> weights_{};
+  Vector<Scalar, kParams> estimate_, sigma_, last_window_, last_variance_, pending_, pending_var_;
+  std::unique_ptr<WeakForm> weak_;
+  bool weak_form_ = false;
+  bool weighted_blocks_ = false;
   int pending_next_ = 0;
   detail::Storage<Event, kParams> events_{};
   int event_count_ = 0;

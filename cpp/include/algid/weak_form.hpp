@@ -241,8 +241,8 @@ class WeakFormWindows {
 
   /// The latest window result (3n+1, NaN where not identified or the window was singular).
   const Vector<Scalar, kParams>& result() const noexcept { return result_; }
-  /// Its variance per parameter (diagonal of the inverse corrected normal matrix; meaningful
-  /// once weighted() is true) [parameter units^2].
+  /// Its variance per parameter (diagonal of the inverse corrected normal matrix; NaN until
+  /// every DOF's rows were GLS-weighted when the window started) [parameter units^2].
   const Vector<Scalar, kParams>& variance() const noexcept { return variance_; }
   /// Window results since reset().
   long results() const noexcept { return results_; }
@@ -453,6 +453,7 @@ class WeakFormWindows {
   // One step of the pending window: rows, then one DOF per step, then the solve.
   bool window_step() noexcept {
     if (step_ == 0) {
+      window_weighted_ = weighted_;
       build_rows();
       normal_.setZero();
       rhs_.setZero();
@@ -486,7 +487,8 @@ class WeakFormWindows {
       for (int j = 0; j < params_; ++j) {
         ok = ok && std::isfinite(x(j));
         result_(j) = static_cast<Scalar>(x(j));
-        variance_(j) = static_cast<Scalar>(inverse_(j, j));
+        // the inverse normal matrix is the covariance only with GLS weights
+        variance_(j) = window_weighted_ ? static_cast<Scalar>(inverse_(j, j)) : static_cast<Scalar>(nan);
       }
     }
     if (!ok) {
@@ -602,7 +604,7 @@ class WeakFormWindows {
   bool pending_ = false;
   int step_ = 0;
   int refresh_dof_ = 0, refresh_stage_ = 0, weighted_dofs_ = 0;
-  bool weighted_ = false;
+  bool weighted_ = false, window_weighted_ = false;
   long results_ = 0;
   Vector<Scalar, kParams> result_, variance_;
 };
