@@ -118,8 +118,7 @@ struct ContinuousConfig {
   Scalar accel_noise = Scalar(-1);  ///< weak form: acceleration noise RMS [m/s^2]; -1: estimated
   Scalar force_noise = Scalar(-1);  ///< weak form: force noise RMS [N]; -1: estimated
   bool bias_compensation = true;    ///< weak form: subtract the regressor-noise term
-  bool weighted_mean = true;        ///< weak form: blocks by variance-weighted trimmed mean (false: median)
-  Scalar trim = Scalar(4);          ///< weighted mean: results beyond trim x spread from the block median left out
+  bool joint = true;  ///< weak form: estimate from the summed window normal equations (false: block medians)
   bool detect = true;  ///< run the change detector
   bool amortize = true;  ///< spread the per-parameter work over the samples
 };
@@ -143,7 +142,6 @@ enum class ContinuousConfigError {
   kBadDofs,
   kBadBand,
   kBadNoise,
-  kBadTrim,
 };
 
 /// Human-readable text of a ContinuousConfigError.
@@ -169,7 +167,6 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
     case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
     case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
     case ContinuousConfigError::kBadNoise: return to_string(WeakFormConfigError::kBadNoise);
-    case ContinuousConfigError::kBadTrim: return "trim must be finite and > 0";
   }
   return "unknown";
 }
@@ -236,7 +233,6 @@ class ContinuousEstimator {
     if (!std::isfinite(c.prefilter_hz) || (c.prefilter_hz < Scalar(0) && c.prefilter_hz != Scalar(-1)) ||
         !(c.prefilter_hz * c.dt < Scalar(0.45)) || (c.prefilter_order != 2 && c.prefilter_order != 4))
       return ContinuousConfigError::kBadPrefilter;
-    if (!std::isfinite(c.trim) || !(c.trim > Scalar(0))) return ContinuousConfigError::kBadTrim;
     if (c.method == WindowMethod::kWeakForm) {
       switch (WeakForm::validate(weak_config(c), n)) {
         case WeakFormConfigError::kNone: break;
@@ -262,7 +258,9 @@ class ContinuousEstimator {
     known_.resize(params_);
     tracks_.resize(params_);
     events_.resize(params_);
-    for (auto* v : {&estimate_, &sigma_, &last_window_, &last_variance_, &pending_, &pending_var_}) v->setZero(params_);
+    for (auto* v :
+         {&estimate_, &sigma_, &last_window_, &last_variance_, &pending_, &pending_var_, &track_, &track_sigma_})
+      v->setZero(params_);
     config_.window_s = resolved_window(config_);
     weak_form_ = config_.method == WindowMethod::kWeakForm;
     window_samples_ = std::lround(config_.window_s / config_.dt);
@@ -272,6 +270,7 @@ class ContinuousEstimator {
       // and the bias correction assume white.
       weak_ = std::make_unique<WeakForm>(weak_config(config_), n_);
       window_samples_ = weak_->window_samples();
+      if (config_.joint) joint_ = std::make_unique<Joint>(params_, std::max(config_.block, 2 * config_.stagger + 1));
     } else if (fc > Scalar(0)) {
       filter_.configure(fc, config_.dt, config_.prefilter_order);
       filtered_ = true;
@@ -289,8 +288,10 @@ class ContinuousEstimator {
     const Scalar block_s = static_cast<Scalar>(config_.block) * static_cast<Scalar>(window_samples_) /
                            static_cast<Scalar>(config_.stagger) * config_.dt;
     forget_ = config_.horizon_s > Scalar(0) ? std::exp(-block_s / config_.horizon_s) : Scalar(1);
-    weighted_blocks_ = weak_form_ && config_.weighted_mean;
-    block_scale_ = (weighted_blocks_ ? Scalar(1) : detail::kMedianInefficiency<Scalar>) /
+    if (joint_ && config_.horizon_s > Scalar(0))
+      joint_->forget =
+          std::exp(-static_cast<double>(hop_samples()) * static_cast<double>(config_.dt / config_.horizon_s));
+    block_scale_ = detail::kMedianInefficiency<Scalar> /
                    std::sqrt(static_cast<Scalar>(config_.block) * config_.overlap_efficiency);
     for (int j = 0; j < params_; ++j) known_[j] = Known::kEstimated;
     if (config_.boundary == Boundary::kFree) known_[params_ - 1] = Known::kZero;
@@ -303,12 +304,15 @@ class ContinuousEstimator {
   void reset() noexcept {
     restart_windows();
     if (weak_) weak_->reset();
+    if (joint_) joint_->clear();
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     for (int j = 0; j < params_; ++j) {
       tracks_[j] = Track{};
       const Scalar fixed = known_[j] == Known::kZero ? Scalar(0) : nan;
       estimate_(j) = fixed;
       sigma_(j) = known_[j] == Known::kZero ? Scalar(0) : nan;
+      track_(j) = estimate_(j);
+      track_sigma_(j) = sigma_(j);
       last_window_(j) = fixed;
       last_variance_(j) = nan;
       pending_(j) = nan;
@@ -348,7 +352,10 @@ class ContinuousEstimator {
     }
     if (weak_form_) {
       weak_->set_model(estimate_.data());
-      if (weak_->update(a, f)) harvest(weak_->result(), weak_->variance());
+      if (weak_->update(a, f)) {
+        harvest(weak_->result(), weak_->variance());
+        if (joint_) joint_add();
+      }
       work();
       return ready() ? Status::kOk : Status::kWarmup;
     }
@@ -449,7 +456,6 @@ class ContinuousEstimator {
   struct Track {
     std::array<Scalar, Capacity> value{};  // window results since the restart, newest at head - 1
     std::array<Scalar, Capacity> z{};  // their z-scores against the estimate before them
-    std::array<Scalar, Capacity> w{};  // their weights (1 / variance; 1 for the median path)
     int head = 0;
     int count = 0;  // entries since the restart, <= Capacity
     int z_count = 0;  // consecutive newest entries with a finite z, <= Capacity
@@ -457,7 +463,6 @@ class ContinuousEstimator {
     long fresh = 0;  // window results that arrived after the restart
     int in_block = 0;  // results in the current block
     Scalar s0 = Scalar(0), s1 = Scalar(0), s2 = Scalar(0), s0sq = Scalar(0);  // block-statistic moments
-    Scalar p0 = Scalar(0), p1 = Scalar(0);  // weighted sums of the block in progress (weighted mean)
     Scalar cusum_hi = Scalar(0), cusum_lo = Scalar(0);
     Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();  // per-window sigma
     Scalar relative_spread = std::numeric_limits<Scalar>::quiet_NaN();  // carried over a restart
@@ -554,34 +559,6 @@ class ContinuousEstimator {
     return count;
   }
 
-  // Weight of a window result: 1 / the per-window variance, estimated by the spread of the
-  // ring (1 before it exists). Not the window's own variance (diagonal of its inverse normal
-  // matrix): that one is computed from the same noisy rows, correlates with the window's
-  // error, and weighting by it biased the springs (8x the Cramer-Rao bound instead of 2.6x).
-  Scalar weight_of(const Track& t, Scalar) const noexcept {
-    if (!weighted_blocks_) return Scalar(1);
-    if (std::isfinite(t.spread) && t.spread > Scalar(0)) return Scalar(1) / (t.spread * t.spread);
-    return Scalar(1);
-  }
-
-  // Weighted mean of the last `block` results within trim spreads of their median `bm`
-  // (replaced by the mean); `bw` receives the sum of their weights.
-  void block_mean(const Track& t, Scalar& bm, Scalar& bw) const noexcept {
-    const Scalar reach = config_.trim * floor_spread(t, bm);
-    Scalar s0 = Scalar(0), s1 = Scalar(0);
-    for (int i = 0; i < config_.block; ++i) {
-      const std::size_t slot = static_cast<std::size_t>((t.head - 1 - i + Capacity) % Capacity);
-      const Scalar x = t.value[slot];
-      if (!(std::abs(x - bm) <= reach) && std::isfinite(reach)) continue;
-      s0 += t.w[slot];
-      s1 += t.w[slot] * x;
-    }
-    if (s0 > Scalar(0)) {
-      bm = s1 / s0;
-      bw = s0;
-    }
-  }
-
   Scalar floor_spread(const Track& t, Scalar estimate) const noexcept {
     return std::max(t.spread, config_.min_relative_spread * std::abs(estimate));
   }
@@ -591,7 +568,7 @@ class ContinuousEstimator {
     const Scalar x = pending_(j);
     if (!std::isfinite(x)) return;
     Track& t = tracks_[j];
-    const Scalar est = estimate_(j);
+    const Scalar est = track_(j);
     Scalar z = std::numeric_limits<Scalar>::quiet_NaN();
     if (t.spread_ok && std::isfinite(est)) {
       const Scalar s = floor_spread(t, est);
@@ -599,7 +576,6 @@ class ContinuousEstimator {
     }
     t.value[static_cast<std::size_t>(t.head)] = x;
     t.z[static_cast<std::size_t>(t.head)] = z;
-    t.w[static_cast<std::size_t>(t.head)] = weight_of(t, pending_var_(j));
     t.head = (t.head + 1) % Capacity;
     t.count = std::min(t.count + 1, Capacity);
     t.z_count = std::isfinite(z) ? std::min(t.z_count + 1, Capacity) : 0;
@@ -616,20 +592,11 @@ class ContinuousEstimator {
       }
     }
 
-    // Blocks: median (or weighted trimmed mean) of the last `block` results into the running
-    // mean; drift test on it.
-    if (weighted_blocks_ && t.s0 > Scalar(0) && std::abs(x - est) <= config_.trim * floor_spread(t, est)) {
-      const Scalar w = t.w[static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity)];
-      t.p0 += w;
-      t.p1 += w * x;
-    }
+    // Blocks: median of the last `block` results into the running mean; drift test on it.
     if (++t.in_block == config_.block) {
       t.in_block = 0;
-      t.p0 = t.p1 = Scalar(0);
       newest(t.value, t.head, config_.block);
-      Scalar bm = detail::median_inplace(scratch_.data(), config_.block);
-      Scalar bw = Scalar(1);
-      if (weighted_blocks_) block_mean(t, bm, bw);
+      const Scalar bm = detail::median_inplace(scratch_.data(), config_.block);
       if (config_.detect && t.s0 > Scalar(0) && t.spread_ok) {
         const Scalar sb = block_scale_ * floor_spread(t, est);
         if (sb > Scalar(0)) {
@@ -642,10 +609,10 @@ class ContinuousEstimator {
           }
         }
       }
-      t.s0 = forget_ * t.s0 + bw;
-      t.s1 = forget_ * t.s1 + bw * bm;
-      t.s2 = forget_ * t.s2 + bw * bm * bm;
-      t.s0sq = forget_ * forget_ * t.s0sq + bw * bw;
+      t.s0 = forget_ * t.s0 + Scalar(1);
+      t.s1 = forget_ * t.s1 + bm;
+      t.s2 = forget_ * t.s2 + bm * bm;
+      t.s0sq = forget_ * forget_ * t.s0sq + Scalar(1);
     }
     refresh(j, t);
   }
@@ -669,7 +636,7 @@ class ContinuousEstimator {
     }
     Scalar est;
     if (t.s0 > Scalar(0)) {
-      est = (t.s1 + t.p1) / (t.s0 + t.p0);
+      est = t.s1 / t.s0;
     } else {
       if (!std::isfinite(ring_median)) {
         newest(t.value, t.head, t.count);
@@ -681,8 +648,7 @@ class ContinuousEstimator {
     Scalar sig;
     if (t.s0 > Scalar(0)) {
       const Scalar n_eff = t.s0 * t.s0 / t.s0sq;
-      sig = weighted_blocks_ ? Scalar(1) / std::sqrt((t.s0 + t.p0) * config_.overlap_efficiency)
-                             : block_scale_ * t.spread / std::sqrt(n_eff);
+      sig = block_scale_ * t.spread / std::sqrt(n_eff);
       if (n_eff >= Scalar(4)) {
         const Scalar var = (t.s2 / t.s0 - est * est) * n_eff / (n_eff - Scalar(1));
         sig = std::max(sig, std::sqrt(std::max(var, Scalar(0)) / n_eff));
@@ -691,8 +657,21 @@ class ContinuousEstimator {
       sig = detail::kMedianInefficiency<Scalar> * t.spread /
             std::sqrt(std::max(Scalar(1), static_cast<Scalar>(t.count) * config_.overlap_efficiency));
     }
-    estimate_(j) = est;
-    sigma_(j) = sig;
+    track_(j) = est;
+    track_sigma_(j) = sig;
+    publish(j);
+  }
+
+  // The reported estimate of parameter j: the joint solution where it exists, else the track's.
+  void publish(int j) noexcept {
+    if (joint_ && joint_->valid && joint_->trusted[j]) {
+      estimate_(j) = static_cast<Scalar>(joint_->solution(j));
+      sigma_(j) =
+          static_cast<Scalar>(std::sqrt(joint_->inverse(j, j) / static_cast<double>(config_.overlap_efficiency)));
+    } else {
+      estimate_(j) = track_(j);
+      sigma_(j) = track_sigma_(j);
+    }
   }
 
   void clear_aggregation(Track& t) noexcept {
@@ -701,7 +680,6 @@ class ContinuousEstimator {
     t.z_count = 0;
     t.in_block = 0;
     t.s0 = t.s1 = t.s2 = t.s0sq = Scalar(0);
-    t.p0 = t.p1 = Scalar(0);
     t.cusum_hi = t.cusum_lo = Scalar(0);
   }
 
@@ -713,29 +691,26 @@ class ContinuousEstimator {
     for (int i = n - 1; i >= 0; --i) {  // oldest first into scratch_
       const std::size_t slot = static_cast<std::size_t>((t.head - 1 - i + Capacity) % Capacity);
       const Scalar zi = t.z[slot];
-      if ((zi > Scalar(0)) == (mz > Scalar(0)) && std::abs(zi) > Scalar(0.5) * config_.step_threshold) {
-        weights_[static_cast<std::size_t>(kept)] = t.w[slot];
+      if ((zi > Scalar(0)) == (mz > Scalar(0)) && std::abs(zi) > Scalar(0.5) * config_.step_threshold)
         scratch_[static_cast<std::size_t>(kept++)] = t.value[slot];
-      }
     }
-    if (kept == 0) {
-      const std::size_t slot = static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity);
-      weights_[static_cast<std::size_t>(kept)] = t.w[slot];
-      scratch_[static_cast<std::size_t>(kept++)] = t.value[slot];
-    }
+    if (kept == 0)
+      scratch_[static_cast<std::size_t>(kept++)] =
+          t.value[static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity)];
     for (int i = 0; i < kept; ++i) {
       const std::size_t slot = static_cast<std::size_t>((t.head - kept + i + Capacity) % Capacity);
       t.value[slot] = scratch_[static_cast<std::size_t>(i)];
-      t.w[slot] = weights_[static_cast<std::size_t>(i)];
     }
     t.count = kept;
     clear_aggregation(t);
+    joint_restart(j);
     finish_restart(j, t, ChangeKind::kStep);
   }
 
   void restart_drift(int j, Track& t, Scalar) noexcept {
     t.count = std::min(t.count, config_.block);  // the block just completed
     clear_aggregation(t);
+    joint_restart(j);
     finish_restart(j, t, ChangeKind::kDrift);
   }
 
@@ -750,6 +725,138 @@ class ContinuousEstimator {
     ev.after = estimate_(j);
     if (event_count_ < params_) ++event_count_;
     ++total_events_;
+  }
+
+  // Sum of the GLS-weighted weak-form windows' normal equations since the start (with
+  // `horizon_s` forgetting), and a ring of the newest windows' systems so that a restart of
+  // one parameter can take them out again. Heap-allocated at construction (weak form only).
+  struct Joint {
+    Eigen::MatrixXd normal, inverse;
+    Eigen::VectorXd rhs, solution, column;
+    Eigen::LDLT<Eigen::MatrixXd> ldlt;
+    detail::Storage<Eigen::MatrixXd, Dynamic> ring_normal;
+    detail::Storage<Eigen::VectorXd, Dynamic> ring_rhs;
+    detail::Storage<int, Dynamic> fresh;  // per parameter: windows since its restart
+    detail::Storage<bool, Dynamic> trusted;  // per parameter: the joint estimate is reported
+    int head = 0, count = 0, size = 0;
+    double forget = 1.0;
+    bool valid = false;
+
+    Joint(int params, int ring) : ldlt(params), size(ring) {
+      normal.setZero(params, params);
+      inverse.setZero(params, params);
+      rhs.setZero(params);
+      solution.setZero(params);
+      column.setZero(params);
+      ring_normal.resize(ring);
+      ring_rhs.resize(ring);
+      fresh.resize(params);
+      trusted.resize(params);
+      for (int r = 0; r < ring; ++r) {
+        ring_normal[r].setZero(params, params);
+        ring_rhs[r].setZero(params);
+      }
+    }
+    void clear() noexcept {
+      normal.setZero();
+      rhs.setZero();
+      fresh.fill(0);
+      trusted.fill(true);
+      head = count = 0;
+      valid = false;
+    }
+    int slot(int age) const noexcept {  // age 0: the newest window
+      return ((head - 1 - age) % size + size) % size;
+    }
+  };
+
+  // A weighted window with a finite result joins the joint system, which is solved again.
+  void joint_add() noexcept {
+    Joint& J = *joint_;
+    const auto& x = weak_->result();
+    for (int j = 0; j < params_; ++j)
+      if (known_[j] == Known::kEstimated && !std::isfinite(x(j))) return;
+    if (!weak_->result_weighted()) return;
+    if (J.forget < 1.0) {
+      J.normal *= J.forget;
+      J.rhs *= J.forget;
+      for (int r = 0; r < J.size; ++r) {
+        J.ring_normal[r] *= J.forget;
+        J.ring_rhs[r] *= J.forget;
+      }
+    }
+    const int r = J.head;
+    J.ring_normal[r] = weak_->normal();
+    J.ring_rhs[r] = weak_->rhs();
+    J.head = (J.head + 1) % J.size;
+    J.count = std::min(J.count + 1, J.size);
+    J.normal += weak_->normal();
+    J.rhs += weak_->rhs();
+    for (int j = 0; j < params_; ++j) {
+      if (J.trusted[j] || ++J.fresh[j] < J.size) continue;
+      joint_forget(j, J.size - config_.stagger);
+      J.trusted[j] = true;
+    }
+    joint_solve();
+  }
+
+  void joint_solve() noexcept {
+    Joint& J = *joint_;
+    J.ldlt.compute(J.normal);
+    J.valid = J.ldlt.info() == Eigen::Success && J.ldlt.vectorD().minCoeff() > 0.0;
+    if (J.valid) {
+      J.solution = J.rhs;
+      J.ldlt.solveInPlace(J.solution);
+      J.inverse.setIdentity();
+      J.ldlt.solveInPlace(J.inverse);
+      J.valid = J.solution.allFinite();
+    }
+    for (int j = 0; j < params_; ++j)
+      if (known_[j] == Known::kEstimated) publish(j);
+  }
+
+  // Take the `recent` newest windows out, marginalise parameter j out of the rest (its old
+  // information is void, the others' is kept: the Schur complement), pin j by a negligible
+  // prior at the track's estimate (so the system stays definite), put the recent windows back.
+  void joint_forget(int j, int recent) noexcept {
+    Joint& J = *joint_;
+    recent = std::min(recent, J.count);
+    for (int age = 0; age < recent; ++age) {
+      const int r = J.slot(age);
+      J.normal -= J.ring_normal[r];
+      J.rhs -= J.ring_rhs[r];
+    }
+    const double d = J.normal(j, j);
+    if (d > 0.0) {
+      J.column = J.normal.col(j);
+      const double bj = J.rhs(j);
+      for (int b = 0; b < params_; ++b) {
+        for (int a = 0; a < params_; ++a) J.normal(a, b) -= J.column(a) * J.column(b) / d;
+        J.rhs(b) -= J.column(b) * bj / d;
+      }
+    }
+    J.normal.row(j).setZero();
+    J.normal.col(j).setZero();
+    const double prior = 1e-12 * (d > 0.0 ? d : 1.0);
+    J.normal(j, j) = prior;
+    J.rhs(j) = prior * static_cast<double>(track_(j));
+    for (int age = 0; age < recent; ++age) {
+      const int r = J.slot(age);
+      J.normal += J.ring_normal[r];
+      J.rhs += J.ring_rhs[r];
+    }
+  }
+
+  // Parameter j restarted (step or drift): the joint forgets all it knew of j, and j's
+  // reported estimate is the track's (which follows a step within a second) until a ring of
+  // windows has arrived since; then j is forgotten once more, except for the newest ring
+  // minus K windows (none of which straddles the change), and the joint takes over again.
+  void joint_restart(int j) noexcept {
+    if (!joint_) return;
+    joint_forget(j, 0);
+    joint_->fresh[j] = 0;
+    joint_->trusted[j] = false;
+    joint_solve();
   }
 
   static constexpr int kChannels = N == Dynamic ? Dynamic : 2 * N;
@@ -772,11 +879,12 @@ class ContinuousEstimator {
   detail::Storage<Known, kParams> known_{};
   detail::Storage<Track, kParams> tracks_{};
   std::array<Scalar, Capacity> scratch_{};
-  std::array<Scalar, Capacity> weights_{};
   Vector<Scalar, kParams> estimate_, sigma_, last_window_, last_variance_, pending_, pending_var_;
   std::unique_ptr<WeakForm> weak_;
+  std::unique_ptr<Joint> joint_;
+  Vector<Scalar, kParams> track_, track_sigma_;
   bool weak_form_ = false;
-  bool weighted_blocks_ = false;
+
   int pending_next_ = 0;
   detail::Storage<Event, kParams> events_{};
   int event_count_ = 0;
