@@ -95,6 +95,8 @@ void bind_config_classes(py::module_& m) {
       .def_readwrite("force_noise", &Cont::force_noise, "weak form: force noise RMS [N]; -1: estimated")
       .def_readwrite("bias_compensation", &Cont::bias_compensation,
                      "weak form: subtract the regressor-noise term of the normal equations")
+      .def_readwrite("joint_efficiency", &Cont::joint_efficiency,
+                     "weak form: sigma = sqrt(diag(N^-1) / joint_efficiency) (overlap of the windows' information)")
       .def_readwrite("gls", &Cont::gls, "weak form: rows weighted by their noise covariance (False: unweighted)")
       .def_readwrite("joint", &Cont::joint,
                      "weak form: estimate from the summed window normal equations (False: block medians)")
