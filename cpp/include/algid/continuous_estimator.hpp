@@ -7,7 +7,14 @@
 /// of the noise grow faster than the information), so the estimator is restarted on short
 /// windows and the window results are aggregated.
 ///
-/// Pipeline, per sample:
+/// Window results come from WeakFormWindows (weak_form.hpp, the default: GLS over all
+/// weak-form rows of a 0.5 s window, bias-compensated, no prefilter) or, with
+/// WindowMethod::kAlgebraic, from the pipeline below (steps 0-1). With weak-form windows the
+/// reported estimate is the solution of the summed window normal equations (Joint, below); the
+/// per-parameter aggregation of steps 2-3 still runs and drives the change detector (step 4),
+/// and a restarted parameter is marginalised out of the joint sum (docs/continuous.md).
+///
+/// Pipeline of the algebraic windows, per sample:
 ///   0. Prefilter. The accelerations and the forces pass through the same Butterworth
 ///      low-pass (`prefilter_hz`, default fs/20; order 4). Eq. 1 is linear and time-invariant,
 ///      so the filtered signals obey it with the same parameters, while the white noise above
@@ -51,6 +58,9 @@
 /// parameter two rings of Capacity scalars (window results and their z-scores):
 /// 2 (3n+1) Capacity scalars: about 50 KiB for n = 3, 0.85 MiB for n = 64 (defaults). Inside the
 /// object for a fixed N; allocated by the constructor for N = Dynamic (n given at run time).
+/// The weak-form windows (WindowMethod::kWeakForm, the default) and their joint system add
+/// buffers sized by the window and the band (about 0.3 MB for n = 5), allocated by the
+/// constructor for every N: firmware without a heap uses WindowMethod::kAlgebraic.
 
 #include "algid/chain_estimator.hpp"
 #include "algid/detail/prefilter.hpp"
