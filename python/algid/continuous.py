@@ -124,7 +124,10 @@ class ContinuousEstimator(PackedParameters):
     min_windows : int
         Window results since a restart before the tests are armed (default 8).
     overlap_efficiency : float
-        Independent fraction of the staggered window results used in the uncertainty (0.5).
+        Independent fraction of the staggered window results in the per-parameter track (its
+        uncertainty, the drift test's scale); -1 (default): 0.25 weak form, 0.5 algebraic.
+    joint_efficiency : float
+        Weak form: sigma = sqrt(diag(N^-1) / joint_efficiency) (default 0.3).
     horizon_s : float
         Forgetting time constant of the block mean [s]; 0 = none (default).
     band_hz : float
