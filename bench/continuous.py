@@ -9,10 +9,10 @@ accelerations only ("accel", force known: the case the Cramer-Rao bound is compu
 on accelerations and forces ("accel+force").
 
 Estimators:
-* ``continuous``: algid.ContinuousEstimator with its defaults (no tuning);
-* ``rls``: RLS with forgetting on row 1 of eqs. 3-4 over reseeded windows, fed the same
-  prefiltered signals as the continuous estimator (its default Butterworth, order 4 at fs/20:
-  it works on the same regressors and gains as much from it), two settings
+* ``continuous``: algid.ContinuousEstimator with its defaults (weak-form windows; no tuning);
+* ``rls``: RLS with forgetting on row 1 of eqs. 3-4 over reseeded windows, fed the signals
+  through the algebraic windows' prefilter (Butterworth, order 4 at fs/20: it works on the
+  algebraic windows' regressors and gains as much from it as they do), two settings
   tuned on a separate seed (``--tune``): ``rls-inf`` (no forgetting: best on a constant
   system) and ``rls-fair`` (best worst-case score over the issue's targets, see ``score``);
 * ``ukf``: filterpy UKF on states and log-parameters, the random-walk intensity tuned the
@@ -126,8 +126,8 @@ SETTLE = 115  # samples: the prefilter's start-up transient below 1e-6 (as the C
 
 
 def prefilter(a, u):
-    """The continuous estimator's default prefilter (Butterworth order 4 at fs/20, causal),
-    given to RLS too: it works on the same regressors and gains the same."""
+    """The algebraic windows' prefilter (Butterworth order 4 at fs/20, causal), given to RLS:
+    it works on the same regressors and gains the same."""
     b, den = butter(4, 0.05 * 2.0)
     return lfilter(b, den, a, axis=0), lfilter(b, den, u, axis=0)
 

@@ -480,8 +480,8 @@ def main(argv: list[str] | None = None) -> int:
                     configs[f"{subject}_double_v3"][str(n)]["instructions_per_dof_sample"] = ipds
 
     continuous_note = (
-        "ContinuousEstimator<N, Scalar> with its default configuration (K = 4 staggered 0.3 s "
-        "windows, block-median aggregation, change detection on), one uninterrupted signal"
+        "ContinuousEstimator<N, Scalar> with its default configuration (K = 4 staggered 0.5 s "
+        "weak-form windows, joint estimate, change detection on), one uninterrupted signal"
         if "continuous_double" in configs
         else "algid::ContinuousEstimator is not in the core (cpp/include/algid/continuous_estimator.hpp "
         "missing at build time): not measured"

@@ -1,7 +1,8 @@
-"""ContinuousEstimator through Python: window results against the numpy reference, the running
-estimate against an independent median / block-median computation, per-sample vs batch,
-tracking of a stiffness step and no alarm on a constant system under 40 dB noise, argument
-checking."""
+"""ContinuousEstimator through Python: algebraic window results against the numpy reference,
+the running estimate of the block-median path against an independent median / block-median
+computation, per-sample vs batch, tracking of a stiffness step and no alarm on a constant
+system under 40 dB noise (default weak-form windows), argument checking. The weak-form
+windows against their numpy oracle: test_weak_form.py."""
 
 from __future__ import annotations
 
@@ -62,7 +63,7 @@ def noisy_record():
 
 def test_window_results_match_numpy_reference(noisy_record):
     a, u, _ = noisy_record
-    est = algid.ContinuousEstimator(3, DT, detect=False, amortize=False, prefilter_hz=0.0)
+    est = algid.ContinuousEstimator(3, DT, method="algebraic", detect=False, amortize=False, prefilter_hz=0.0)
     out = est.run(a, u)
     M, K, d, n = est.window_samples, 4, 6, 3
     assert M == 300
@@ -88,7 +89,7 @@ def test_prefilter_matches_scipy_butterworth(noisy_record):
     from scipy.signal import butter, lfilter
 
     a, u, _ = noisy_record
-    est = algid.ContinuousEstimator(3, DT, detect=False, amortize=False)
+    est = algid.ContinuousEstimator(3, DT, method="algebraic", detect=False, amortize=False)
     assert est.prefilter_hz == pytest.approx(50.0) and est.settle_samples == 115
     out = est.run(a, u)
     b, den = butter(4, 50.0 / 500.0)
@@ -104,7 +105,7 @@ def test_prefilter_matches_scipy_butterworth(noisy_record):
 
 def test_running_estimate_is_median_then_block_mean(noisy_record):
     a, u, _ = noisy_record
-    est = algid.ContinuousEstimator(3, DT, detect=False, amortize=False, block=16)
+    est = algid.ContinuousEstimator(3, DT, method="algebraic", detect=False, amortize=False, block=16)
     out = est.run(a, u)
     W, samples = out["windows"], out["window_sample"]
     assert len(W) > 60
@@ -179,12 +180,13 @@ def test_bad_sample_drops_windows_keeps_estimate(noisy_record):
     a, u, _ = noisy_record
     a = a.copy()
     a[3000, 1] = np.nan
-    out = algid.ContinuousEstimator(3, DT).run(a, u)
-    assert out["status"][3000] == int(algid.Status.BAD_INPUT)
-    assert np.all(np.isfinite(out["estimate"][3001]))
-    # the schedule restarts: no window is harvested during the first M samples after it
-    after = out["window_sample"][out["window_sample"] > 3000]
-    assert after[0] >= 3000 + 115 + 300  # prefilter settling, then a full window
+    for method, first in (("algebraic", 115 + 300), ("weak_form", 500)):  # (prefilter settling and) a window
+        out = algid.ContinuousEstimator(3, DT, method=method).run(a, u)
+        assert out["status"][3000] == int(algid.Status.BAD_INPUT)
+        assert np.all(np.isfinite(out["estimate"][3001]))
+        # the schedule restarts: no window is harvested during the first window after it
+        after = out["window_sample"][out["window_sample"] > 3000 + 5]
+        assert after[0] >= 3000 + first
 
 
 def test_runtime_size_and_instruction_sets_agree(noisy_record):
@@ -204,7 +206,8 @@ def test_runtime_size_and_instruction_sets_agree(noisy_record):
     base = chain_core("x86-64").ContinuousEstimator3(cfg, 3).run(a, u)
     late = slice(len(base["estimate"]) // 2, None)
     np.testing.assert_allclose(base["estimate"][late], fixed["estimate"][late], rtol=1e-6)
-    assert algid.ContinuousConfig().window_s == 0.3 and est.options["stagger"] == 4
+    assert algid.ContinuousConfig().window_s == -1 and est.options["stagger"] == 4
+    assert est.options["method"] == "weak_form" and est.window_samples == 500
 
 
 def test_arguments_are_checked():
@@ -218,6 +221,12 @@ def test_arguments_are_checked():
         algid.ContinuousEstimator(3, DT, prefilter_hz=600.0)
     with pytest.raises(ValueError, match="stagger"):
         algid.ContinuousEstimator(3, DT, stagger=8)
+    with pytest.raises(ValueError, match="method"):
+        algid.ContinuousEstimator(3, DT, method="kalman")
+    with pytest.raises(ValueError, match="band_hz"):
+        algid.ContinuousEstimator(3, DT, band_hz=1.0)
+    with pytest.raises(ValueError, match="noise"):
+        algid.ContinuousEstimator(3, DT, accel_noise=-3.0)
     est = algid.ContinuousEstimator(3, DT)
     with pytest.raises(ValueError, match=r"\(T, 3\)"):
         est.run(np.zeros((10, 2)), np.zeros((10, 2)))

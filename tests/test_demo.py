@@ -108,7 +108,7 @@ def test_adapter_serves_growing_window_then_running_estimate():
     a, u = rng.standard_normal((T, n)), rng.standard_normal((T, n))
     ad = ContinuousAdapter(n, 1e-3, "fixed", rel_sigma_tol=0.05)
     single = algid.ChainEstimator(n, 1e-3).run(a, u)
-    cont = algid.ContinuousEstimator(n, 1e-3).run(a, u)
+    cont = algid.ContinuousEstimator(n, 1e-3, method="algebraic").run(a, u)  # the adapter's default
     for k in range(T):
         ad.update(a[k], u[k])
         if ad.running_from is None or k < ad.running_from:

@@ -13,7 +13,7 @@
 // Configurations (SUBJECT): "default" = ChainEstimator<N, Scalar> (one window from t0, reseeded
 // between timing windows); "dynamic" = ChainEstimator<Dynamic, Scalar>(config, N), the same
 // protocol; "continuous" = ContinuousEstimator<N, Scalar> with its default configuration (K = 4
-// staggered reseeded 0.3 s windows, block-median aggregation, change detection), fed one
+// staggered 0.5 s weak-form windows, joint estimate, change detection), fed one
 // uninterrupted signal (never reset between timing windows); "continuous_dynamic" = the same
 // with ContinuousEstimator<Dynamic, Scalar>(config, N); "rls" = the baseline; "batch" =
 // ChainEstimator<N, Scalar>::record() (what the Python run() calls: update() sample by sample,

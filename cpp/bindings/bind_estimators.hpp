@@ -224,6 +224,16 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
       .def_property_readonly("estimate", [](const Est& e) { return Array(e.params(), e.estimate().data()); })
       .def_property_readonly("sigma", [](const Est& e) { return Array(e.params(), e.sigma().data()); })
       .def_property_readonly("last_window", [](const Est& e) { return Array(e.params(), e.last_window().data()); })
+      .def_property_readonly("last_variance", [](const Est& e) { return Array(e.params(), e.last_variance().data()); })
+      .def_property_readonly("hop_samples", &Est::hop_samples)
+      .def_property_readonly("noise_rms",
+                             [](const Est& e) {
+                               const int C = 2 * e.dofs();
+                               Array out(C);
+                               for (int c = 0; c < C; ++c)
+                                 out.mutable_data()[c] = e.weak_form() ? e.weak_form()->noise_rms(c) : -1.0;
+                               return out;
+                             })
       .def_property_readonly("ready", &Est::ready)
       .def_property_readonly("window_results", &Est::window_results)
       .def_property_readonly("window_samples", &Est::window_samples)

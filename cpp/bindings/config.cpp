@@ -17,6 +17,16 @@ algid::Boundary parse_boundary(const std::string& b) {
 
 const char* boundary_name(algid::Boundary b) { return b == algid::Boundary::kFree ? "free" : "fixed"; }
 
+algid::WindowMethod parse_method(const std::string& m) {
+  if (m == "weak_form") return algid::WindowMethod::kWeakForm;
+  if (m == "algebraic") return algid::WindowMethod::kAlgebraic;
+  throw py::value_error("method must be 'weak_form' or 'algebraic', got '" + m + "'");
+}
+
+const char* method_name(algid::WindowMethod m) {
+  return m == algid::WindowMethod::kAlgebraic ? "algebraic" : "weak_form";
+}
+
 // dt, boundary (as "fixed" / "free") and the validity rule, which both configs carry.
 template <class Config, class Class>
 void bind_window_fields(Class& cls) {
@@ -59,7 +69,11 @@ void bind_config_classes(py::module_& m) {
                         "Configuration of a ContinuousEstimator (C++ ContinuousConfig; defaults from C++).");
   cont.def(py::init<>());
   bind_window_fields<Cont>(cont);
-  cont.def_readwrite("window_s", &Cont::window_s, "window length L [s]")
+  cont.def_property(
+          "method", [](const Cont& c) { return method_name(c.method); },
+          [](Cont& c, const std::string& v) { c.method = parse_method(v); },
+          "window results: 'weak_form' (GLS over all test-function rows, bias-compensated) or 'algebraic'")
+      .def_readwrite("window_s", &Cont::window_s, "window length L [s]; -1: 0.5 (weak form), 0.3 (algebraic)")
       .def_readwrite("stagger", &Cont::stagger, "windows in flight K, started L/K apart")
       .def_readwrite("block", &Cont::block, "window results per block median")
       .def_readwrite("confirm", &Cont::confirm, "window results in the step test; 0: 2K+1")
@@ -76,6 +90,16 @@ void bind_config_classes(py::module_& m) {
       .def_readwrite("prefilter_hz", &Cont::prefilter_hz,
                      "low-pass on accelerations and forces [Hz]; -1: 0.05/dt, 0: off")
       .def_readwrite("prefilter_order", &Cont::prefilter_order, "Butterworth order of the prefilter: 2 or 4")
+      .def_readwrite("band_hz", &Cont::band_hz, "weak form: highest test-function frequency [Hz]; -1: 0.05/dt")
+      .def_readwrite("accel_noise", &Cont::accel_noise, "weak form: acceleration noise RMS [m/s^2]; -1: estimated")
+      .def_readwrite("force_noise", &Cont::force_noise, "weak form: force noise RMS [N]; -1: estimated")
+      .def_readwrite("bias_compensation", &Cont::bias_compensation,
+                     "weak form: subtract the regressor-noise term of the normal equations")
+      .def_readwrite("joint_efficiency", &Cont::joint_efficiency,
+                     "weak form: sigma = sqrt(diag(N^-1) / joint_efficiency) (overlap of the windows' information)")
+      .def_readwrite("gls", &Cont::gls, "weak form: rows weighted by their noise covariance (False: unweighted)")
+      .def_readwrite("joint", &Cont::joint,
+                     "weak form: estimate from the summed window normal equations (False: block medians)")
       .def_readwrite("detect", &Cont::detect, "run the change detector")
       .def_readwrite("amortize", &Cont::amortize, "spread the per-parameter work over the samples");
   cont.def(

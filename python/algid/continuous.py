@@ -1,14 +1,18 @@
 """Python face of the continuous estimator: ``ContinuousEstimator(n, dt, ...)``.
 
 Continuous operation of the algebraic estimator for long, noisy records (the per-sample work
-runs in ``cpp/include/algid/continuous_estimator.hpp``):
+runs in ``cpp/include/algid/continuous_estimator.hpp`` and ``weak_form.hpp``):
 
-* the same Butterworth low-pass on accelerations and forces (default fs/20), which removes
-  out-of-band noise without changing eq. 1;
-* K staggered windows of length L (``stagger``, ``window_s``), each a ChainEstimator that is
-  reseeded when full: a window result every L/K;
-* per parameter, a running estimate (median of the window results until a block of ``block``
-  results is complete, then the mean of block medians) with a one-sigma uncertainty;
+* K staggered windows of length L (``stagger``, ``window_s``): a window result every L/K.
+  By default (``method="weak_form"``) each window is the generalised least-squares solution
+  of all its weak-form rows (eq. 1 against sin^4-tapered tones up to ``band_hz``, no initial
+  conditions), weighted by their noise covariance and corrected for the bias that noise in
+  the regressors causes (noise level estimated from the signals, or given); with
+  ``method="algebraic"`` each window is a ChainEstimator behind the same Butterworth
+  low-pass on accelerations and forces (default fs/20);
+* the running estimate: the sum of the weak-form windows' normal equations (the windows
+  combined by their information), or per parameter the mean of block medians of the window
+  results (algebraic windows, ``joint=False``), with a one-sigma uncertainty;
 * a change detector (step test on the median robust z-score of the last 2K+1 window
   results; drift test, a CUSUM of block medians) that restarts the aggregation of the
   parameter that changed and reports a change event.
@@ -96,8 +100,11 @@ class ContinuousEstimator(PackedParameters):
     **options
         Fields of :class:`ContinuousConfig` (defaults: ``ContinuousConfig()``):
 
+    method : {"weak_form", "algebraic"}
+        Window results: GLS over all weak-form rows with bias compensation (default), or the
+        paper's exactly determined algebraic windows behind the prefilter.
     window_s : float
-        Window length L [s] (default 0.3).
+        Window length L [s]; -1 (default): 0.5 (weak form), 0.3 (algebraic).
     stagger : int
         Windows in flight K (1..4), started L/K apart (default 4).
     block : int
@@ -117,11 +124,26 @@ class ContinuousEstimator(PackedParameters):
     min_windows : int
         Window results since a restart before the tests are armed (default 8).
     overlap_efficiency : float
-        Independent fraction of the staggered window results used in the uncertainty (0.5).
+        Independent fraction of the staggered window results in the per-parameter track (its
+        uncertainty, the drift test's scale); -1 (default): 0.25 weak form, 0.5 algebraic.
+    joint_efficiency : float
+        Weak form: sigma = sqrt(diag(N^-1) / joint_efficiency) (default 0.3).
     horizon_s : float
         Forgetting time constant of the block mean [s]; 0 = none (default).
+    band_hz : float
+        Weak form: highest test-function frequency [Hz]; -1 = fs/20 (default).
+    accel_noise, force_noise : float
+        Weak form: RMS of the white noise on the accelerations [m/s^2] and forces [N]; -1 =
+        estimated from the fourth differences of the signals (default).
+    bias_compensation : bool
+        Weak form: subtract the regressor-noise term from the normal equations (default True).
+    gls : bool
+        Weak form: weight the rows by their noise covariance at the running estimate (True).
+    joint : bool
+        Weak form: report the solution of the summed window normal equations (True), else the
+        mean of block medians.
     prefilter_hz : float
-        Butterworth low-pass applied alike to accelerations and forces before the windows [Hz];
+        Algebraic windows: Butterworth low-pass applied alike to accelerations and forces [Hz];
         -1 = fs/20 (default), 0 = off. Eq. 1 is LTI, so the filtered signals obey it with the
         same parameters while the out-of-band noise (the cause of the noise bias) is removed.
         Set it just above the band of the response for the best accuracy.
@@ -194,6 +216,17 @@ class ContinuousEstimator(PackedParameters):
     def window_results(self) -> int:
         """Window results harvested so far."""
         return int(self._impl.window_results)
+
+    @property
+    def hop_samples(self) -> int:
+        """Samples between two window results."""
+        return int(self._impl.hop_samples)
+
+    @property
+    def noise_rms(self) -> np.ndarray:
+        """Noise RMS per channel used by the weak-form windows (accelerations then forces,
+        (2n,); estimated unless given; -1 with algebraic windows)."""
+        return np.asarray(self._impl.noise_rms)
 
     @property
     def settle_samples(self) -> int:

@@ -12,3 +12,4 @@
 #include "algid/quadrature.hpp"
 #include "algid/ratio_estimator.hpp"
 #include "algid/types.hpp"
+#include "algid/weak_form.hpp"

@@ -7,7 +7,14 @@
 /// of the noise grow faster than the information), so the estimator is restarted on short
 /// windows and the window results are aggregated.
 ///
-/// Pipeline, per sample:
+/// Window results come from WeakFormWindows (weak_form.hpp, the default: GLS over all
+/// weak-form rows of a 0.5 s window, bias-compensated, no prefilter) or, with
+/// WindowMethod::kAlgebraic, from the pipeline below (steps 0-1). With weak-form windows the
+/// reported estimate is the solution of the summed window normal equations (Joint, below); the
+/// per-parameter aggregation of steps 2-3 still runs and drives the change detector (step 4),
+/// and a restarted parameter is marginalised out of the joint sum (docs/continuous.md).
+///
+/// Pipeline of the algebraic windows, per sample:
 ///   0. Prefilter. The accelerations and the forces pass through the same Butterworth
 ///      low-pass (`prefilter_hz`, default fs/20; order 4). Eq. 1 is linear and time-invariant,
 ///      so the filtered signals obey it with the same parameters, while the white noise above
@@ -51,18 +58,23 @@
 /// parameter two rings of Capacity scalars (window results and their z-scores):
 /// 2 (3n+1) Capacity scalars: about 50 KiB for n = 3, 0.85 MiB for n = 64 (defaults). Inside the
 /// object for a fixed N; allocated by the constructor for N = Dynamic (n given at run time).
+/// The weak-form windows (WindowMethod::kWeakForm, the default) and their joint system add
+/// buffers sized by the window and the band (about 0.3 MB for n = 5), allocated by the
+/// constructor for every N: firmware without a heap uses WindowMethod::kAlgebraic.
 
 #include "algid/chain_estimator.hpp"
 #include "algid/detail/prefilter.hpp"
 #include "algid/detail/robust.hpp"
 #include "algid/detail/storage.hpp"
 #include "algid/types.hpp"
+#include "algid/weak_form.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <utility>
 
 namespace algid {
@@ -84,6 +96,12 @@ struct ChangeEvent {
   Scalar after = Scalar(0);               ///< running estimate right after it [parameter units]
 };
 
+/// Where the window results come from.
+enum class WindowMethod : int {
+  kWeakForm = 0,   ///< WeakFormWindows: GLS over all test-function rows, bias-compensated (default)
+  kAlgebraic = 1,  ///< ChainEstimator: the paper's exactly determined windows behind the prefilter
+};
+
 /// Configuration of a ContinuousEstimator. The defaults are the ones benchmarked in
 /// bench/continuous.py (1 kHz, broadband forcing, 20-60 dB SNR).
 template <class Scalar>
@@ -91,7 +109,8 @@ struct ContinuousConfig {
   Scalar dt = Scalar(1e-3);                       ///< sample period [s]
   Boundary boundary = Boundary::kFixed;           ///< right end: wall or free (see ChainEstimator)
   ValidityRule<Scalar> validity{};                ///< validity rule of every window
-  Scalar window_s = Scalar(0.3);                  ///< window length L [s] (rounded to samples)
+  WindowMethod method = WindowMethod::kWeakForm;  ///< source of the window results
+  Scalar window_s = Scalar(-1);  ///< window length L [s] (rounded to samples); -1: 0.5 (weak form), 0.3 (algebraic)
   int stagger = 4;                                ///< windows in flight K, started L/K apart (<= MaxStagger)
   int block = 16;                                 ///< window results per block median (<= Capacity)
   int confirm = 0;                                ///< window results in the step test; 0: 2K+1 (<= Capacity)
@@ -101,10 +120,19 @@ struct ContinuousConfig {
   Scalar cusum_clip = Scalar(4);                  ///< drift test: clip of one standardised block median
   Scalar min_relative_spread = Scalar(1e-2);      ///< floor of the per-window spread relative to |estimate|
   int min_windows = 8;                            ///< window results since a restart before the tests are armed
-  Scalar overlap_efficiency = Scalar(0.5);        ///< independent fraction of the staggered window results, (0, 1]
+  /// independent fraction of the staggered window results, (0, 1]; -1: 0.25 (weak form), 0.5 (algebraic)
+  Scalar overlap_efficiency = Scalar(-1);
+  /// weak form: sigma = sqrt(diag(N^-1) / joint_efficiency), for the overlap of the windows' information, (0, 1]
+  Scalar joint_efficiency = Scalar(0.3);
   Scalar horizon_s = Scalar(0);                   ///< forgetting time constant of the block mean [s]; 0: none
   Scalar prefilter_hz = Scalar(-1);  ///< low-pass on accelerations and forces alike [Hz]; -1: 0.05 / dt, 0: off
   int prefilter_order = 4;  ///< Butterworth order of the prefilter: 2 or 4
+  Scalar band_hz = Scalar(-1);      ///< weak form: highest test-function frequency [Hz]; -1: 0.05 / dt
+  Scalar accel_noise = Scalar(-1);  ///< weak form: acceleration noise RMS [m/s^2]; -1: estimated
+  Scalar force_noise = Scalar(-1);  ///< weak form: force noise RMS [N]; -1: estimated
+  bool bias_compensation = true;    ///< weak form: subtract the regressor-noise term
+  bool gls = true;                  ///< weak form: rows weighted by their noise covariance (false: unweighted)
+  bool joint = true;  ///< weak form: estimate from the summed window normal equations (false: block medians)
   bool detect = true;  ///< run the change detector
   bool amortize = true;  ///< spread the per-parameter work over the samples
 };
@@ -126,6 +154,8 @@ enum class ContinuousConfigError {
   kBadHorizon,
   kBadPrefilter,
   kBadDofs,
+  kBadBand,
+  kBadNoise,
 };
 
 /// Human-readable text of a ContinuousConfigError.
@@ -144,11 +174,14 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
       return "step_threshold, cusum_threshold and cusum_clip must be > 0, cusum_reference >= 0";
     case ContinuousConfigError::kBadSpreadFloor: return "min_relative_spread must be finite and >= 0";
     case ContinuousConfigError::kBadMinWindows: return "min_windows must be in [3, Capacity]";
-    case ContinuousConfigError::kBadEfficiency: return "overlap_efficiency must be in (0, 1]";
+    case ContinuousConfigError::kBadEfficiency:
+      return "overlap_efficiency must be -1 (auto) or in (0, 1], joint_efficiency in (0, 1]";
     case ContinuousConfigError::kBadHorizon: return "horizon_s must be finite and >= 0 [s]";
     case ContinuousConfigError::kBadPrefilter:
       return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in (0, 0.45/dt) [Hz], prefilter_order 2 or 4";
     case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
+    case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
+    case ContinuousConfigError::kBadNoise: return to_string(WeakFormConfigError::kBadNoise);
   }
   return "unknown";
 }
@@ -169,6 +202,8 @@ class ContinuousEstimator {
  public:
   /// The estimator run on each window.
   using Window = ChainEstimator<N, Scalar, P>;
+  /// The weak-form windows (WindowMethod::kWeakForm).
+  using WeakForm = WeakFormWindows<N, Scalar, MaxStagger>;
   /// Configuration type.
   using Config = ContinuousConfig<Scalar>;
   /// Change event type.
@@ -191,8 +226,9 @@ class ContinuousEstimator {
       case ConfigError::kBadMinHadamard: return ContinuousConfigError::kBadMinHadamard;
       case ConfigError::kBadDofs: return ContinuousConfigError::kBadDofs;
     }
-    if (!std::isfinite(c.window_s) || !(c.window_s > Scalar(0))) return ContinuousConfigError::kBadWindow;
-    const Scalar samples = c.window_s / c.dt;
+    const Scalar window_s = resolved_window(c);
+    if (!std::isfinite(window_s) || !(window_s > Scalar(0))) return ContinuousConfigError::kBadWindow;
+    const Scalar samples = window_s / c.dt;
     if (!std::isfinite(samples) || samples > Scalar(1e9)) return ContinuousConfigError::kBadWindow;
     const long m = std::lround(samples);
     if (m < static_cast<long>(P) + c.validity.min_samples) return ContinuousConfigError::kBadWindow;
@@ -206,12 +242,25 @@ class ContinuousEstimator {
     if (!(c.min_relative_spread >= Scalar(0)) || !std::isfinite(c.min_relative_spread))
       return ContinuousConfigError::kBadSpreadFloor;
     if (c.min_windows < 3 || c.min_windows > Capacity) return ContinuousConfigError::kBadMinWindows;
-    if (!(c.overlap_efficiency > Scalar(0) && c.overlap_efficiency <= Scalar(1)))
+    if ((!(c.overlap_efficiency > Scalar(0) && c.overlap_efficiency <= Scalar(1)) &&
+         c.overlap_efficiency != Scalar(-1)) ||
+        !(c.joint_efficiency > Scalar(0) && c.joint_efficiency <= Scalar(1)))
       return ContinuousConfigError::kBadEfficiency;
     if (!(c.horizon_s >= Scalar(0)) || !std::isfinite(c.horizon_s)) return ContinuousConfigError::kBadHorizon;
     if (!std::isfinite(c.prefilter_hz) || (c.prefilter_hz < Scalar(0) && c.prefilter_hz != Scalar(-1)) ||
         !(c.prefilter_hz * c.dt < Scalar(0.45)) || (c.prefilter_order != 2 && c.prefilter_order != 4))
       return ContinuousConfigError::kBadPrefilter;
+    if (c.method == WindowMethod::kWeakForm) {
+      switch (WeakForm::validate(weak_config(c), n)) {
+        case WeakFormConfigError::kNone: break;
+        case WeakFormConfigError::kBadSamplePeriod: return ContinuousConfigError::kBadSamplePeriod;
+        case WeakFormConfigError::kBadWindow: return ContinuousConfigError::kBadWindow;
+        case WeakFormConfigError::kBadStagger: return ContinuousConfigError::kBadStagger;
+        case WeakFormConfigError::kBadBand: return ContinuousConfigError::kBadBand;
+        case WeakFormConfigError::kBadNoise: return ContinuousConfigError::kBadNoise;
+        case WeakFormConfigError::kBadDofs: return ContinuousConfigError::kBadDofs;
+      }
+    }
     return ContinuousConfigError::kNone;
   }
 
@@ -226,10 +275,24 @@ class ContinuousEstimator {
     known_.resize(params_);
     tracks_.resize(params_);
     events_.resize(params_);
-    for (auto* v : {&estimate_, &sigma_, &last_window_, &pending_}) v->setZero(params_);
+    for (auto* v :
+         {&estimate_, &sigma_, &last_window_, &last_variance_, &pending_, &pending_var_, &track_, &track_sigma_})
+      v->setZero(params_);
+    config_.window_s = resolved_window(config_);
+    // Successive weak-form window results are more correlated (sin^4 taper, K = 4): CUSUM false
+    // alarms on dampings with 0.5 (40 dB, tones) and 0.3 (20 dB, bench/continuous.py), none with 0.25.
+    if (config_.overlap_efficiency == Scalar(-1))
+      config_.overlap_efficiency = config_.method == WindowMethod::kWeakForm ? Scalar(0.25) : Scalar(0.5);
+    weak_form_ = config_.method == WindowMethod::kWeakForm;
     window_samples_ = std::lround(config_.window_s / config_.dt);
     const Scalar fc = config_.prefilter_hz < Scalar(0) ? Scalar(0.05) / config_.dt : config_.prefilter_hz;
-    if (fc > Scalar(0)) {
+    if (weak_form_) {
+      // The test functions are the low-pass; a prefilter would colour the noise the weights
+      // and the bias correction assume white.
+      weak_ = std::make_unique<WeakForm>(weak_config(config_), n_);
+      window_samples_ = weak_->window_samples();
+      if (config_.joint) joint_ = std::make_unique<Joint>(params_, std::max(config_.block, 2 * config_.stagger + 1));
+    } else if (fc > Scalar(0)) {
       filter_.configure(fc, config_.dt, config_.prefilter_order);
       filtered_ = true;
       // ln(1e6) / decay: the start-up transient is below 1e-6 of the signal when windows start
@@ -246,6 +309,9 @@ class ContinuousEstimator {
     const Scalar block_s = static_cast<Scalar>(config_.block) * static_cast<Scalar>(window_samples_) /
                            static_cast<Scalar>(config_.stagger) * config_.dt;
     forget_ = config_.horizon_s > Scalar(0) ? std::exp(-block_s / config_.horizon_s) : Scalar(1);
+    if (joint_ && config_.horizon_s > Scalar(0))
+      joint_->forget =
+          std::exp(-static_cast<double>(hop_samples()) * static_cast<double>(config_.dt / config_.horizon_s));
     block_scale_ = detail::kMedianInefficiency<Scalar> /
                    std::sqrt(static_cast<Scalar>(config_.block) * config_.overlap_efficiency);
     for (int j = 0; j < params_; ++j) known_[j] = Known::kEstimated;
@@ -258,14 +324,20 @@ class ContinuousEstimator {
   /// @realtime no allocation, no throw
   void reset() noexcept {
     restart_windows();
+    if (weak_) weak_->reset();
+    if (joint_) joint_->clear();
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     for (int j = 0; j < params_; ++j) {
       tracks_[j] = Track{};
       const Scalar fixed = known_[j] == Known::kZero ? Scalar(0) : nan;
       estimate_(j) = fixed;
       sigma_(j) = known_[j] == Known::kZero ? Scalar(0) : nan;
+      track_(j) = estimate_(j);
+      track_sigma_(j) = sigma_(j);
       last_window_(j) = fixed;
+      last_variance_(j) = nan;
       pending_(j) = nan;
+      pending_var_(j) = nan;
     }
     pending_next_ = params_;
     samples_ = 0;
@@ -299,6 +371,15 @@ class ContinuousEstimator {
       a = io_.data();
       f = io_.data() + n_;
     }
+    if (weak_form_) {
+      weak_->set_model(estimate_.data());
+      if (weak_->update(a, f)) {
+        harvest(weak_->result(), weak_->variance());
+        if (joint_) joint_add();
+      }
+      work();
+      return ready() ? Status::kOk : Status::kWarmup;
+    }
     for (int e = 0; e < config_.stagger; ++e) {
       if (phase_[e] < 0) {
         ++phase_[e];
@@ -306,7 +387,7 @@ class ContinuousEstimator {
       }
       windows_[e].update(a, f);
       if (++phase_[e] == window_samples_) {
-        harvest(windows_[e]);
+        harvest(windows_[e].mass(), windows_[e].damping(), windows_[e].stiffness());
         windows_[e].reseed();
         phase_[e] = 0;
       }
@@ -356,6 +437,10 @@ class ContinuousEstimator {
 
   /// The latest window result (fused as in ChainEstimator; NaN where that window was not valid).
   const Vector<Scalar, kParams>& last_window() const noexcept { return last_window_; }
+  /// Its variance per parameter (weak form; NaN for algebraic windows) [parameter units^2].
+  const Vector<Scalar, kParams>& last_variance() const noexcept { return last_variance_; }
+  /// The weak-form windows (nullptr with algebraic windows), e.g. for noise_rms().
+  const WeakForm* weak_form() const noexcept { return weak_.get(); }
   /// Window results harvested since construction or reset().
   long window_results() const noexcept { return results_; }
   /// Window results aggregated into parameter j's estimate since its last restart.
@@ -366,6 +451,8 @@ class ContinuousEstimator {
   long samples() const noexcept { return samples_; }
   /// Window length M [samples].
   long window_samples() const noexcept { return window_samples_; }
+  /// Samples between two window results.
+  long hop_samples() const noexcept { return weak_form_ ? weak_->hop_samples() : window_samples_ / config_.stagger; }
   /// Samples skipped after a (re)start while the prefilter settles (0 without prefilter).
   long settle_samples() const noexcept { return settle_; }
   /// Prefilter cut-off in force [Hz] (0: off).
@@ -396,7 +483,7 @@ class ContinuousEstimator {
     long since = 0;  // window results aggregated since the restart (kept ones included)
     long fresh = 0;  // window results that arrived after the restart
     int in_block = 0;  // results in the current block
-    Scalar s0 = Scalar(0), s1 = Scalar(0), s2 = Scalar(0), s0sq = Scalar(0);  // block-median moments
+    Scalar s0 = Scalar(0), s1 = Scalar(0), s2 = Scalar(0), s0sq = Scalar(0);  // block-statistic moments
     Scalar cusum_hi = Scalar(0), cusum_lo = Scalar(0);
     Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();  // per-window sigma
     Scalar relative_spread = std::numeric_limits<Scalar>::quiet_NaN();  // carried over a restart
@@ -408,6 +495,25 @@ class ContinuousEstimator {
     w.dt = c.dt;
     w.boundary = c.boundary;
     w.validity = c.validity;
+    return w;
+  }
+
+  static Scalar resolved_window(const Config& c) noexcept {
+    if (c.window_s != Scalar(-1)) return c.window_s;
+    return c.method == WindowMethod::kWeakForm ? Scalar(0.5) : Scalar(0.3);
+  }
+
+  static typename WeakForm::Config weak_config(const Config& c) noexcept {
+    typename WeakForm::Config w;
+    w.dt = c.dt;
+    w.boundary = c.boundary;
+    w.window_s = resolved_window(c);
+    w.stagger = c.stagger;
+    w.band_hz = c.band_hz;
+    w.accel_noise = c.accel_noise;
+    w.force_noise = c.force_noise;
+    w.bias_compensation = c.bias_compensation;
+    w.weighted = c.gls;
     return w;
   }
 
@@ -424,6 +530,7 @@ class ContinuousEstimator {
   }
 
   void restart_windows() noexcept {
+    if (weak_) weak_->restart();
     filter_.reset();
     for (int e = 0; e < MaxStagger; ++e) {
       windows_[e].reseed();
@@ -431,18 +538,35 @@ class ContinuousEstimator {
     }
   }
 
-  void harvest(const Window& w) noexcept {
-    // Finish the previous result first (only if the budget was too small, e.g. a bad sample
-    // shifted the schedule), so no result is lost.
-    while (pending_next_ < params_) process(pending_next_++);
+  template <class M, class C, class K>
+  void harvest(const M& mass, const C& damping, const K& stiffness) noexcept {
+    finish_pending();
     for (int i = 0; i < n_; ++i) {
-      last_window_(i) = w.mass()(i);
-      last_window_(n_ + i) = w.damping()(i);
+      last_window_(i) = mass(i);
+      last_window_(n_ + i) = damping(i);
     }
-    for (int j = 0; j <= n_; ++j) last_window_(2 * n_ + j) = w.stiffness()(j);
+    for (int j = 0; j <= n_; ++j) last_window_(2 * n_ + j) = stiffness(j);
+    last_variance_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
     pending_ = last_window_;
+    pending_var_ = last_variance_;
     pending_next_ = 0;
     ++results_;
+  }
+
+  void harvest(const Vector<Scalar, kParams>& result, const Vector<Scalar, kParams>& variance) noexcept {
+    finish_pending();
+    last_window_ = result;
+    last_variance_ = variance;
+    pending_ = result;
+    pending_var_ = variance;
+    pending_next_ = 0;
+    ++results_;
+  }
+
+  // Finish the previous result first (only if the budget was too small, e.g. a bad sample
+  // shifted the schedule), so no result is lost.
+  void finish_pending() noexcept {
+    while (pending_next_ < params_) process(pending_next_++);
   }
 
   void work() noexcept {
@@ -466,7 +590,7 @@ class ContinuousEstimator {
     const Scalar x = pending_(j);
     if (!std::isfinite(x)) return;
     Track& t = tracks_[j];
-    const Scalar est = estimate_(j);
+    const Scalar est = track_(j);
     Scalar z = std::numeric_limits<Scalar>::quiet_NaN();
     if (t.spread_ok && std::isfinite(est)) {
       const Scalar s = floor_spread(t, est);
@@ -555,8 +679,20 @@ class ContinuousEstimator {
       sig = detail::kMedianInefficiency<Scalar> * t.spread /
             std::sqrt(std::max(Scalar(1), static_cast<Scalar>(t.count) * config_.overlap_efficiency));
     }
-    estimate_(j) = est;
-    sigma_(j) = sig;
+    track_(j) = est;
+    track_sigma_(j) = sig;
+    publish(j);
+  }
+
+  // The reported estimate of parameter j: the joint solution where it exists, else the track's.
+  void publish(int j) noexcept {
+    if (joint_ && joint_->valid && joint_->trusted[j]) {
+      estimate_(j) = static_cast<Scalar>(joint_->solution(j));
+      sigma_(j) = static_cast<Scalar>(std::sqrt(joint_->inverse(j, j) / static_cast<double>(config_.joint_efficiency)));
+    } else {
+      estimate_(j) = track_(j);
+      sigma_(j) = track_sigma_(j);
+    }
   }
 
   void clear_aggregation(Track& t) noexcept {
@@ -588,12 +724,14 @@ class ContinuousEstimator {
     }
     t.count = kept;
     clear_aggregation(t);
+    joint_restart(j);
     finish_restart(j, t, ChangeKind::kStep);
   }
 
   void restart_drift(int j, Track& t, Scalar) noexcept {
     t.count = std::min(t.count, config_.block);  // the block just completed
     clear_aggregation(t);
+    joint_restart(j);
     finish_restart(j, t, ChangeKind::kDrift);
   }
 
@@ -608,6 +746,138 @@ class ContinuousEstimator {
     ev.after = estimate_(j);
     if (event_count_ < params_) ++event_count_;
     ++total_events_;
+  }
+
+  // Sum of the GLS-weighted weak-form windows' normal equations since the start (with
+  // `horizon_s` forgetting), and a ring of the newest windows' systems so that a restart of
+  // one parameter can take them out again. Heap-allocated at construction (weak form only).
+  struct Joint {
+    Eigen::MatrixXd normal, inverse;
+    Eigen::VectorXd rhs, solution, column;
+    Eigen::LDLT<Eigen::MatrixXd> ldlt;
+    detail::Storage<Eigen::MatrixXd, Dynamic> ring_normal;
+    detail::Storage<Eigen::VectorXd, Dynamic> ring_rhs;
+    detail::Storage<int, Dynamic> fresh;  // per parameter: windows since its restart
+    detail::Storage<bool, Dynamic> trusted;  // per parameter: the joint estimate is reported
+    int head = 0, count = 0, size = 0;
+    double forget = 1.0;
+    bool valid = false;
+
+    Joint(int params, int ring) : ldlt(params), size(ring) {
+      normal.setZero(params, params);
+      inverse.setZero(params, params);
+      rhs.setZero(params);
+      solution.setZero(params);
+      column.setZero(params);
+      ring_normal.resize(ring);
+      ring_rhs.resize(ring);
+      fresh.resize(params);
+      trusted.resize(params);
+      for (int r = 0; r < ring; ++r) {
+        ring_normal[r].setZero(params, params);
+        ring_rhs[r].setZero(params);
+      }
+    }
+    void clear() noexcept {
+      normal.setZero();
+      rhs.setZero();
+      fresh.fill(0);
+      trusted.fill(true);
+      head = count = 0;
+      valid = false;
+    }
+    int slot(int age) const noexcept {  // age 0: the newest window
+      return ((head - 1 - age) % size + size) % size;
+    }
+  };
+
+  // A weighted window with a finite result joins the joint system, which is solved again.
+  void joint_add() noexcept {
+    Joint& J = *joint_;
+    const auto& x = weak_->result();
+    for (int j = 0; j < params_; ++j)
+      if (known_[j] == Known::kEstimated && !std::isfinite(x(j))) return;
+    if (!weak_->result_weighted()) return;
+    if (J.forget < 1.0) {
+      J.normal *= J.forget;
+      J.rhs *= J.forget;
+      for (int r = 0; r < J.size; ++r) {
+        J.ring_normal[r] *= J.forget;
+        J.ring_rhs[r] *= J.forget;
+      }
+    }
+    const int r = J.head;
+    J.ring_normal[r] = weak_->normal();
+    J.ring_rhs[r] = weak_->rhs();
+    J.head = (J.head + 1) % J.size;
+    J.count = std::min(J.count + 1, J.size);
+    J.normal += weak_->normal();
+    J.rhs += weak_->rhs();
+    for (int j = 0; j < params_; ++j) {
+      if (J.trusted[j] || ++J.fresh[j] < J.size) continue;
+      joint_forget(j, J.size - config_.stagger);
+      J.trusted[j] = true;
+    }
+    joint_solve();
+  }
+
+  void joint_solve() noexcept {
+    Joint& J = *joint_;
+    J.ldlt.compute(J.normal);
+    J.valid = J.ldlt.info() == Eigen::Success && J.ldlt.vectorD().minCoeff() > 0.0;
+    if (J.valid) {
+      J.solution = J.rhs;
+      J.ldlt.solveInPlace(J.solution);
+      J.inverse.setIdentity();
+      J.ldlt.solveInPlace(J.inverse);
+      J.valid = J.solution.allFinite();
+    }
+    for (int j = 0; j < params_; ++j)
+      if (known_[j] == Known::kEstimated) publish(j);
+  }
+
+  // Take the `recent` newest windows out, marginalise parameter j out of the rest (its old
+  // information is void, the others' is kept: the Schur complement), pin j by a negligible
+  // prior at the track's estimate (so the system stays definite), put the recent windows back.
+  void joint_forget(int j, int recent) noexcept {
+    Joint& J = *joint_;
+    recent = std::min(recent, J.count);
+    for (int age = 0; age < recent; ++age) {
+      const int r = J.slot(age);
+      J.normal -= J.ring_normal[r];
+      J.rhs -= J.ring_rhs[r];
+    }
+    const double d = J.normal(j, j);
+    if (d > 0.0) {
+      J.column = J.normal.col(j);
+      const double bj = J.rhs(j);
+      for (int b = 0; b < params_; ++b) {
+        for (int a = 0; a < params_; ++a) J.normal(a, b) -= J.column(a) * J.column(b) / d;
+        J.rhs(b) -= J.column(b) * bj / d;
+      }
+    }
+    J.normal.row(j).setZero();
+    J.normal.col(j).setZero();
+    const double prior = 1e-12 * (d > 0.0 ? d : 1.0);
+    J.normal(j, j) = prior;
+    J.rhs(j) = prior * static_cast<double>(track_(j));
+    for (int age = 0; age < recent; ++age) {
+      const int r = J.slot(age);
+      J.normal += J.ring_normal[r];
+      J.rhs += J.ring_rhs[r];
+    }
+  }
+
+  // Parameter j restarted (step or drift): the joint forgets all it knew of j, and j's
+  // reported estimate is the track's (which follows a step within a second) until a ring of
+  // windows has arrived since; then j is forgotten once more, except for the newest ring
+  // minus K windows (none of which straddles the change), and the joint takes over again.
+  void joint_restart(int j) noexcept {
+    if (!joint_) return;
+    joint_forget(j, 0);
+    joint_->fresh[j] = 0;
+    joint_->trusted[j] = false;
+    joint_solve();
   }
 
   static constexpr int kChannels = N == Dynamic ? Dynamic : 2 * N;
@@ -630,7 +900,12 @@ class ContinuousEstimator {
   detail::Storage<Known, kParams> known_{};
   detail::Storage<Track, kParams> tracks_{};
   std::array<Scalar, Capacity> scratch_{};
-  Vector<Scalar, kParams> estimate_, sigma_, last_window_, pending_;
+  Vector<Scalar, kParams> estimate_, sigma_, last_window_, last_variance_, pending_, pending_var_;
+  std::unique_ptr<WeakForm> weak_;
+  std::unique_ptr<Joint> joint_;
+  Vector<Scalar, kParams> track_, track_sigma_;
+  bool weak_form_ = false;
+
   int pending_next_ = 0;
   detail::Storage<Event, kParams> events_{};
   int event_count_ = 0;

@@ -102,6 +102,7 @@ def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan:
         a.shape[1],
         dt,
         boundary=boundary,
+        method="algebraic",  # the plans' window lengths and prefilters are tuned for these windows
         window_s=plan.window_s,
         prefilter_hz=plan.prefilter_hz,
         stagger=plan.stagger,
