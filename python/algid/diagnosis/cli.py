@@ -11,6 +11,7 @@ import json
 import sys
 from pathlib import Path
 
+from ..messages import one_line
 from ..recording import RecordingError, load_recording
 
 
@@ -34,7 +35,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _err(msg: str) -> int:
-    print(f"algid diagnose: error: {' '.join(str(msg).split())}", file=sys.stderr)
+    print(one_line(f"algid diagnose: error: {msg}"), file=sys.stderr)
     return 2
 
 

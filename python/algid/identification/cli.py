@@ -13,6 +13,7 @@ import json
 import sys
 from pathlib import Path
 
+from ..cli import error_line
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
 from .plan import ESTIMATORS
@@ -92,10 +93,10 @@ def run(args) -> int:
 
             save_figures(result, args.plots)
     except (RecordingError, IdentifyError) as err:
-        print(f"algid identify: error: {' '.join(str(err).split())}", file=sys.stderr)
+        print(error_line("identify", err), file=sys.stderr)
         return 2
     except OSError as err:
-        print(f"algid identify: error: {err.strerror}: {err.filename}", file=sys.stderr)
+        print(error_line("identify", err), file=sys.stderr)
         return 2
     for line in result.reasons:
         print(f"algid identify: {line}", file=sys.stderr)
