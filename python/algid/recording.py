@@ -349,7 +349,15 @@ def _npz_members(path: Path) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
                         version, np.lib.format.read_array_header_2_0
                     )
                     shape, _, dtype = read_header(fh)
+                    declared = math.prod(shape) * dtype.itemsize
+                    if declared > info.file_size:
+                        raise RecordingError(
+                            f"{path.name}: array {quote(info.filename)} declares {declared} bytes "
+                            f"but holds at most {info.file_size} (truncated or corrupt)"
+                        )
                 members[info.filename[: -len(".npy")]] = (shape, dtype)
+    except RecordingError:
+        raise
     except (zipfile.BadZipFile, ValueError, OSError, EOFError, NotImplementedError) as err:
         raise RecordingError(f"{path.name}: not a readable .npz file ({type(err).__name__})") from None
     return members
