@@ -140,3 +140,33 @@ def test_successful_runs_print_no_numerical_warnings(tmp_path):
     np.savez(path, **_good_columns(T=2000))
     proc = _algid("diagnose", path, "--json", tmp_path / "o.json", "--quiet")
     assert "RuntimeWarning" not in proc.stderr, proc.stderr[-2000:]
+
+
+@pytest.mark.parametrize("n", [3.7, 3.0, True, "3", None])
+def test_the_number_of_dof_must_be_an_integer(n):
+    import algid
+
+    for cls in (algid.ChainEstimator, algid.ContinuousEstimator):
+        with pytest.raises(TypeError, match="n must be an integer"):
+            cls(n, 1e-3)
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda a: a.astype(complex),
+        lambda a: a > 0,
+        lambda a: np.ma.masked_array(a, mask=np.zeros_like(a, bool)),
+        lambda a: a.astype(object),
+    ],
+)
+def test_signals_must_be_real_numbers(make):
+    import algid
+
+    a = np.random.default_rng(0).standard_normal((50, 2))
+    for est in (algid.ChainEstimator(2, 1e-3), algid.ContinuousEstimator(2, 1e-3)):
+        with pytest.raises(TypeError, match="accel"):
+            est.run(make(a), a)
+        with pytest.raises(TypeError, match="accel"):
+            est.update(make(a[0]), a[0])
+    assert np.isfinite(algid.ChainEstimator(2, 1e-3).run(a.astype(np.int64), a)["mass"][:5]).sum() == 0
