@@ -156,6 +156,9 @@ class ContinuousEstimator(PackedParameters):
         Spread the per-parameter aggregation over the samples between window results.
     min_samples, min_hadamard
         Validity rule of each window (see :class:`algid.ChainEstimator`).
+
+    Threads: one estimator serves one thread at a time; a call on an object whose ``run()``
+    is in progress in another thread raises ``RuntimeError``.
     """
 
     def __init__(

@@ -166,7 +166,13 @@ class ChainEstimator:
     Notes
     -----
     Estimates after sample k describe the window ``[t0, t_k - delay_samples * dt]``
-    (the quadrature centres its stencil). A non-finite sample reseeds the estimator.
+    (the quadrature centres its stencil). A non-finite sample, or one so large that the
+    window's systems overflow, reseeds the estimator (status ``BadInput``); ``valid`` is never
+    true for an estimate that is not a number.
+
+    Threads: one estimator serves one thread at a time. ``run()`` releases the GIL; any call
+    on the same object from another thread meanwhile raises ``RuntimeError`` (it would mix
+    two records). Distinct estimators run in parallel threads exactly as one after the other.
     """
 
     def __init__(

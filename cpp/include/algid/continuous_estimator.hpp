@@ -162,11 +162,11 @@ enum class ContinuousConfigError {
 inline const char* to_string(ContinuousConfigError e) noexcept {
   switch (e) {
     case ContinuousConfigError::kNone: return "ok";
-    case ContinuousConfigError::kBadSamplePeriod: return "dt must be finite and > 0 [s]";
+    case ContinuousConfigError::kBadSamplePeriod: return to_string(ConfigError::kBadSamplePeriod);
     case ContinuousConfigError::kBadMinSamples: return "validity.min_samples must be >= 1";
     case ContinuousConfigError::kBadMinHadamard: return "validity.min_hadamard must be in [0, 1)";
     case ContinuousConfigError::kBadWindow:
-      return "window_s must be finite and hold at least P + validity.min_samples samples";
+      return "window_s must be finite and hold P + validity.min_samples to 1e7 samples";
     case ContinuousConfigError::kBadStagger: return "stagger must be in [1, MaxStagger] and <= window samples";
     case ContinuousConfigError::kBadBlock: return "block must be in [1, Capacity]";
     case ContinuousConfigError::kBadConfirm: return "confirm must be 0 (auto) or in [1, Capacity]";
@@ -178,7 +178,7 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
       return "overlap_efficiency must be -1 (auto) or in (0, 1], joint_efficiency in (0, 1]";
     case ContinuousConfigError::kBadHorizon: return "horizon_s must be finite and >= 0 [s]";
     case ContinuousConfigError::kBadPrefilter:
-      return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in (0, 0.45/dt) [Hz], prefilter_order 2 or 4";
+      return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in [1e-6/dt, 0.45/dt) [Hz], prefilter_order 2 or 4";
     case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
     case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
     case ContinuousConfigError::kBadNoise: return to_string(WeakFormConfigError::kBadNoise);
@@ -216,6 +216,11 @@ class ContinuousEstimator {
   static constexpr int kCapacity = Capacity;
   /// Most windows in flight.
   static constexpr int kMaxStagger = MaxStagger;
+  /// Longest window [samples] (1e7: 2.8 h at 1 kHz).
+  static constexpr long kMaxWindowSamples = 10000000;
+  /// Lowest prefilter cut-off [cycles per sample] (1e-6: 1 mHz at 1 kHz; its start-up transient
+  /// lasts about 6e6 samples).
+  static constexpr double kMinPrefilterCycles = 1e-6;
 
   /// Check a configuration without side effects. @realtime no allocation, no throw
   static ContinuousConfigError validate(const Config& c, int n = N) noexcept {
@@ -229,7 +234,7 @@ class ContinuousEstimator {
     const Scalar window_s = resolved_window(c);
     if (!std::isfinite(window_s) || !(window_s > Scalar(0))) return ContinuousConfigError::kBadWindow;
     const Scalar samples = window_s / c.dt;
-    if (!std::isfinite(samples) || samples > Scalar(1e9)) return ContinuousConfigError::kBadWindow;
+    if (!std::isfinite(samples) || samples > Scalar(kMaxWindowSamples)) return ContinuousConfigError::kBadWindow;
     const long m = std::lround(samples);
     if (m < static_cast<long>(P) + c.validity.min_samples) return ContinuousConfigError::kBadWindow;
     if (c.stagger < 1 || c.stagger > MaxStagger || c.stagger > m) return ContinuousConfigError::kBadStagger;
@@ -248,6 +253,7 @@ class ContinuousEstimator {
       return ContinuousConfigError::kBadEfficiency;
     if (!(c.horizon_s >= Scalar(0)) || !std::isfinite(c.horizon_s)) return ContinuousConfigError::kBadHorizon;
     if (!std::isfinite(c.prefilter_hz) || (c.prefilter_hz < Scalar(0) && c.prefilter_hz != Scalar(-1)) ||
+        (c.prefilter_hz > Scalar(0) && !(c.prefilter_hz * c.dt >= Scalar(kMinPrefilterCycles))) ||
         !(c.prefilter_hz * c.dt < Scalar(0.45)) || (c.prefilter_order != 2 && c.prefilter_order != 4))
       return ContinuousConfigError::kBadPrefilter;
     if (c.method == WindowMethod::kWeakForm) {
