@@ -170,3 +170,26 @@ def test_signals_must_be_real_numbers(make):
         with pytest.raises(TypeError, match="accel"):
             est.update(make(a[0]), a[0])
     assert np.isfinite(algid.ChainEstimator(2, 1e-3).run(a.astype(np.int64), a)["mass"][:5]).sum() == 0
+
+
+@pytest.mark.parametrize("kind", ["noise", "zeros"])
+def test_diagnose_finds_no_system_in_noise_or_zeros(tmp_path, kind):
+    """Independent noise in force and acceleration, or all zeros: the record carries no
+    identifiable system; never 'explained within noise'."""
+    rng = np.random.default_rng(0)
+    T = 5000
+    cols = {"t": 1e-3 * np.arange(T)}
+    for i in (1, 2):
+        cols[f"u{i}"] = rng.standard_normal(T) if kind == "noise" else np.zeros(T)
+        cols[f"a{i}"] = rng.standard_normal(T) if kind == "noise" else np.zeros(T)
+    path = tmp_path / "r.npz"
+    np.savez(path, **cols)
+    out = tmp_path / "o.json"
+    proc = _algid("diagnose", path, "--json", out, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    import json
+
+    d = json.loads(out.read_text())
+    assert d["model"]["verdict"] == "no_force_response"
+    assert d["effect"] != "none"
+    assert "no identifiable system" in d["model"]["reasons"][0]
