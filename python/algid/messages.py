@@ -17,6 +17,12 @@ def quote(text: object, limit: int = MAX_QUOTE) -> str:
     return repr(s if len(s) <= limit else s[: limit - 3] + "...")
 
 
+def quote_path(path: object, limit: int = MAX_QUOTE) -> str:
+    """A path shortened from the left to about ``limit`` characters (its end names the file)."""
+    s = str(path)
+    return s if len(s) <= limit else "..." + s[-(limit - 3) :]
+
+
 def one_line(message: object, limit: int = MAX_LINE) -> str:
     """The message on one line (whitespace collapsed) of at most ``limit`` characters."""
     s = " ".join(str(message).split())

@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .messages import listing, quote
+from .messages import listing, quote, quote_path
 
 __all__ = [
     "MIN_SAMPLES",
@@ -411,9 +411,9 @@ def load_recording(path: str | Path) -> Recording:
     if ext not in (".csv", ".npz"):
         raise RecordingError(f"{path.name}: unknown extension {path.suffix!r} (expected .csv or .npz)")
     if not path.exists():
-        raise RecordingError(f"{path}: no such file")
+        raise RecordingError(f"no such file: {quote_path(path)}")
     if path.is_dir():
-        raise RecordingError(f"{path}: is a directory, not a recording")
+        raise RecordingError(f"is a directory, not a recording: {quote_path(path)}")
     if path.stat().st_size == 0:
         raise RecordingError(f"{path.name}: empty file")
     return _read_csv(path) if ext == ".csv" else _read_npz(path)

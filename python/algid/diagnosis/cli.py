@@ -11,7 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-from ..messages import one_line
+from ..messages import one_line, quote_path
 from ..recording import RecordingError, load_recording
 
 
@@ -57,9 +57,9 @@ def run(args: argparse.Namespace) -> int:
 
     out = Path(args.json)
     if out.exists() and out.is_dir():
-        return _err(f"--json {out}: is a directory")
+        return _err(f"--json: is a directory: {quote_path(out)}")
     if not out.parent.exists():
-        return _err(f"--json {out}: folder {out.parent} does not exist")
+        return _err(f"--json: folder does not exist: {quote_path(out.parent)}")
     try:
         rec = load_recording(args.recording)
     except RecordingError as err:
