@@ -28,6 +28,7 @@ BINARIES = [
     "test_no_exceptions",
     "firmware_loop",
     "test_continuous",
+    "test_fuzz",
 ]
 # The same tests built for the wider instruction sets the wheel ships (x86-64 only; skipped
 # where the CPU cannot run them, exit code 77).

@@ -46,6 +46,48 @@ inline int require_index(int i, int size, const char* what) {
   return i;
 }
 
+/// One estimator serves one thread at a time. run() releases the GIL, so without this another
+/// thread could call into the same object while it runs and interleave the two records. A Busy
+/// marks its object in use for the duration of a mutating call (constructed and destroyed with
+/// the GIL held, so the registry needs no lock of its own); a second call on the same object
+/// from another thread meanwhile raises RuntimeError (see idle()). Distinct objects never wait.
+class Busy {
+ public:
+  explicit Busy(const void* object) : object_(object) {
+    idle(object);
+    registry().push_back(object);
+  }
+  ~Busy() {
+    auto& objects = registry();
+    objects.erase(std::find(objects.begin(), objects.end(), object_));
+  }
+  Busy(const Busy&) = delete;
+  Busy& operator=(const Busy&) = delete;
+
+  /// RuntimeError if `object` is in use by a call in another thread.
+  static void idle(const void* object) {
+    const auto& objects = registry();
+    if (std::find(objects.begin(), objects.end(), object) != objects.end())
+      throw std::runtime_error(
+          "this estimator is in use by another thread (a run() is in progress): "
+          "use one estimator per thread, or wait for the call to return");
+  }
+
+ private:
+  static std::vector<const void*>& registry() {
+    static std::vector<const void*> objects;
+    return objects;
+  }
+  const void* object_;
+};
+
+/// `e` after checking that no other thread is running it (RuntimeError otherwise).
+template <class Est>
+const Est& idle(const Est& e) {
+  Busy::idle(&e);
+  return e;
+}
+
 /// Construct an estimator from its configuration, or raise ValueError with the reason.
 template <class Est, class Error>
 Est* make(const typename Est::Config& config, int n) {
@@ -125,10 +167,11 @@ void bind_common(Class& cls) {
           "update",
           [](Est& e, const Array& accel, const Array& force) {
             require_sample(accel, force, e.dofs());
+            const Busy busy(&e);
             return static_cast<int>(e.update(accel.data(), force.data()));
           },
           py::arg("accel"), py::arg("force"))
-      .def_property_readonly("samples", &Est::samples)
+      .def_property_readonly("samples", [](const Est& e) { return idle(e).samples(); })
       .def_property_readonly("config", &Est::config);
 }
 
@@ -157,26 +200,33 @@ void bind_chain(py::module_& m, const char* name, bool module_local) {
   cls.def(py::init(&make<Est, algid::ConfigError>), py::arg("config"), py::arg("n"))
       .def_readonly_static("delay_samples", &Est::kDelay)
       .def_readonly_static("lanes", &Est::kLanes)
-      .def("reseed", &Est::reseed)
-      .def_property_readonly("mass", [](const Est& e) { return Array(e.dofs(), e.mass().data()); })
-      .def_property_readonly("damping", [](const Est& e) { return Array(e.dofs(), e.damping().data()); })
-      .def_property_readonly("stiffness", [](const Est& e) { return Array(e.dofs() + 1, e.stiffness().data()); })
+      .def("reseed",
+           [](Est& e) {
+             const Busy busy(&e);
+             e.reseed();
+           })
+      .def_property_readonly("mass", [](const Est& e) { return Array(e.dofs(), idle(e).mass().data()); })
+      .def_property_readonly("damping", [](const Est& e) { return Array(e.dofs(), idle(e).damping().data()); })
+      .def_property_readonly("stiffness", [](const Est& e) { return Array(e.dofs() + 1, idle(e).stiffness().data()); })
       .def_property_readonly("valid",
                              [](const Est& e) {
+                               idle(e);
                                py::array_t<bool> out(e.dofs());
                                std::copy(e.valid().data(), e.valid().data() + e.dofs(), out.mutable_data());
                                return out;
                              })
-      .def_property_readonly("window", &Est::window)
+      .def_property_readonly("window", [](const Est& e) { return idle(e).window(); })
       .def(
-          "theta", [](const Est& e, int i) { return Array(4, e.theta(require_index(i, e.dofs(), "dof")).data()); },
+          "theta",
+          [](const Est& e, int i) { return Array(4, idle(e).theta(require_index(i, e.dofs(), "dof")).data()); },
           py::arg("dof"))
       .def(
           "theta_instant",
-          [](const Est& e, int i) { return Array(4, e.theta_instant(require_index(i, e.dofs(), "dof")).data()); },
+          [](const Est& e, int i) { return Array(4, idle(e).theta_instant(require_index(i, e.dofs(), "dof")).data()); },
           py::arg("dof"))
       .def(
-          "hadamard", [](const Est& e, int i) { return e.hadamard(require_index(i, e.dofs(), "dof")); }, py::arg("dof"))
+          "hadamard", [](const Est& e, int i) { return idle(e).hadamard(require_index(i, e.dofs(), "dof")); },
+          py::arg("dof"))
       .def(
           "run",
           [](Est& e, const Array& accel, const Array& force, bool full) {
@@ -200,6 +250,7 @@ void bind_chain(py::module_& m, const char* name, bool module_local) {
             double* theta = full ? out.f8("theta") : nullptr;
             double* instant = full ? out.f8("theta_instant") : nullptr;
             double* hadamard = full ? out.f8("hadamard") : nullptr;
+            const Busy busy(&e);
             {
               py::gil_scoped_release release;
               record(e, accel.data(), force.data(), static_cast<long>(T), histories, theta, instant, hadamard);
@@ -220,30 +271,38 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
       .def_property_readonly("params", &Est::params)
       .def_readonly_static("capacity", &Est::kCapacity)
       .def_readonly_static("max_stagger", &Est::kMaxStagger)
-      .def("reset", &Est::reset)
-      .def_property_readonly("estimate", [](const Est& e) { return Array(e.params(), e.estimate().data()); })
-      .def_property_readonly("sigma", [](const Est& e) { return Array(e.params(), e.sigma().data()); })
-      .def_property_readonly("last_window", [](const Est& e) { return Array(e.params(), e.last_window().data()); })
-      .def_property_readonly("last_variance", [](const Est& e) { return Array(e.params(), e.last_variance().data()); })
+      .def("reset",
+           [](Est& e) {
+             const Busy busy(&e);
+             e.reset();
+           })
+      .def_property_readonly("estimate", [](const Est& e) { return Array(e.params(), idle(e).estimate().data()); })
+      .def_property_readonly("sigma", [](const Est& e) { return Array(e.params(), idle(e).sigma().data()); })
+      .def_property_readonly("last_window",
+                             [](const Est& e) { return Array(e.params(), idle(e).last_window().data()); })
+      .def_property_readonly("last_variance",
+                             [](const Est& e) { return Array(e.params(), idle(e).last_variance().data()); })
       .def_property_readonly("hop_samples", &Est::hop_samples)
       .def_property_readonly("noise_rms",
                              [](const Est& e) {
+                               idle(e);
                                const int C = 2 * e.dofs();
                                Array out(C);
                                for (int c = 0; c < C; ++c)
                                  out.mutable_data()[c] = e.weak_form() ? e.weak_form()->noise_rms(c) : -1.0;
                                return out;
                              })
-      .def_property_readonly("ready", &Est::ready)
-      .def_property_readonly("window_results", &Est::window_results)
+      .def_property_readonly("ready", [](const Est& e) { return idle(e).ready(); })
+      .def_property_readonly("window_results", [](const Est& e) { return idle(e).window_results(); })
       .def_property_readonly("window_samples", &Est::window_samples)
       .def_property_readonly("confirm", &Est::confirm)
       .def_property_readonly("budget", &Est::budget)
       .def_property_readonly("settle_samples", &Est::settle_samples)
       .def_property_readonly("prefilter_hz", &Est::prefilter_hz)
-      .def_property_readonly("total_events", &Est::total_events)
+      .def_property_readonly("total_events", [](const Est& e) { return idle(e).total_events(); })
       .def("events",
            [](const Est& e) {
+             idle(e);
              py::list out;
              for (int i = 0; i < e.events(); ++i) {
                const auto& ev = e.event(i);
@@ -252,10 +311,12 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
              return out;
            })
       .def(
-          "since_restart", [](const Est& e, int j) { return e.since_restart(require_index(j, e.params(), "param")); },
+          "since_restart",
+          [](const Est& e, int j) { return idle(e).since_restart(require_index(j, e.params(), "param")); },
           py::arg("param"))
       .def(
-          "window_spread", [](const Est& e, int j) { return e.window_spread(require_index(j, e.params(), "param")); },
+          "window_spread",
+          [](const Est& e, int j) { return idle(e).window_spread(require_index(j, e.params(), "param")); },
           py::arg("param"))
       .def(
           "run",
@@ -277,6 +338,7 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
             double* ps = sigma.mutable_data();
             auto* pr = row_sample.mutable_data();
             const long first = e.samples();
+            const Busy busy(&e);
             {
               py::gil_scoped_release release;
               py::ssize_t row = 0;

@@ -101,7 +101,9 @@ void bind_config_classes(py::module_& m) {
       .def_readwrite("joint", &Cont::joint,
                      "weak form: estimate from the summed window normal equations (False: block medians)")
       .def_readwrite("detect", &Cont::detect, "run the change detector")
-      .def_readwrite("amortize", &Cont::amortize, "spread the per-parameter work over the samples");
+      .def_readwrite("amortize", &Cont::amortize, "spread the per-parameter work over the samples")
+      .def_readwrite("outlier_ratio", &Cont::outlier_ratio,
+                     "a sample beyond this many times its channel's running RMS is bad input; 0: off");
   cont.def(
       "validate",
       [](const Cont& c, int n) {

@@ -1,9 +1,30 @@
-"""The ``algid`` command: ``identify``, ``demo`` and ``diagnose``."""
+"""The ``algid`` command: ``identify``, ``demo`` and ``diagnose``.
+
+Every failure ends in one line on stderr (at most ``algid.messages.MAX_LINE`` characters, quoted
+input shortened by ``algid.messages.quote``) and exit code 2; a closed pipe on stdout (``algid ... | head -1``)
+ends quietly with 141 as a shell's SIGPIPE would; numerical warnings (numpy's RuntimeWarning)
+are counted, not printed. ``ALGID_DEBUG=1`` shows the traceback and the warnings instead.
+"""
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import warnings
+
+from .messages import one_line
+
+
+def error_line(command: str, err: BaseException) -> str:
+    """The one line an exception of ``algid COMMAND`` ends with."""
+    if isinstance(err, OSError) and err.strerror:
+        what = f"{err.strerror}: {err.filename}" if err.filename else err.strerror
+    elif isinstance(err, (ValueError, TypeError)) or type(err).__module__.startswith("algid"):
+        what = str(err) or type(err).__name__
+    else:
+        what = f"{type(err).__name__}: {err}"
+    return one_line(f"algid {command}: error: {what}")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -23,6 +44,24 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _run(args: argparse.Namespace) -> int:
+    """The subcommand with numerical warnings counted; one line about them unless --quiet."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RuntimeWarning)
+        code = int(args.func(args) or 0)
+    numerical = [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    for w in caught:
+        if not issubclass(w.category, RuntimeWarning):
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    if numerical and not getattr(args, "quiet", False):
+        print(
+            f"algid {args.command}: {len(numerical)} numerical warnings (overflow, invalid value) were handled; "
+            "ALGID_DEBUG=1 prints them",
+            file=sys.stderr,
+        )
+    return code
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = build_parser()
@@ -30,7 +69,20 @@ def main(argv: list[str] | None = None) -> int:
     if getattr(args, "func", None) is None:
         parser.print_help()
         return 2
-    return int(args.func(args) or 0)
+    if os.environ.get("ALGID_DEBUG"):
+        return int(args.func(args) or 0)
+    try:
+        return _run(args)
+    except BrokenPipeError:
+        # The reader of stdout went away: nothing more to say, and nothing to flush at exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+    except KeyboardInterrupt:
+        print(f"algid {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except (Exception, MemoryError) as err:  # noqa: BLE001 - the promise is one line, never a traceback
+        print(error_line(args.command, err), file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ runs in ``cpp/include/algid/continuous_estimator.hpp`` and ``weak_form.hpp``):
 
 from __future__ import annotations
 
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -155,6 +156,9 @@ class ContinuousEstimator(PackedParameters):
         Spread the per-parameter aggregation over the samples between window results.
     min_samples, min_hadamard
         Validity rule of each window (see :class:`algid.ChainEstimator`).
+
+    Threads: one estimator serves one thread at a time; a call on an object whose ``run()``
+    is in progress in another thread raises ``RuntimeError``.
     """
 
     def __init__(
@@ -275,9 +279,10 @@ class ContinuousEstimator(PackedParameters):
             at which it was harvested; ``names``.
         """
         a, u = as_record(accel, force, self.n)
-        if int(stride) < 1:
-            raise ValueError("stride must be >= 1")
-        out = dict(self._impl.run(a, u, int(stride)))
+        stride = operator.index(stride)
+        if stride < 1:
+            raise ValueError(f"stride must be an integer >= 1, got {stride}")
+        out = dict(self._impl.run(a, u, stride))
         n = self.n
         est = out["estimate"]
         out["mass"], out["damping"], out["stiffness"] = est[:, :n], est[:, n : 2 * n], est[:, 2 * n :]

@@ -78,6 +78,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .chain import TABLE1, Chain, parameter_names
+from .messages import one_line
 
 __all__ = ["add_parser", "run", "demo_chain", "run_scenario", "summarize", "settle_time", "format_summary", "jsonable"]
 
@@ -573,7 +574,7 @@ def run(args: argparse.Namespace) -> int:
             actuator_lag_s=1e-3 * args.actuator_lag_ms,
         )
     except ValueError as exc:
-        print(f"algid demo: {exc}", file=sys.stderr)
+        print(one_line(f"algid demo: error: {exc}"), file=sys.stderr)
         return 2
     print(format_summary(summary))
     out = Path(args.out)

@@ -11,6 +11,7 @@ the GIL released.
 from __future__ import annotations
 
 import importlib
+import operator
 import os
 
 import numpy as np
@@ -98,16 +99,34 @@ def make_config(config, dt, boundary, options: dict):
 
 
 def dofs(n) -> int:
-    """The number of DOF as an int >= 1; ValueError otherwise."""
-    if int(n) != n or n < 1:
-        raise ValueError(f"n must be an integer >= 1, got {n!r}")
-    return int(n)
+    """The number of DOF as an int >= 1: an integer (not a float, not a bool); TypeError or
+    ValueError otherwise."""
+    if isinstance(n, (bool, np.bool_)):
+        raise TypeError(f"n must be an integer >= 1, got {n!r}")
+    try:
+        n = operator.index(n)
+    except TypeError:
+        raise TypeError(f"n must be an integer >= 1, got {n!r} ({type(n).__name__})") from None
+    if n < 1:
+        raise ValueError(f"n must be an integer >= 1, got {n}")
+    return n
+
+
+def real_signal(x, name: str) -> np.ndarray:
+    """``x`` as a contiguous float64 array: real floating point or integer data (converted);
+    complex, boolean, masked and object arrays are refused with a TypeError naming them."""
+    if isinstance(x, np.ma.MaskedArray):
+        raise TypeError(f"{name} is a masked array: fill or drop the masked samples first")
+    arr = np.asarray(x)
+    if arr.dtype.kind not in "fiu":
+        raise TypeError(f"{name} must be real numbers (float or integer), got dtype {arr.dtype}")
+    return np.ascontiguousarray(arr, dtype=float)
 
 
 def as_sample(accel, force, n: int) -> tuple[np.ndarray, np.ndarray]:
     """One simultaneous sample as contiguous float arrays of n entries; ValueError otherwise."""
-    a = np.ascontiguousarray(accel, dtype=float).reshape(-1)
-    u = np.ascontiguousarray(force, dtype=float).reshape(-1)
+    a = real_signal(accel, "accel").reshape(-1)
+    u = real_signal(force, "force").reshape(-1)
     if a.size != n or u.size != n:
         raise ValueError(f"update() takes accel and force with {n} entries, got {a.size} and {u.size}")
     return a, u
@@ -115,8 +134,8 @@ def as_sample(accel, force, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def as_record(accel, force, n: int) -> tuple[np.ndarray, np.ndarray]:
     """A whole record as contiguous float arrays of shape (T, n) (1-D accepted for n = 1)."""
-    a = np.ascontiguousarray(accel, dtype=float)
-    u = np.ascontiguousarray(force, dtype=float)
+    a = real_signal(accel, "accel")
+    u = real_signal(force, "force")
     if a.ndim == 1 and n == 1:
         a, u = a[:, None], u.reshape(-1, 1)
     if a.ndim != 2 or a.shape[1] != n or u.shape != a.shape:
@@ -147,7 +166,13 @@ class ChainEstimator:
     Notes
     -----
     Estimates after sample k describe the window ``[t0, t_k - delay_samples * dt]``
-    (the quadrature centres its stencil). A non-finite sample reseeds the estimator.
+    (the quadrature centres its stencil). A non-finite sample, or one so large that the
+    window's systems overflow, reseeds the estimator (status ``BadInput``); ``valid`` is never
+    true for an estimate that is not a number.
+
+    Threads: one estimator serves one thread at a time. ``run()`` releases the GIL; any call
+    on the same object from another thread meanwhile raises ``RuntimeError`` (it would mix
+    two records). Distinct estimators run in parallel threads exactly as one after the other.
     """
 
     def __init__(

@@ -31,10 +31,13 @@ from __future__ import annotations
 
 import math
 import re
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from .messages import listing, quote, quote_path
 
 __all__ = [
     "MIN_SAMPLES",
@@ -53,6 +56,10 @@ __all__ = [
 MIN_SAMPLES = 8
 #: Tolerated relative deviation of every sample interval from the mean interval.
 UNIFORM_RTOL = 1e-3
+#: Sampling intervals a recording may have [s]: 1 ns (1 GHz) to 1 h.
+DT_RANGE_S = (1e-9, 3600.0)
+#: Lines of a CSV file parsed at a time (the reader's memory beyond the data is about this).
+CSV_CHUNK_LINES = 65536
 #: Points of the interpolating polynomial :func:`accelerations` differentiates.
 DEFAULT_DIFF_POINTS = 5
 
@@ -176,7 +183,13 @@ def _check_time(t: np.ndarray, lines: np.ndarray | None = None) -> float:
     if np.any(d <= 0):
         k = int(np.argmax(d <= 0))
         raise RecordingError(f"time is not increasing at {where(k)} (t = {t[k + 1]:.9g} s after {t[k]:.9g} s)")
-    dt = float((t[-1] - t[0]) / (T - 1))
+    with np.errstate(over="ignore"):
+        dt = float((t[-1] - t[0]) / (T - 1))
+    if not DT_RANGE_S[0] <= dt <= DT_RANGE_S[1]:
+        raise RecordingError(
+            f"sampling interval {dt:.3g} s outside {DT_RANGE_S[0]:g} .. {DT_RANGE_S[1]:g} s "
+            "(1 GHz to one sample an hour)"
+        )
     dev = np.abs(d - dt)
     if dev.max() > UNIFORM_RTOL * dt:
         k = int(np.argmax(dev))
@@ -188,21 +201,28 @@ def _check_time(t: np.ndarray, lines: np.ndarray | None = None) -> float:
 
 
 def _group_columns(names: list[str], source: str) -> tuple[int, dict[str, list[int]]]:
-    """Map the column names to their position; return n and {'t': [pos], 'u': [...], ...}."""
+    """Map the column names to their position; return n and {'t': [pos], 'u': [...], ...}.
+
+    Checked before anything is allocated from them: an index above the number of columns
+    (``u10000000`` in a header of five) is refused at once."""
     seen: set[str] = set()
     groups: dict[str, dict[int, int]] = {"u": {}, "a": {}, "v": {}, "x": {}}
     tpos = None
     for pos, raw in enumerate(names):
         name = raw.strip()
         if name in seen:
-            raise RecordingError(f"{source}: duplicate column {name!r}")
+            raise RecordingError(f"{source}: duplicate column {quote(name)}")
         seen.add(name)
         if name == "t":
             tpos = pos
             continue
         m = _NAME.match(name)
         if not m:
-            raise RecordingError(f"{source}: unexpected column {name!r} (expected t, u1..un, a1..an, v1..vn, x1..xn)")
+            raise RecordingError(
+                f"{source}: unexpected column {quote(name)} (expected t, u1..un, a1..an, v1..vn, x1..xn)"
+            )
+        if len(m.group(2)) > 9 or int(m.group(2)) > len(names):
+            raise RecordingError(f"{source}: column {quote(name)} numbers a DOF beyond the file's {len(names)} columns")
         groups[m.group(1)][int(m.group(2))] = pos
     if tpos is None:
         raise RecordingError(f"{source}: missing column 't'")
@@ -221,7 +241,7 @@ def _group_columns(names: list[str], source: str) -> tuple[int, dict[str, list[i
             )
         missing = [f"{key}{i}" for i in range(1, n + 1) if i not in cols]
         if missing:
-            raise RecordingError(f"{source}: missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
+            raise RecordingError(f"{source}: missing column{'s' if len(missing) > 1 else ''} {listing(missing)}")
     out = {"t": [tpos]}
     for key, cols in groups.items():
         if cols:
@@ -229,48 +249,72 @@ def _group_columns(names: list[str], source: str) -> tuple[int, dict[str, list[i
     return n, out
 
 
-def _read_csv(path: Path) -> Recording:
+def _csv_lines(fh, first_lineno: int):
+    """(line number, text) of the data lines from ``first_lineno`` on: blank lines and ``#``
+    comments skipped, the file read line by line."""
+    for lineno, line in enumerate(fh, start=first_lineno):
+        s = line.strip()
+        if s and not s.startswith("#"):
+            yield lineno, s
+
+
+def _csv_header(fh, source: str) -> tuple[list[str], int]:
+    for lineno, s in _csv_lines(fh, 1):
+        return [c.strip() for c in s.split(",")], lineno
+    raise RecordingError(f"{source}: empty file")
+
+
+def _parse_chunk(texts: list[str], linenos: list[int], header: list[str], source: str) -> np.ndarray:
+    """One chunk of data lines as a (rows, columns) array; on a bad line, the one-line error
+    naming it (found line by line, only then)."""
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        return np.loadtxt(texts, delimiter=",", ndmin=2, dtype=float, comments=None)
+    except ValueError:
+        pass
+    width = len(header)
+    for text, lineno in zip(texts, linenos):
+        fields = text.split(",")
+        if len(fields) != width:
+            raise RecordingError(f"{source}: ragged row at line {lineno}: {len(fields)} fields, header has {width}")
+        for col, field in enumerate(fields):
+            try:
+                np.loadtxt([field], delimiter=",", dtype=float, comments=None)
+            except ValueError:
+                raise RecordingError(
+                    f"{source}: line {lineno}, column {quote(header[col])}: "
+                    f"cannot parse {quote(field.strip())} as a number"
+                ) from None
+    raise RecordingError(f"{source}: unreadable data between lines {linenos[0]} and {linenos[-1]}")  # pragma: no cover
+
+
+def _read_csv(path: Path) -> Recording:
+    """Read the CSV chunk by chunk: the memory is the data array (8 bytes a value) plus one
+    chunk of lines, never the whole text split into Python strings."""
+    chunks: list[np.ndarray] = []
+    line_numbers: list[np.ndarray] = []
+    try:
+        with open(path, encoding="utf-8-sig") as fh:
+            header, header_line = _csv_header(fh, path.name)
+            n, groups = _group_columns(header, path.name)
+            texts: list[str] = []
+            linenos: list[int] = []
+            for lineno, text in _csv_lines(fh, header_line + 1):
+                texts.append(text)
+                linenos.append(lineno)
+                if len(texts) == CSV_CHUNK_LINES:
+                    chunks.append(_parse_chunk(texts, linenos, header, path.name))
+                    line_numbers.append(np.asarray(linenos, dtype=np.int64))
+                    texts, linenos = [], []
+            if texts:
+                chunks.append(_parse_chunk(texts, linenos, header, path.name))
+                line_numbers.append(np.asarray(linenos, dtype=np.int64))
     except UnicodeDecodeError:
         raise RecordingError(f"{path.name}: not a text CSV file (cannot decode as UTF-8)") from None
-    rows: list[list[str]] = []
-    lines: list[int] = []
-    header = None
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
-        if not s or s.startswith("#"):
-            continue
-        if header is None:
-            header = [c.strip() for c in s.split(",")]
-            header_line = lineno
-            continue
-        rows.append(s.split(","))
-        lines.append(lineno)
-    if header is None:
-        raise RecordingError(f"{path.name}: empty file")
-    n, groups = _group_columns(header, path.name)
-    if not rows:
+    if not chunks:
         raise RecordingError(f"{path.name}: no data rows after the header (line {header_line})")
-    width = len(header)
-    for fields, lineno in zip(rows, lines):
-        if len(fields) != width:
-            raise RecordingError(f"{path.name}: ragged row at line {lineno}: {len(fields)} fields, header has {width}")
-    try:
-        data = np.array(rows, dtype=float)
-    except ValueError:
-        data = None
-        for fields, lineno in zip(rows, lines):
-            for col, field in enumerate(fields):
-                try:
-                    float(field)
-                except ValueError:
-                    raise RecordingError(
-                        f"{path.name}: line {lineno}, column {header[col]}: cannot parse {field.strip()!r} as a number"
-                    ) from None
-        raise  # pragma: no cover - numpy refused something float() accepts
-    line_arr = np.asarray(lines)
-    return _from_table(path, data, groups, line_arr)
+    data = chunks[0] if len(chunks) == 1 else np.concatenate(chunks)
+    del chunks
+    return _from_table(path, data, groups, np.concatenate(line_numbers))
 
 
 def _from_table(path: Path, data: np.ndarray, groups: dict[str, list[int]], lines: np.ndarray | None) -> Recording:
@@ -288,30 +332,61 @@ def _from_table(path: Path, data: np.ndarray, groups: dict[str, list[int]], line
         raise RecordingError(f"{path.name}: {err}") from None
 
 
-def _read_npz(path: Path) -> Recording:
+def _npz_members(path: Path) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
+    """Name -> (shape, dtype) of every array of an npz, read from the headers only: nothing is
+    decompressed before the names, shapes and types are known to be right."""
+    if not zipfile.is_zipfile(path):
+        raise RecordingError(f"{path.name}: not a readable .npz file (not a zip archive)")
+    members = {}
     try:
-        with np.load(path, allow_pickle=False) as z:
-            arrays = {k: np.asarray(z[k]) for k in z.files}
-    except (ValueError, OSError, EOFError) as err:
+        with zipfile.ZipFile(path) as z:
+            for info in z.infolist():
+                if not info.filename.endswith(".npy"):
+                    raise RecordingError(f"{path.name}: member {quote(info.filename)} is not an .npy array")
+                with z.open(info) as fh:
+                    version = np.lib.format.read_magic(fh)
+                    read_header = {(1, 0): np.lib.format.read_array_header_1_0}.get(
+                        version, np.lib.format.read_array_header_2_0
+                    )
+                    shape, _, dtype = read_header(fh)
+                    declared = math.prod(shape) * dtype.itemsize
+                    if declared > info.file_size:
+                        raise RecordingError(
+                            f"{path.name}: array {quote(info.filename)} declares {declared} bytes "
+                            f"but holds at most {info.file_size} (truncated or corrupt)"
+                        )
+                members[info.filename[: -len(".npy")]] = (shape, dtype)
+    except RecordingError:
+        raise
+    except (zipfile.BadZipFile, ValueError, OSError, EOFError, NotImplementedError) as err:
         raise RecordingError(f"{path.name}: not a readable .npz file ({type(err).__name__})") from None
-    if not arrays:
+    return members
+
+
+def _read_npz(path: Path) -> Recording:
+    members = _npz_members(path)
+    if not members:
         raise RecordingError(f"{path.name}: empty file (no arrays)")
-    names = list(arrays)
+    names = list(members)
     n, groups = _group_columns(names, path.name)
-    lengths = {}
-    for name, arr in arrays.items():
-        if arr.ndim != 1:
-            raise RecordingError(f"{path.name}: array {name!r} has shape {arr.shape}, expected 1-D")
-        if not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
-            raise RecordingError(f"{path.name}: array {name!r} is not real numeric (dtype {arr.dtype})")
-        lengths[name] = arr.size
-    T = lengths["t"]
-    for name, size in lengths.items():
-        if size != T:
-            raise RecordingError(f"{path.name}: ragged arrays: {name!r} has {size} samples, t has {T}")
+    for name, (shape, dtype) in members.items():
+        if len(shape) != 1:
+            raise RecordingError(f"{path.name}: array {quote(name)} has shape {shape}, expected 1-D")
+        if dtype.kind not in "fiu":
+            raise RecordingError(f"{path.name}: array {quote(name)} is not real numeric (dtype {dtype})")
+    T = members["t"][0][0]
+    for name, (shape, _) in members.items():
+        if shape[0] != T:
+            raise RecordingError(f"{path.name}: ragged arrays: {quote(name)} has {shape[0]} samples, t has {T}")
     if T == 0:
         raise RecordingError(f"{path.name}: empty file (no samples)")
-    data = np.stack([arrays[k].astype(float) for k in names], axis=1)
+    data = np.empty((T, len(names)))
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            for col, name in enumerate(names):
+                data[:, col] = z[name]
+    except (zipfile.BadZipFile, ValueError, OSError, EOFError) as err:
+        raise RecordingError(f"{path.name}: not a readable .npz file ({type(err).__name__})") from None
     return _from_table(path, data, groups, None)
 
 
@@ -336,9 +411,9 @@ def load_recording(path: str | Path) -> Recording:
     if ext not in (".csv", ".npz"):
         raise RecordingError(f"{path.name}: unknown extension {path.suffix!r} (expected .csv or .npz)")
     if not path.exists():
-        raise RecordingError(f"{path}: no such file")
+        raise RecordingError(f"no such file: {quote_path(path)}")
     if path.is_dir():
-        raise RecordingError(f"{path}: is a directory, not a recording")
+        raise RecordingError(f"is a directory, not a recording: {quote_path(path)}")
     if path.stat().st_size == 0:
         raise RecordingError(f"{path.name}: empty file")
     return _read_csv(path) if ext == ".csv" else _read_npz(path)

@@ -239,6 +239,7 @@ void configuration_is_validated() {
   rejected([](Est::Config& c) { c.dt = 0; }, E::kBadSamplePeriod);
   rejected([](Est::Config& c) { c.window_s = 0.01; }, E::kBadWindow);  // 10 samples < P + 16
   rejected([](Est::Config& c) { c.window_s = NAN; }, E::kBadWindow);
+  rejected([](Est::Config& c) { c.window_s = 1e6; }, E::kBadWindow);  // 1e9 samples > 1e7
   rejected([](Est::Config& c) { c.stagger = 5; }, E::kBadStagger);     // MaxStagger = 4
   rejected([](Est::Config& c) { c.block = 65; }, E::kBadBlock);        // Capacity = 64
   rejected([](Est::Config& c) { c.confirm = -1; }, E::kBadConfirm);
@@ -249,6 +250,8 @@ void configuration_is_validated() {
   rejected([](Est::Config& c) { c.horizon_s = -1; }, E::kBadHorizon);
   rejected([](Est::Config& c) { c.prefilter_hz = 450; }, E::kBadPrefilter);  // >= 0.45 fs
   rejected([](Est::Config& c) { c.prefilter_hz = -2; }, E::kBadPrefilter);
+  rejected([](Est::Config& c) { c.prefilter_hz = 1e-300; }, E::kBadPrefilter);  // start-up of ~1e300 samples
+  rejected([](Est::Config& c) { c.prefilter_hz = 1e-4; }, E::kBadPrefilter);  // below 1e-6 / dt
   rejected([](Est::Config& c) { c.prefilter_order = 3; }, E::kBadPrefilter);
   rejected([](Est::Config& c) { c.band_hz = 1; }, E::kBadBand);      // Q = 0.5 harmonics < 2
   rejected([](Est::Config& c) { c.band_hz = 460; }, E::kBadBand);    // >= 0.45 fs

@@ -348,6 +348,43 @@ void bad_samples_and_reseed(int n) {
   CHECK(std::abs(est.window() - 293 * cfg.dt) < 1e-15);
   est.reseed();
   CHECK(est.samples() == 0 && !est.valid()(0) && !est.all_valid());
+  // A finite sample so large that the systems of eq. 5 overflow poisons every later instant of
+  // the window: reported as a bad input and reseeded, then the estimator recovers.
+  for (int s = 0; s < 100; ++s) est.update(rec.a(s), rec.u(s));
+  CHECK(est.all_valid());
+  std::vector<double> huge(static_cast<std::size_t>(n), 0.0);
+  huge[0] = 1e200;
+  est.update(huge.data(), ok.data());
+  int reported = -1;  // the sample enters the systems once the quadrature's delay has passed
+  for (int s = 100; s < 400; ++s)
+    if (est.update(rec.a(s), rec.u(s)) == algid::Status::kBadInput && reported < 0) reported = s - 100;
+  CHECK(reported >= 0 && reported <= Est::kDelay + 1);
+  CHECK(est.all_valid());
+  for (int i = 0; i < n; ++i) CHECK(std::isfinite(est.mass()(i)));
+}
+
+// Signals scaled far outside any physical range: valid() is never true for an estimate that
+// is not a number.
+template <class Est>
+void scaled_signals_are_never_valid_nonfinite(int n) {
+  const algid_test::SineChainN truth(n, 17);
+  typename Est::Config cfg;
+  const algid_test::Samples rec(truth, 400, cfg.dt);
+  for (double scale : {1e-160, 1e-75, 1e80, 1e150}) {
+    Est est(cfg, n);
+    std::vector<double> a(static_cast<std::size_t>(n)), u(a);
+    long lies = 0;
+    for (int s = 0; s < 400; ++s) {
+      for (int i = 0; i < n; ++i) {
+        a[static_cast<std::size_t>(i)] = rec.a(s)[i] * scale;
+        u[static_cast<std::size_t>(i)] = rec.u(s)[i] * scale;
+      }
+      est.update(a.data(), u.data());
+      for (int i = 0; i < n; ++i)
+        lies += est.valid()(i) && !(std::isfinite(est.mass()(i)) && std::isfinite(est.damping()(i)));
+    }
+    CHECK(lies == 0);
+  }
 }
 
 template <class Est>
@@ -383,13 +420,17 @@ bool throws(const typename Est::Config& cfg, int n) {
 void configuration_is_validated() {
   using Fixed = algid::ChainEstimator<3>;
   using Dyn = algid::ChainEstimator<Dynamic>;
-  Fixed::Config ok, bad_dt, bad_samples, bad_hadamard;
+  Fixed::Config ok, bad_dt, bad_samples, bad_hadamard, tiny_dt, huge_dt;
   bad_dt.dt = -1;
+  tiny_dt.dt = 1e-300;  // the time scaling tau^-7 would overflow
+  huge_dt.dt = 1e300;
   bad_samples.validity.min_samples = 0;
   bad_hadamard.validity.min_hadamard = 1.0;
   CHECK(Fixed::validate(ok) == algid::ConfigError::kNone);
   CHECK(Fixed::validate(ok, 4) == algid::ConfigError::kBadDofs);  // a fixed size takes N only
   CHECK(Fixed::validate(bad_dt) == algid::ConfigError::kBadSamplePeriod);
+  CHECK(Fixed::validate(tiny_dt) == algid::ConfigError::kBadSamplePeriod);
+  CHECK(Fixed::validate(huge_dt) == algid::ConfigError::kBadSamplePeriod);
   CHECK(Dyn::validate(ok, 7) == algid::ConfigError::kNone);
   CHECK(Dyn::validate(ok, 0) == algid::ConfigError::kBadDofs);
   CHECK(Dyn::validate(ok, -3) == algid::ConfigError::kBadDofs);
@@ -455,6 +496,8 @@ int main() {
   bad_samples_and_reseed<algid::ChainEstimator<3>>(3);
   bad_samples_and_reseed<algid::ChainEstimator<Dynamic>>(3);
   bad_samples_and_reseed<algid::ChainEstimator<Dynamic>>(11);
+  scaled_signals_are_never_valid_nonfinite<algid::ChainEstimator<3>>(3);
+  scaled_signals_are_never_valid_nonfinite<algid::ChainEstimator<Dynamic>>(11);
   constant_force_is_not_identifiable<algid::ChainEstimator<1>>();
   constant_force_is_not_identifiable<algid::ChainEstimator<Dynamic>>();
   configuration_is_validated();

@@ -24,7 +24,7 @@ enum class ConfigError { kNone, kBadSamplePeriod, kBadMinSamples, kBadMinHadamar
 inline const char* to_string(ConfigError e) noexcept {
   switch (e) {
     case ConfigError::kNone: return "ok";
-    case ConfigError::kBadSamplePeriod: return "dt must be finite and > 0 [s]";
+    case ConfigError::kBadSamplePeriod: return "dt must be in [1e-9, 3600] s (1 GHz to one sample an hour)";
     case ConfigError::kBadMinSamples: return "validity.min_samples must be >= 1";
     case ConfigError::kBadMinHadamard: return "validity.min_hadamard must be in [0, 1)";
     case ConfigError::kBadDofs: return "the number of DOF must be >= 1 (and equal N for a fixed-size estimator)";
@@ -35,7 +35,7 @@ inline const char* to_string(ConfigError e) noexcept {
 /// Check a configuration without side effects. @realtime no allocation, no throw
 template <class Scalar>
 ConfigError validate(const ChainConfig<Scalar>& config) noexcept {
-  if (!(config.dt > Scalar(0)) || !std::isfinite(config.dt)) return ConfigError::kBadSamplePeriod;
+  if (!(config.dt >= Scalar(1e-9) && config.dt <= Scalar(3600))) return ConfigError::kBadSamplePeriod;
   if (config.validity.min_samples < 1) return ConfigError::kBadMinSamples;
   if (!(config.validity.min_hadamard >= Scalar(0) && config.validity.min_hadamard < Scalar(1)))
     return ConfigError::kBadMinHadamard;

@@ -14,7 +14,10 @@
 ///
 /// Bad samples: a non-finite acceleration or force is discarded, the estimator reseeds (the
 /// next sample is the new t0), `update()` returns Status::kBadInput and every estimate is
-/// invalid (NaN) until the new window has a trusted sample.
+/// invalid (NaN) until the new window has a trusted sample. The same happens when a finite
+/// sample is so large that a system of eq. 5 overflows (its determinant is no longer finite):
+/// nothing later in that window could be trusted. A DOF is valid only while all its eq. 7
+/// estimates are finite.
 ///
 /// Layout: every DOF side by side, one per SIMD lane, for every step of every sample. DOF i
 /// sits in lane i % W of register i / W (W = lane_width(): 2 doubles with SSE2, 4 with AVX2
@@ -187,6 +190,10 @@ class ChainEstimator {
       }
       for (int q = 0; q < 4; ++q) left[q] = self.spring[q];
     }
+    if (!finite_systems()) {  // a finite sample so large that the window's integrals overflow
+      reseed();
+      return Status::kBadInput;
+    }
     collect();
     return Status::kOk;
   }
@@ -302,6 +309,13 @@ class ChainEstimator {
     return ok;
   }
 
+  // Every system of eq. 5 has a finite determinant (false once the integrals overflowed).
+  bool finite_systems() const noexcept {
+    bool ok = true;
+    for (int g = 0; g < registers(); ++g) ok &= det_[g].isFinite().all();
+    return ok;
+  }
+
   template <int Size>
   static Scalar lane(const Registers<Size>& registers, int i) noexcept {
     return registers[i / kLanes](i % kLanes);
@@ -411,7 +425,11 @@ class ChainEstimator {
       spring_[g] = dof ? Ops::if_less(zero, ratio_[g].denominator(), fused, left) : left;
     }
     if (free_end()) spring_[n_ / kLanes](n_ % kLanes) = Scalar(0);
-    for (int i = 0; i < n_; ++i) valid_[i] = ratio_[i / kLanes].denominator()(i % kLanes) > Scalar(0);
+    // Valid: eq. 7 has weight, and every estimate of the DOF is a number.
+    for (int i = 0; i < n_; ++i)
+      valid_[i] = ratio_[i / kLanes].denominator()(i % kLanes) > Scalar(0) && std::isfinite(lane(estimate_[0], i)) &&
+                  std::isfinite(lane(estimate_[1], i)) && std::isfinite(lane(estimate_[2], i)) &&
+                  (is_reduced(i) || std::isfinite(lane(estimate_[3], i)));
   }
 
   Config config_;

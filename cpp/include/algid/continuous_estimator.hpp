@@ -135,6 +135,9 @@ struct ContinuousConfig {
   bool joint = true;  ///< weak form: estimate from the summed window normal equations (false: block medians)
   bool detect = true;  ///< run the change detector
   bool amortize = true;  ///< spread the per-parameter work over the samples
+  /// A finite sample beyond this many times its channel's running RMS (time constant one
+  /// window, measured once a window of samples has passed) is treated as bad input; 0: off.
+  Scalar outlier_ratio = Scalar(1e8);
 };
 
 /// Why a ContinuousConfig is rejected (kNone: accepted).
@@ -153,6 +156,7 @@ enum class ContinuousConfigError {
   kBadEfficiency,
   kBadHorizon,
   kBadPrefilter,
+  kBadOutlierRatio,
   kBadDofs,
   kBadBand,
   kBadNoise,
@@ -162,11 +166,11 @@ enum class ContinuousConfigError {
 inline const char* to_string(ContinuousConfigError e) noexcept {
   switch (e) {
     case ContinuousConfigError::kNone: return "ok";
-    case ContinuousConfigError::kBadSamplePeriod: return "dt must be finite and > 0 [s]";
+    case ContinuousConfigError::kBadSamplePeriod: return to_string(ConfigError::kBadSamplePeriod);
     case ContinuousConfigError::kBadMinSamples: return "validity.min_samples must be >= 1";
     case ContinuousConfigError::kBadMinHadamard: return "validity.min_hadamard must be in [0, 1)";
     case ContinuousConfigError::kBadWindow:
-      return "window_s must be finite and hold at least P + validity.min_samples samples";
+      return "window_s must be finite and hold P + validity.min_samples to 1e7 samples";
     case ContinuousConfigError::kBadStagger: return "stagger must be in [1, MaxStagger] and <= window samples";
     case ContinuousConfigError::kBadBlock: return "block must be in [1, Capacity]";
     case ContinuousConfigError::kBadConfirm: return "confirm must be 0 (auto) or in [1, Capacity]";
@@ -178,7 +182,8 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
       return "overlap_efficiency must be -1 (auto) or in (0, 1], joint_efficiency in (0, 1]";
     case ContinuousConfigError::kBadHorizon: return "horizon_s must be finite and >= 0 [s]";
     case ContinuousConfigError::kBadPrefilter:
-      return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in (0, 0.45/dt) [Hz], prefilter_order 2 or 4";
+      return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in [1e-6/dt, 0.45/dt) [Hz], prefilter_order 2 or 4";
+    case ContinuousConfigError::kBadOutlierRatio: return "outlier_ratio must be 0 (off) or finite and > 1";
     case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
     case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
     case ContinuousConfigError::kBadNoise: return to_string(WeakFormConfigError::kBadNoise);
@@ -216,6 +221,11 @@ class ContinuousEstimator {
   static constexpr int kCapacity = Capacity;
   /// Most windows in flight.
   static constexpr int kMaxStagger = MaxStagger;
+  /// Longest window [samples] (1e7: 2.8 h at 1 kHz).
+  static constexpr long kMaxWindowSamples = 10000000;
+  /// Lowest prefilter cut-off [cycles per sample] (1e-6: 1 mHz at 1 kHz; its start-up transient
+  /// lasts about 6e6 samples).
+  static constexpr double kMinPrefilterCycles = 1e-6;
 
   /// Check a configuration without side effects. @realtime no allocation, no throw
   static ContinuousConfigError validate(const Config& c, int n = N) noexcept {
@@ -229,7 +239,7 @@ class ContinuousEstimator {
     const Scalar window_s = resolved_window(c);
     if (!std::isfinite(window_s) || !(window_s > Scalar(0))) return ContinuousConfigError::kBadWindow;
     const Scalar samples = window_s / c.dt;
-    if (!std::isfinite(samples) || samples > Scalar(1e9)) return ContinuousConfigError::kBadWindow;
+    if (!std::isfinite(samples) || samples > Scalar(kMaxWindowSamples)) return ContinuousConfigError::kBadWindow;
     const long m = std::lround(samples);
     if (m < static_cast<long>(P) + c.validity.min_samples) return ContinuousConfigError::kBadWindow;
     if (c.stagger < 1 || c.stagger > MaxStagger || c.stagger > m) return ContinuousConfigError::kBadStagger;
@@ -248,6 +258,7 @@ class ContinuousEstimator {
       return ContinuousConfigError::kBadEfficiency;
     if (!(c.horizon_s >= Scalar(0)) || !std::isfinite(c.horizon_s)) return ContinuousConfigError::kBadHorizon;
     if (!std::isfinite(c.prefilter_hz) || (c.prefilter_hz < Scalar(0) && c.prefilter_hz != Scalar(-1)) ||
+        (c.prefilter_hz > Scalar(0) && !(c.prefilter_hz * c.dt >= Scalar(kMinPrefilterCycles))) ||
         !(c.prefilter_hz * c.dt < Scalar(0.45)) || (c.prefilter_order != 2 && c.prefilter_order != 4))
       return ContinuousConfigError::kBadPrefilter;
     if (c.method == WindowMethod::kWeakForm) {
@@ -261,6 +272,8 @@ class ContinuousEstimator {
         case WeakFormConfigError::kBadDofs: return ContinuousConfigError::kBadDofs;
       }
     }
+    if (!std::isfinite(c.outlier_ratio) || (c.outlier_ratio != Scalar(0) && !(c.outlier_ratio > Scalar(1))))
+      return ContinuousConfigError::kBadOutlierRatio;
     return ContinuousConfigError::kNone;
   }
 
@@ -272,6 +285,8 @@ class ContinuousEstimator {
         windows_(make_windows(window_config(config), n_, std::make_index_sequence<MaxStagger>{})) {
     filter_.configure_channels(2 * n_);
     io_.resize(2 * n_);
+    mean_square_.resize(2 * n_);
+    mean_square_.fill(Scalar(0));
     known_.resize(params_);
     tracks_.resize(params_);
     events_.resize(params_);
@@ -340,6 +355,9 @@ class ContinuousEstimator {
       pending_var_(j) = nan;
     }
     pending_next_ = params_;
+    mean_square_.fill(Scalar(0));
+    accepted_ = 0;
+    out_of_range_ = 0;
     samples_ = 0;
     results_ = 0;
     event_count_ = 0;
@@ -347,18 +365,16 @@ class ContinuousEstimator {
   }
 
   /// Consume one simultaneous sample of the accelerations [m/s^2] and forces [N].
-  /// A non-finite sample is discarded and the windows in flight are dropped (the aggregation
-  /// is kept). Returns kWarmup until every identified parameter has an estimate.
+  /// A non-finite sample (or one that overflows the prefilter) is discarded and the windows in flight are dropped (the
+  /// aggregation is kept). Returns kWarmup until every identified parameter has an estimate.
   /// @realtime no allocation, no throw, O(K N) plus at most `budget` parameters' aggregation
   Status update(const Scalar* accel, const Scalar* force) noexcept {
     event_count_ = 0;
     ++samples_;
-    for (int i = 0; i < n_; ++i) {
-      if (!std::isfinite(accel[i]) || !std::isfinite(force[i])) {
-        restart_windows();
-        work();
-        return Status::kBadInput;
-      }
+    if (!plausible(accel, force)) {
+      restart_windows();
+      work();
+      return Status::kBadInput;
     }
     const Scalar* a = accel;
     const Scalar* f = force;
@@ -368,6 +384,13 @@ class ContinuousEstimator {
         io_[n_ + i] = force[i];
       }
       filter_.process(io_.data(), io_.data());
+      bool finite = true;
+      for (int c = 0; c < 2 * n_; ++c) finite &= std::isfinite(io_[c]);
+      if (!finite) {  // a finite sample so large that the prefilter overflowed: its state is lost
+        restart_windows();
+        work();
+        return Status::kBadInput;
+      }
       a = io_.data();
       f = io_.data() + n_;
     }
@@ -527,6 +550,38 @@ class ContinuousEstimator {
   static std::array<Window, sizeof...(I)> make_windows(const typename Window::Config& c, int n,
                                                        std::index_sequence<I...>) {
     return {{((void)I, Window(c, n))...}};
+  }
+
+  // Every value finite (squared too) and, once a window of samples has set each channel's running mean
+  // square, within outlier_ratio times its RMS; the running mean squares learn from the
+  // plausible samples only. A whole window of finite samples out of range in a row is a new
+  // level, not an outlier (a quiet channel that starts to move): the scales are learnt anew.
+  bool plausible(const Scalar* accel, const Scalar* force) noexcept {
+    const Scalar limit = config_.outlier_ratio * config_.outlier_ratio;
+    const bool armed = limit > Scalar(0) && accepted_ >= window_samples_;
+    bool finite = true, in_range = true;
+    for (int i = 0; i < n_; ++i) {
+      // finite, and finite squared: beyond sqrt(max) nothing is a measurement (and the
+      // prefilter and the mean squares would overflow)
+      finite &= std::isfinite(accel[i] * accel[i]) && std::isfinite(force[i] * force[i]);
+      if (armed)
+        in_range &= !(accel[i] * accel[i] > limit * mean_square_[i]) &&
+                    !(force[i] * force[i] > limit * mean_square_[n_ + i]);
+    }
+    if (!finite) return false;
+    if (!in_range) {
+      if (++out_of_range_ < window_samples_) return false;
+      mean_square_.fill(Scalar(0));
+      accepted_ = 0;
+    }
+    out_of_range_ = 0;
+    const Scalar alpha = Scalar(1) / static_cast<Scalar>(window_samples_);
+    for (int i = 0; i < n_; ++i) {
+      mean_square_[i] += alpha * (accel[i] * accel[i] - mean_square_[i]);
+      mean_square_[n_ + i] += alpha * (force[i] * force[i] - mean_square_[n_ + i]);
+    }
+    ++accepted_;
+    return true;
   }
 
   void restart_windows() noexcept {
@@ -888,6 +943,9 @@ class ContinuousEstimator {
   std::array<Window, MaxStagger> windows_;
   detail::ButterworthLowpass<Scalar, kChannels> filter_{};
   detail::Storage<Scalar, kChannels> io_{};
+  detail::Storage<Scalar, kChannels> mean_square_{};  // running mean square of every raw channel
+  long accepted_ = 0;  // plausible samples since construction, reset() or a new level
+  long out_of_range_ = 0;  // finite samples out of range in a row
   bool filtered_ = false;
   long settle_ = 0;
   std::array<long, MaxStagger> phase_{};

@@ -41,7 +41,7 @@ enum class Boundary {
 enum class Status {
   kOk = 0,        ///< sample consumed; see the per-DOF validity flags for the estimates
   kWarmup = 1,    ///< sample consumed, but the quadrature stencil is not full yet (no estimate)
-  kBadInput = 2,  ///< a non-finite sample: it was discarded and the estimator reseeded
+  kBadInput = 2,  ///< a non-finite sample, or one whose integrals overflow: the estimator reseeded
 };
 
 namespace detail {

@@ -11,6 +11,7 @@ import json
 import sys
 from pathlib import Path
 
+from ..messages import one_line, quote_path
 from ..recording import RecordingError, load_recording
 
 
@@ -34,7 +35,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _err(msg: str) -> int:
-    print(f"algid diagnose: error: {' '.join(str(msg).split())}", file=sys.stderr)
+    print(one_line(f"algid diagnose: error: {msg}"), file=sys.stderr)
     return 2
 
 
@@ -56,9 +57,9 @@ def run(args: argparse.Namespace) -> int:
 
     out = Path(args.json)
     if out.exists() and out.is_dir():
-        return _err(f"--json {out}: is a directory")
+        return _err(f"--json: is a directory: {quote_path(out)}")
     if not out.parent.exists():
-        return _err(f"--json {out}: folder {out.parent} does not exist")
+        return _err(f"--json: folder does not exist: {quote_path(out.parent)}")
     try:
         rec = load_recording(args.recording)
     except RecordingError as err:

@@ -595,6 +595,8 @@ def _verdict(
     than the chain, unless it brings the gap to the white noise floor; ``none`` only when
     nothing is beyond noise, the gap is at the noise floor, the linear fit is admissible
     and the record has no more modes than the chain (:mod:`.model`); else ``unknown``."""
+    if model.verdict == "no_force_response":  # nothing to explain an effect of
+        return {"effect": "unknown", "best": None, "explained": 0.0}
     excess = gap_before**2 - floor_rel**2
     if best is None:
         at_floor = gap_before <= UNKNOWN_FLOOR_RATIO * floor_rel

@@ -4,6 +4,11 @@ An effect ranking only means something when eq. 1 is the right skeleton: before 
 which unmodelled effect closes the gap, the diagnosis asks three questions of the
 recording and of the linear fit, and reports the first that fails with its evidence:
 
+0. ``no_force_response``: the accelerations do not respond to the recorded forces: no
+   force or no motion in the band, or, for every forced DOF, the multiple coherence of its
+   acceleration with all the forces, averaged over the band weighted by the force power, is below
+   :data:`MIN_RESPONSE_COHERENCE` (independent noise in both channels, a force sensor wired
+   to another rig). The record carries no identifiable system, whatever the fit says.
 1. ``inertia_not_identifiable``: a forced DOF whose inertia the record does not determine:
    the inertia force ``|m| rms(a)`` is below :data:`INERTIA_SHARE` of the force in the
    signal band (a quasi-static, displacement-driven device), or the mass is not above zero
@@ -33,7 +38,11 @@ from .gram import jackknife_std
 from .linear import LinearFit
 from .windows import Prepared
 
-MODEL_VERDICTS = ("chain", "inertia_not_identifiable", "more_modes_than_dof", "not_a_chain")
+MODEL_VERDICTS = ("chain", "no_force_response", "inertia_not_identifiable", "more_modes_than_dof", "not_a_chain")
+#: Band-mean multiple coherence (acceleration with every force) below which a DOF does not
+#: respond to the forces. Independent noise gives about q / K (q forces, K Welch averages,
+#: kept below a tenth by the segment length); a chain at 0 dB SNR gives about 0.5.
+MIN_RESPONSE_COHERENCE = 0.25
 #: Inertia force over force, in the band, below which a DOF's mass is not determined.
 INERTIA_SHARE = 0.02
 #: A resonance peak stands this many times above the lower of its two flanking minima.
@@ -104,6 +113,57 @@ def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> d
             "determined": bool(share >= INERTIA_SHARE and m > 3 * s),
         }
     return out
+
+
+def _cross_spectra(x: np.ndarray, nper: int) -> np.ndarray:
+    """Welch cross-spectral matrices (bins, channels, channels) of the columns of ``x``
+    (Hann windows, half overlap, means removed per segment)."""
+    step = nper // 2
+    starts = np.arange(0, x.shape[0] - nper + 1, step)
+    w = np.hanning(nper)[:, None]
+    S = 0.0
+    for s0 in starts:
+        seg = x[s0 : s0 + nper]
+        X = np.fft.rfft((seg - seg.mean(axis=0)) * w, axis=0)
+        S = S + np.einsum("fi,fj->fij", X, X.conj())
+    return S / len(starts)
+
+
+def force_response(P: Prepared, f_hi: float) -> dict:
+    """Question 0: the band-mean multiple coherence of every forced DOF's acceleration with
+    all the forces (the share of its power the forces explain linearly, per bin)."""
+    forced = np.nonzero(P.forced)[0]
+    u, a = P.u_full[:, forced], P.a_full
+    if forced.size == 0 or not np.any(band_rms(u, P.dt, f_hi) > 0) or not np.any(band_rms(a, P.dt, f_hi) > 0):
+        return {"related": False, "coherence": {}, "reason": "no force or no motion in the signal band"}
+    q, T = forced.size, u.shape[0]
+    nper = int(2 ** np.floor(np.log2(max(T // (20 * q), 32))))  # K >= about 40 q averages
+    S = _cross_spectra(np.column_stack([u, a]), nper)
+    f = np.fft.rfftfreq(nper, P.dt)
+    band = (f > 0) & (f <= f_hi)
+    Suu, Sua = S[band][:, :q, :q], S[band][:, :q, q:]
+    out = {}
+    for e in forced:
+        Saa = S[band][:, q + e, q + e].real
+        with np.errstate(divide="ignore", invalid="ignore"):
+            coh = np.array(
+                [(np.conj(Sua[k, :, e]) @ np.linalg.pinv(Suu[k]) @ Sua[k, :, e]).real / Saa[k] for k in range(Saa.size)]
+            )
+        # weighted by the force power: where the forces act (a quasi-static device moves slowly,
+        # and its acceleration, differentiated from an encoder, is noise above that)
+        weight = np.einsum("fii->f", Suu).real
+        ok = np.isfinite(coh) & (weight > 0)
+        out[int(e) + 1] = (
+            float(np.sum(np.clip(coh[ok], 0.0, 1.0) * weight[ok]) / np.sum(weight[ok])) if ok.any() else 0.0
+        )
+    related = any(c >= MIN_RESPONSE_COHERENCE for c in out.values())
+    listed = ", ".join(f"DOF {d}: {c:.2f}" for d, c in out.items())
+    reason = (
+        ""
+        if related
+        else f"the forces explain almost none of the accelerations in the band (multiple coherence {listed})"
+    )
+    return {"related": related, "coherence": out, "reason": reason}
 
 
 def resonances(P: Prepared, f_hi: float) -> dict:
@@ -186,6 +246,11 @@ def admissibility(
 def model_verdict(P: Prepared, lin: LinearFit, f_hi: float, states: tuple | None = None) -> ModelVerdict:
     """The three questions of the module docstring, in order; ``states = (x, v)`` measured
     or reconstructed on the analysed samples (default: the linear fit's reconstruction)."""
+    response = force_response(P, f_hi)
+    if not response["related"]:
+        evidence = {"force_response": response}
+        reason = f"no force response: {response['reason']}; the record carries no identifiable system"
+        return ModelVerdict(verdict="no_force_response", reasons=[reason], admissible=False, evidence=evidence)
     sd = physical_uncertainty(P, lin)
     ine = inertia(P, lin, sd, f_hi)
     res = resonances(P, f_hi)
@@ -213,5 +278,11 @@ def model_verdict(P: Prepared, lin: LinearFit, f_hi: float, states: tuple | None
         verdict = "not_a_chain"
     else:
         verdict = "chain"
-    evidence = {"inertia": ine, "resonances": res, "inadmissible": bad, "parameters_sigma": [s.tolist() for s in sd]}
+    evidence = {
+        "force_response": response,
+        "inertia": ine,
+        "resonances": res,
+        "inadmissible": bad,
+        "parameters_sigma": [s.tolist() for s in sd],
+    }
     return ModelVerdict(verdict=verdict, reasons=reasons, admissible=not bad, evidence=evidence)

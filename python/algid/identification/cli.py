@@ -13,6 +13,8 @@ import json
 import sys
 from pathlib import Path
 
+from ..cli import error_line
+from ..messages import quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
 from .plan import ESTIMATORS
@@ -60,9 +62,9 @@ def add_parser(sub) -> None:
 
 def _check_output(path: Path, flag: str) -> None:
     if path.is_dir():
-        raise IdentifyError(f"{flag} {path}: is a directory")
+        raise IdentifyError(f"{flag}: is a directory: {quote_path(path)}")
     if not path.parent.exists():
-        raise IdentifyError(f"{flag} {path}: folder {path.parent} does not exist")
+        raise IdentifyError(f"{flag}: folder does not exist: {quote_path(path.parent)}")
 
 
 def run(args) -> int:
@@ -92,10 +94,10 @@ def run(args) -> int:
 
             save_figures(result, args.plots)
     except (RecordingError, IdentifyError) as err:
-        print(f"algid identify: error: {' '.join(str(err).split())}", file=sys.stderr)
+        print(error_line("identify", err), file=sys.stderr)
         return 2
     except OSError as err:
-        print(f"algid identify: error: {err.strerror}: {err.filename}", file=sys.stderr)
+        print(error_line("identify", err), file=sys.stderr)
         return 2
     for line in result.reasons:
         print(f"algid identify: {line}", file=sys.stderr)
