@@ -59,7 +59,7 @@ UNIFORM_RTOL = 1e-3
 #: Sampling intervals a recording may have [s]: 1 ns (1 GHz) to 1 h.
 DT_RANGE_S = (1e-9, 3600.0)
 #: Lines of a CSV file parsed at a time (the reader's memory beyond the data is about this).
-CSV_CHUNK_LINES = 65536
+CSV_CHUNK_LINES = 8192
 #: Points of the interpolating polynomial :func:`accelerations` differentiates.
 DEFAULT_DIFF_POINTS = 5
 
