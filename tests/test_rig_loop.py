@@ -71,7 +71,7 @@ class _Truth:
 
 
 class _CommandedEq10(TrackingController):
-    """Eq. 10 on the commanded force (the form before issue 19)."""
+    """Eq. 10 on the commanded force (the continuous-time form of the paper)."""
 
     def start(self, *args, **kwargs):
         super().start(*args, **kwargs)

@@ -365,8 +365,9 @@ class ContinuousEstimator {
   }
 
   /// Consume one simultaneous sample of the accelerations [m/s^2] and forces [N].
-  /// A non-finite sample (or one that overflows the prefilter) is discarded and the windows in flight are dropped (the
-  /// aggregation is kept). Returns kWarmup until every identified parameter has an estimate.
+  /// A sample plausible() refuses (not finite, not finite squared, or an outlier) is discarded
+  /// and the windows in flight are dropped (the aggregation is kept). Returns kWarmup until every
+  /// identified parameter has an estimate.
   /// @realtime no allocation, no throw, O(K N) plus at most `budget` parameters' aggregation
   Status update(const Scalar* accel, const Scalar* force) noexcept {
     event_count_ = 0;
@@ -383,14 +384,7 @@ class ContinuousEstimator {
         io_[i] = accel[i];
         io_[n_ + i] = force[i];
       }
-      filter_.process(io_.data(), io_.data());
-      bool finite = true;
-      for (int c = 0; c < 2 * n_; ++c) finite &= std::isfinite(io_[c]);
-      if (!finite) {  // a finite sample so large that the prefilter overflowed: its state is lost
-        restart_windows();
-        work();
-        return Status::kBadInput;
-      }
+      filter_.process(io_.data(), io_.data());  // cannot overflow: plausible() bounds |x| by sqrt(max)
       a = io_.data();
       f = io_.data() + n_;
     }

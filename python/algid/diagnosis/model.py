@@ -115,47 +115,34 @@ def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> d
     return out
 
 
-def _cross_spectra(x: np.ndarray, nper: int) -> np.ndarray:
-    """Welch cross-spectral matrices (bins, channels, channels) of the columns of ``x``
-    (Hann windows, half overlap, means removed per segment)."""
-    step = nper // 2
-    starts = np.arange(0, x.shape[0] - nper + 1, step)
-    w = np.hanning(nper)[:, None]
-    S = 0.0
-    for s0 in starts:
-        seg = x[s0 : s0 + nper]
-        X = np.fft.rfft((seg - seg.mean(axis=0)) * w, axis=0)
-        S = S + np.einsum("fi,fj->fij", X, X.conj())
-    return S / len(starts)
-
-
 def force_response(P: Prepared, f_hi: float) -> dict:
     """Question 0: the band-mean multiple coherence of every forced DOF's acceleration with
     all the forces (the share of its power the forces explain linearly, per bin)."""
+    from scipy.signal import csd
+
     forced = np.nonzero(P.forced)[0]
     u, a = P.u_full[:, forced], P.a_full
     if forced.size == 0 or not np.any(band_rms(u, P.dt, f_hi) > 0) or not np.any(band_rms(a, P.dt, f_hi) > 0):
         return {"related": False, "coherence": {}, "reason": "no force or no motion in the signal band"}
     q, T = forced.size, u.shape[0]
     nper = int(2 ** np.floor(np.log2(max(T // (20 * q), 32))))  # K >= about 40 q averages
-    S = _cross_spectra(np.column_stack([u, a]), nper)
-    f = np.fft.rfftfreq(nper, P.dt)
+    X = np.column_stack([u, a])
+    # Welch cross-spectral matrices, every pair of channels at once: S[f, i, j] = E[conj(X_i) X_j]
+    f, S = csd(X[:, :, None], X[:, None, :], fs=1.0 / P.dt, nperseg=nper, axis=0)
     band = (f > 0) & (f <= f_hi)
-    Suu, Sua = S[band][:, :q, :q], S[band][:, :q, q:]
+    Sb = S[band]
+    Suu, Sua, Saa = Sb[:, :q, :q], Sb[:, :q, q:], np.einsum("fii->fi", Sb[:, q:, q:]).real
+    # per bin and DOF: Sua^H Suu^+ Sua / Saa, the share of the acceleration's power the forces explain
+    with np.errstate(divide="ignore", invalid="ignore"):
+        coh = np.einsum("fie,fij,fje->fe", Sua.conj(), np.linalg.pinv(Suu), Sua).real / Saa
+    # weighted by the force power: where the forces act (a quasi-static device moves slowly,
+    # and its acceleration, differentiated from an encoder, is noise above that)
+    weight = np.einsum("fii->f", Suu).real
     out = {}
     for e in forced:
-        Saa = S[band][:, q + e, q + e].real
-        with np.errstate(divide="ignore", invalid="ignore"):
-            coh = np.array(
-                [(np.conj(Sua[k, :, e]) @ np.linalg.pinv(Suu[k]) @ Sua[k, :, e]).real / Saa[k] for k in range(Saa.size)]
-            )
-        # weighted by the force power: where the forces act (a quasi-static device moves slowly,
-        # and its acceleration, differentiated from an encoder, is noise above that)
-        weight = np.einsum("fii->f", Suu).real
-        ok = np.isfinite(coh) & (weight > 0)
-        out[int(e) + 1] = (
-            float(np.sum(np.clip(coh[ok], 0.0, 1.0) * weight[ok]) / np.sum(weight[ok])) if ok.any() else 0.0
-        )
+        ok = np.isfinite(coh[:, e]) & (weight > 0)
+        share = np.sum(np.clip(coh[ok, e], 0.0, 1.0) * weight[ok]) / np.sum(weight[ok]) if ok.any() else 0.0
+        out[int(e) + 1] = float(share)
     related = any(c >= MIN_RESPONSE_COHERENCE for c in out.values())
     listed = ", ".join(f"DOF {d}: {c:.2f}" for d, c in out.items())
     reason = (
