@@ -50,8 +50,12 @@ def test_huge_column_index_is_refused_before_allocation(tmp_path, command):
 
 def test_a_huge_header_is_quoted_short(tmp_path):
     path = tmp_path / "r.csv"
-    path.write_text("t,u1,a1," + "x" * 2_000_000 + "\n0,1,2,3\n")
-    _one_line_exit_2(_algid("identify", path, "--json", tmp_path / "o.json"), "unexpected column")
+    path.write_text("t,u1,a1,a" + "1" * 2_000_000 + "\n0,1,2,3\n")
+    _one_line_exit_2(_algid("identify", path, "--json", tmp_path / "o.json"), "beyond")
+    rows = "".join(f"{k}e-3,1,2,3\n" for k in range(20))
+    path.write_text("t,u1,a1," + "x" * 2_000_000 + "\n" + rows)  # ignored, and named short in the note
+    note = load_recording(path).notes[0]
+    assert note.startswith("ignored column 'xxx") and len(note) < MAX_LINE
 
 
 def test_digit_separators_are_not_numbers(tmp_path):
@@ -117,7 +121,7 @@ def test_unexpected_errors_are_one_line_too(tmp_path, monkeypatch, capsys):
     import algid.cli
     import algid.diagnosis.cli
 
-    def refuse(path):
+    def refuse(path, **options):
         raise PermissionError(13, "Permission denied", str(path))
 
     monkeypatch.setattr(algid.diagnosis.cli, "load_recording", refuse)

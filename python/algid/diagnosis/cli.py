@@ -13,6 +13,7 @@ from pathlib import Path
 
 from ..messages import one_line, quote_path
 from ..recording import RecordingError, load_recording
+from ..recording.options import add_recording_options, print_notes, recording_options
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -25,11 +26,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "on training windows, score it on withheld windows and report the best one that "
         "shrinks the gap beyond noise.",
     )
-    p.add_argument("recording", metavar="RECORDING", help="CSV or .npz with t, u1..un, a1..an (or x1..xn)")
+    p.add_argument(
+        "recording",
+        metavar="RECORDING",
+        help="CSV/TSV/TXT (optionally compressed), .npz, HDF5 or UFF 58 with time, u1..un, a1..an (or v, x)",
+    )
     p.add_argument("--json", required=True, metavar="OUT", help="where to write the JSON result")
     p.add_argument("--plots", metavar="DIR", help="write the diagnosis figures (PNG) into DIR")
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
     p.add_argument("--quiet", action="store_true", help="no progress and no report on the terminal")
+    add_recording_options(p)
     p.set_defaults(func=run)
     return p
 
@@ -61,9 +67,10 @@ def run(args: argparse.Namespace) -> int:
     if not out.parent.exists():
         return _err(f"--json: folder does not exist: {quote_path(out.parent)}")
     try:
-        rec = load_recording(args.recording)
+        rec = load_recording(args.recording, **recording_options(args))
     except RecordingError as err:
         return _err(err)
+    print_notes(rec, "diagnose", quiet)
     try:
         d = diagnose(rec, boundary=args.boundary, progress=progress)
     except ValueError as err:

@@ -17,6 +17,7 @@ from ..cli import error_line
 from ..messages import quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
+from ..recording.options import add_recording_options, print_notes, recording_options
 from .plan import ESTIMATORS
 from .surrogate import REPLICATES
 
@@ -34,7 +35,12 @@ def add_parser(sub) -> None:
         "one standard deviation each and a verdict (valid, or why not). The "
         "estimator is chosen from the recording unless --estimator says otherwise.",
     )
-    p.add_argument("recording", type=Path, help="CSV or .npz with t, u1..un, a1..an (or x1..xn)")
+    p.add_argument(
+        "recording",
+        type=Path,
+        help="CSV/TSV/TXT (optionally .gz, .bz2, .xz, .zip), .npz, HDF5 or UFF 58 with time, forces u1..un "
+        "and accelerations a1..an (or velocities v1..vn, displacements x1..xn)",
+    )
     p.add_argument("--json", type=Path, help="write the estimates, uncertainties and verdicts as JSON")
     p.add_argument("--trace", type=Path, help="write the estimate history (with sigma_ columns) as CSV")
     p.add_argument("--plots", type=Path, metavar="DIR", help="write estimates.png (histories with one-sigma bands)")
@@ -57,6 +63,7 @@ def add_parser(sub) -> None:
         help=f"bootstrap replicates for the uncertainties (default {REPLICATES})",
     )
     p.add_argument("--quiet", action="store_true", help="no progress and no table")
+    add_recording_options(p)
     p.set_defaults(func=run)
 
 
@@ -78,7 +85,8 @@ def run(args) -> int:
                 _check_output(path, flag)
         if args.replicates < 2:
             raise IdentifyError(f"--replicates must be >= 2, got {args.replicates}")
-        rec = load_recording(args.recording)
+        rec = load_recording(args.recording, **recording_options(args))
+        print_notes(rec, "identify", args.quiet)
         try:
             result = identify(rec, args.boundary, args.estimator, replicates=args.replicates, progress=progress)
         except ValueError as err:  # e.g. a configuration the estimator rejects

@@ -32,7 +32,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from ..noise import NoiseModel, analyse, without_hum
-from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations
+from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, parameter_units
 from ..recording import motion as recording_motion
 from .plan import Plan, make_plan, natural_frequencies_hz, window_candidates, window_limits
 from .result import Identification
@@ -212,4 +212,6 @@ def identify(
         motion=kind,
         path=rec.path,
         hum_hz=tuple(hum),
+        units=parameter_units(rec),
+        recording_notes=tuple(rec.notes),
     )

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -57,6 +57,9 @@ class Identification(PackedParameters):
     motion: str
     path: Path | None = None
     hum_hz: tuple = ()  #: mains lines notched out of every channel [Hz]
+    #: unit labels of m, c, k (:func:`algid.recording.parameter_units`: V/V where the data are volts)
+    units: dict = field(default_factory=lambda: {"m": "kg", "c": "N s/m", "k": "N/m"})
+    recording_notes: tuple = ()  #: what the reader did (columns ignored, units converted)
 
     # ---- views -------------------------------------------------------------------------
     @property
@@ -158,6 +161,8 @@ class Identification(PackedParameters):
             "motion": self.motion,
             "noise_model": self.noise.to_json(),
             "mains_hum_removed_hz": list(self.hum_hz),
+            "units": dict(self.units),
+            "recording_notes": list(self.recording_notes),
         }
         if n == 1 and self.boundary == "fixed":
             doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
@@ -191,7 +196,7 @@ class Identification(PackedParameters):
                 + (f"{self.plan.prefilter_hz:.3g} Hz" if self.plan.prefilter_hz > 0 else "off")
                 + f", {self.windows} window results"
             )
-        units = {"m": "kg", "c": "N s/m", "k": "N/m"}
+        units = self.units
         for p, v in enumerate(self.verdicts):
             val, sg = self.theta[p], self.sigma[p]
             txt = "       n/a" if not math.isfinite(val) else f"{val:10.5g}"

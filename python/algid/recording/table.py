@@ -1,0 +1,97 @@
+"""From the columns a reader read to a :class:`Recording`: time from the file or from the
+sampling interval, units converted to SI where they can be (and listed in a note), every
+value checked with the file line it came from."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..messages import quote
+from .columns import ROLE_KEYS, Layout
+from .core import Recording, RecordingError, check_finite, check_time
+from .units import ROLES, conversion_note, to_si
+
+
+def role_units(units: dict | None) -> dict[str, str]:
+    """``{"force": "V", "displacement": "V"}`` from a mapping whose keys may be role names
+    or array names (``u``, ``x``, ``accel``); raise on an unknown role."""
+    out = {}
+    for role, label in (units or {}).items():
+        key = ROLE_KEYS.get(str(role).strip().lower())
+        if key is None:
+            raise RecordingError(f"units: unknown role {quote(role)} (expected {', '.join(ROLES.values())})")
+        out[ROLES[key]] = str(label).strip()
+    return out
+
+
+def _convert(key: str, arr: np.ndarray, declared: list[str | None], source: str, notes: list[str]) -> str:
+    """Convert the columns of ``arr`` (role ``key``) to SI in place where their unit allows;
+    return the role's unit label."""
+    role = ROLES[key]
+    labels = set()
+    for col, unit in enumerate(declared):
+        factor, label = to_si(role, unit)
+        if key == "t" and factor is None:
+            raise RecordingError(f"{source}: time in {quote(unit)}, not a unit of time")
+        if factor is not None and factor != 1.0:
+            arr[:, col] *= factor
+            note = conversion_note(role, unit, factor)
+            if note not in notes:
+                notes.append(note)
+        labels.add(label)
+    if len(labels) > 1:
+        raise RecordingError(f"{source}: {role} columns in different units: {', '.join(sorted(labels))}")
+    return labels.pop()
+
+
+def assemble(
+    path: Path | None,
+    source: str,
+    data: np.ndarray,
+    layout: Layout,
+    lines: np.ndarray | None = None,
+    dt: float | None = None,
+    units: dict | None = None,
+) -> Recording:
+    """The recording in ``data`` (T, len(layout.positions())), columns in position order.
+
+    ``units`` (role -> label) overrides the units the columns declare; ``dt`` [s] gives the
+    time when the file has no time column (and must agree with it when it has one)."""
+    given = role_units(units)
+    order = {p: j for j, p in enumerate(layout.positions())}
+    notes = layout.notes()
+    labels: dict[str, str] = {}
+    parts: dict[str, np.ndarray] = {}
+    for key, cols in layout.groups.items():
+        arr = data[:, [order[p] for p in cols]]
+        declared = [given.get(ROLES[key], u) for u in layout.units[key]]
+        try:
+            check_finite(key, arr, lines)
+        except RecordingError as err:
+            raise RecordingError(f"{source}: {err}") from None
+        labels[ROLES[key]] = _convert(key, arr, declared, source, notes)
+        parts[key] = arr
+    if "t" in parts:
+        t = parts["t"][:, 0]
+    else:
+        if dt is None:
+            raise RecordingError(f"{source}: no time column and no sampling interval given")
+        t = float(dt) * np.arange(data.shape[0])
+        notes.append(f"no time column: t = k * {float(dt):.9g} s")
+    try:
+        check_time(t, lines)
+        return Recording(
+            t=t,
+            u=parts["u"],
+            a=parts.get("a"),
+            v=parts.get("v"),
+            x=parts.get("x"),
+            dt=dt,
+            path=path,
+            units={role: label for role, label in labels.items() if role != "time"},
+            notes=notes,
+        )
+    except RecordingError as err:
+        raise RecordingError(f"{source}: {err}") from None
