@@ -262,6 +262,10 @@ def test_missing_optional_packages_name_their_extra(tmp_path, monkeypatch):
         monkeypatch.setitem(sys.modules, module, None)  # import raises ImportError
         with pytest.raises(RecordingError, match=rf"need the {module} package: pip install 'algid\[{extra}\]'"):
             load_recording(path)
+    t, u, a = _signals()
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(RecordingError, match=r"DataFrames need the pandas package: pip install 'algid\[pandas\]'"):
+        Recording(t=t, u=u, a=a).to_frame()
 
 
 def _text(tmp_path, text, name="r.csv"):

@@ -1,4 +1,4 @@
-"""Recordings to and from :class:`pandas.DataFrame`."""
+"""Recordings to and from :class:`pandas.DataFrame` (``pip install 'algid[pandas]'``)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 
 from ..messages import quote
 from .columns import resolve
-from .core import Recording, RecordingError
+from .core import Recording, RecordingError, require
 from .table import assemble
 
 SOURCE = "DataFrame"
@@ -34,8 +34,7 @@ def from_frame(frame, columns=None, units=None, dt: float | None = None) -> Reco
 
 def to_frame(rec: Recording):
     """``rec`` as a DataFrame with columns ``t, u1.., a1..`` and ``attrs["units"]``."""
-    import pandas as pd
-
+    pd = require("pandas", "pandas", "DataFrames")
     frame = pd.DataFrame(rec.columns())
     frame.attrs["units"] = {"time": "s", **rec.units}
     return frame
