@@ -397,3 +397,21 @@ def test_cli_option_errors_are_one_line(tmp_path, capsys):
             code, _, stderr = _cli(capsys, command, path, "--json", tmp_path / "o.json", *args)
             lines = stderr.strip().splitlines()
             assert code == 2 and len(lines) == 1 and needle in lines[0], stderr
+
+
+def test_silverbox_read_as_volts_by_mapping(shared_data):
+    """The real Silverbox record (no time column, V1 and V2 in volts) read by a mapping."""
+    path = shared_data / "silverbox" / "SNLS80mV.npz"
+    fs = 1e7 / 2**14
+    rec = load_recording(
+        path,
+        columns={"force": "V1_input_V", "displacement": "V2_output_V"},
+        units={"force": "V", "displacement": "V"},
+        dt=1 / fs,
+    )
+    with np.load(path) as z:
+        np.testing.assert_array_equal(rec.u[:, 0], z["V1_input_V"])
+        np.testing.assert_array_equal(rec.x[:, 0], z["V2_output_V"])
+    assert rec.fs_hz == pytest.approx(fs, rel=1e-12) and rec.n == 1
+    assert parameter_units(rec) == {"m": "V s^2/V", "c": "V s/V", "k": "V/V"}
+    assert rec.notes == ["ignored column 'fs'", "no time column: t = k * 0.0016384 s"]
