@@ -140,7 +140,10 @@ def _malformed():
     ragged[4] = ",".join(ragged[4].split(",")[:2])
     return [
         (_csv("t,u1,a2", rows), "mismatched n"),
-        (_csv("t,u1,q1", rows), "unexpected column"),
+        (
+            _csv("t,u1,q1", rows),
+            "missing columns a1..a1 (or velocities v1..v1, or displacements x1..x1) (columns not recognised: 'q1')",
+        ),
         (_csv("t,u1", [r[:2] for r in rows]), "missing columns"),
         (_csv("t,u1,a1", nonuniform), "uniform"),
         (_csv("t,u1,a1", decreasing), "increasing"),

@@ -181,6 +181,20 @@ def test_hdf5_datasets_in_a_group(tmp_path):
         load_recording(path)  # the root holds a group and an unrelated dataset
 
 
+def test_hostile_hdf5_and_uff_files(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    pytest.importorskip("pyuff")
+    for name, needle in (("r.h5", "r.h5: not a readable HDF5 file"), ("r.uff", "r.uff: no time responses")):
+        (tmp_path / name).write_text("t,u1,a1\n0,1,2\n")
+        with pytest.raises(RecordingError, match=needle):
+            load_recording(tmp_path / name)
+    t, u, a = _signals(n=1)
+    with h5py.File(tmp_path / "r.h5", "w") as fh:
+        fh["t"], fh["u1"], fh["a1"] = t, np.column_stack([u, u]), a[:-1, 0]
+    with pytest.raises(RecordingError, match="array 'u1' has shape \\(64, 2\\), expected 1-D"):
+        load_recording(tmp_path / "r.h5")
+
+
 def _uff58(id1, node, data_type, unit, data, dt=DT):
     import pyuff
 

@@ -138,11 +138,15 @@ def resolve(
     for key, cols in mapped.items():
         if key != "t":
             groups[key] = {i + 1: p for i, p in enumerate(cols)}
-    out = _complete(groups, source)
+    unnamed = f" (columns not recognised: {listing([quote(n) for n in ignored])})" if ignored else ""
+    try:
+        out = _complete(groups, source)
+    except RecordingError as err:
+        raise RecordingError(f"{err}{unnamed}") from None
     if tpos is not None:
         out["t"] = [tpos]
     elif need_time:
-        raise RecordingError(f"{source}: missing column 't' (name it, or give the sampling rate)")
+        raise RecordingError(f"{source}: missing column 't' (name it, or give the sampling rate){unnamed}")
     n = len(out["u"])
     declared = declared or [None] * len(names)
     units = {key: [split_name(names[p])[1] or declared[p] for p in cols] for key, cols in out.items()}
