@@ -368,6 +368,18 @@ def test_done_when_a_pandas_csv_with_time_and_units_goes_through_identify(tmp_pa
     assert "m1 =" in stdout and " kg" in stdout
 
 
+def test_identification_to_frame_in_the_recording_units(table1):
+    import algid
+
+    t, a, u, _ = table1
+    res = algid.identify(Recording(t=t, u=u * 0.1, a=a, units={"force": "V"}))
+    frame = res.to_frame()
+    assert list(frame.index) == res.names and list(frame["unit"][:3]) == ["V s^2/m"] * 3
+    np.testing.assert_array_equal(frame["value"].to_numpy(), res.theta)
+    np.testing.assert_allclose(frame.loc[["m1", "m2", "m3"], "value"], TABLE1.mass * 0.1, rtol=1e-6)
+    assert frame["status"].tolist() == [v.status for v in res.verdicts]
+
+
 def test_identify_labels_volts_and_reads_a_file_without_time(tmp_path, capsys, table1):
     t, a, u, _ = table1
     volts_per_newton = 0.1

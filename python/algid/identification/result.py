@@ -170,6 +170,22 @@ class Identification(PackedParameters):
             doc["note_accel"] = f"accelerations derived from {self.motion}s by 5-point differentiation"
         return doc
 
+    def to_frame(self):
+        """The estimates as a :class:`pandas.DataFrame`, one row per parameter (index
+        ``m1..``): ``value``, ``sigma``, ``unit``, ``status``, ``valid``, ``reason``."""
+        from ..recording.core import require
+
+        pd = require("pandas", "pandas", "DataFrames")
+        rows = {
+            "value": self.theta,
+            "sigma": self.sigma,
+            "unit": [self.units[v.name[0]] for v in self.verdicts],
+            "status": [v.status for v in self.verdicts],
+            "valid": [v.valid for v in self.verdicts],
+            "reason": [v.reason or "" for v in self.verdicts],
+        }
+        return pd.DataFrame(rows, index=pd.Index([v.name for v in self.verdicts], name="parameter"))
+
     def write_trace(self, path: Path) -> None:
         """History CSV ``t,m1..,c1..,k1..,sigma_m1..,sigma_c1..,sigma_k1..,valid``: one row per
         history instant (every sample for the single window; window-result instants for the
