@@ -47,6 +47,7 @@ from .integrals import integrals
 from .linear import LinearFit, fit_linear, force_scale, reconstruct_states
 from .locate import locate, noise_floor
 from .model import ModelVerdict, inertia, model_verdict, physical_uncertainty
+from .units import SI, diagnosis_units
 from .windows import Prepared, detrend, parseval_weights, prepare, window_length
 
 #: Threshold on the noise-referenced z score of the withheld error reduction (see
@@ -112,7 +113,12 @@ class Scored:
 
 @dataclass
 class Diagnosis:
-    """Result of :func:`diagnose` (see :meth:`to_json` for the published fields)."""
+    """Result of :func:`diagnose` (see :func:`.report.to_json` for the published fields).
+
+    ``units`` names the unit of every number by its name (``m``, ``c``, ``k``, ``force``,
+    ``acceleration``, ``k3``, ...: :func:`.units.diagnosis_units`), in the units the
+    recording declares (``recording_units``, by role); ``recording_notes`` are what the
+    reader did (columns ignored, units converted)."""
 
     effect: str
     location: dict | None
@@ -130,14 +136,18 @@ class Diagnosis:
     timings: dict[str, float] = field(default_factory=dict)
     where: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
+    units: dict = field(default_factory=lambda: dict(SI))
+    recording_units: dict = field(default_factory=dict)
+    recording_notes: list = field(default_factory=list)
 
     @property
     def metric(self) -> str:
         return METRIC
 
     def residuals(self) -> tuple[np.ndarray, np.ndarray]:
-        """In-sample equation errors (N, n) [m/s^2] of the linear model and of the model
-        with the reported effect (the same array twice for ``none``/``unknown``)."""
+        """In-sample equation errors (N, n) of the linear model and of the model with the
+        reported effect, in each equation's target units (acceleration, or force in the force
+        form: ``units``) (the same array twice for ``none``/``unknown``)."""
         before = self.lin.resid
         if self.best is None:
             return before, before
@@ -477,7 +487,8 @@ def diagnose(
     Parameters
     ----------
     rec : Recording
-        Forces [N] and accelerations [m/s^2] (or velocities, or displacements) of every DOF.
+        Forces and accelerations (or velocities, or displacements) of every DOF, in SI or in
+        the units ``rec.units`` declares (the result's ``units`` are built from them).
     boundary : {"fixed", "free"}
         Right end of the chain.
     progress : callable or None
@@ -551,6 +562,9 @@ def diagnose(
             "combination": combo if best is not None else None,
             "mains_hz": st.hum,
         },
+        units=diagnosis_units(rec.units, recording_motion(rec)[0]),
+        recording_units=dict(rec.units),
+        recording_notes=list(rec.notes),
     )
 
 

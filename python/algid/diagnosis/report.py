@@ -8,23 +8,7 @@ import numpy as np
 
 from .candidates import MAIN_PARAM
 from .core import METRIC, METRIC_FORCE
-
-UNITS = {
-    "force": "N",
-    "v_scale": "m/s",
-    "static": "N",
-    "v_stribeck": "m/s",
-    "c_amp": "N s/m^2",
-    "c2": "N s^2/m^2",
-    "k3": "N/m^3",
-    "gap": "m",
-    "stiffness": "N/m",
-    "delay": "s",
-    "bias": "m/s^2",
-    "cutoff_hz": "Hz",
-    "rel_change": "-",
-}
-
+from .units import SI
 
 def _clean(x):
     """JSON-safe floats (NaN/inf -> None)."""
@@ -45,7 +29,10 @@ def to_json(d) -> dict:
     ranking`` (each ranking entry ``effect, location, params, gap_after``), plus
     ``params_std`` (1-sigma, delete-a-group jackknife over the folds), the significance of
     every ranked candidate, the signal band and the full-band gaps (``*_fullband``), the
-    linear model, the location indicators and timings."""
+    linear model, the location indicators and timings; ``units``, the unit of every number
+    by its name (``m``, ``c``, ``k`` of the linear model, the signals, every effect
+    parameter: ``k3`` in ``N/m^3``, or ``V/V^3`` for forces and displacements in volts),
+    ``recording_units`` (by role, as the recording declares them) and ``recording_notes``."""
     ranking = []
     for s in d.ranking:
         ranking.append(
@@ -109,6 +96,9 @@ def to_json(d) -> dict:
         },
         "where": d.where,
         "timings_s": d.timings,
+        "units": dict(d.units),
+        "recording_units": dict(d.recording_units),
+        "recording_notes": list(d.recording_notes),
     }
     return _clean(out)
 
@@ -124,14 +114,24 @@ def _combination_json(s) -> dict | None:
     return {"effects": parts, "gap_after": s.gap_after, "gap_after_fullband": s.gap_after_full, "z_noise": s.z}
 
 
-def _fmt_params(params: dict, std: dict | None = None) -> str:
+def _fmt_params(params: dict, std: dict | None = None, units: dict = SI) -> str:
     parts = []
     for k, v in params.items():
         s = f"{k} = {v:.4g}"
         if std and std.get(k) is not None and np.isfinite(std[k]):
             s += f" +- {std[k]:.2g}"
-        parts.append(s + f" {UNITS.get(k, '')}".rstrip())
+        parts.append(s + f" {units.get(k, '')}".rstrip())
     return ", ".join(parts)
+
+
+def _units_lines(d) -> list[str]:
+    """The units the numbers below are in, built from those the recording declares."""
+    rec = ", ".join(f"{role} [{unit}]" for role, unit in d.recording_units.items() if role != "time")
+    names = {"m": "m", "c": "c", "k": "springs", "displacement": "x", "velocity": "v", "acceleration": "a"}
+    return [
+        f"Units (the recording's: {rec or 'SI'}):",
+        "  " + "   ".join(f"{label} [{d.units[key]}]" for key, label in names.items()),
+    ]
 
 
 def _fmt_loc(loc) -> str:
@@ -151,13 +151,17 @@ def to_text(d, source: str = "") -> str:
         f"{P.boundary} right end; {P.nw} windows of {P.L * P.dt:.3g} s in {P.nfolds} folds"
     )
     L.append("")
+    L.extend(_units_lines(d))
+    L.append("")
     L.append("Linear chain (windowed equation-error fit):")
-    L.append("  DOF   m [kg]      c [N s/m]   springs [N/m]")
+    m_head, c_head = f"m [{d.units['m']}]", f"c [{d.units['c']}]"
+    wm, wc = max(len(m_head), 10), max(len(c_head), 10)
+    L.append(f"  DOF   {m_head:<{wm}}  {c_head:<{wc}}  springs [{d.units['k']}]")
     for e in range(P.n):
         th = lin.theta[e]
         springs = "  ".join(f"{nm}={v:.4g}" for nm, v in zip(lin.names[e][2:], th[2:]))
-        m = f"{th[0]:<10.4g}" if lin.forced[e] else "(no force)"
-        L.append(f"  {e + 1:<4d}  {m}  {th[1]:<10.4g}  {springs}")
+        m = f"{th[0]:<{wm}.4g}" if lin.forced[e] else f"{'(no force)':<{wm}}"
+        L.append(f"  {e + 1:<4d}  {m}  {th[1]:<{wc}.4g}  {springs}")
     if not lin.forced.all():
         L.append("  DOF without force: m unknown, c and k per unit mass [1/s], [1/s^2]")
     nat = d.extra.get("natural_hz", [])
@@ -206,11 +210,11 @@ def to_text(d, source: str = "") -> str:
             f"  with {d.effect} at {_fmt_loc(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)  "
             f"[{d.gap_after_full:.4g}, {shrink_f:.3g}x]"
         )
-        L.append(f"  fitted: {_fmt_params(d.params, d.params_std)}")
+        L.append(f"  fitted: {_fmt_params(d.params, d.params_std, d.units)}")
         combo = d.extra.get("combination")
         if combo is not None:
             parts = " + ".join(
-                f"{eff} at {_fmt_loc(loc)} ({_fmt_params(combo.fit.params[eff])})"
+                f"{eff} at {_fmt_loc(loc)} ({_fmt_params(combo.fit.params[eff], units=d.units)})"
                 for eff, loc in zip(combo.fit.effect.split("+"), combo.fit.location["parts"])
             )
             sh = d.gap_before / combo.gap_after if combo.gap_after > 0 else float("inf")
@@ -246,7 +250,7 @@ def to_text(d, source: str = "") -> str:
         mark = "*" if s.significant else " "
         L.append(
             f"  {mark} {s.fit.effect:<18s} {_fmt_loc(s.fit.location):<9s} {s.gap_after:.4g}  "
-            f"z={s.z:6.1f}  {_fmt_params(s.fit.params)}"
+            f"z={s.z:6.1f}  {_fmt_params(s.fit.params, units=d.units)}"
         )
     if len(d.ranking) > 10:
         L.append(f"  ... {len(d.ranking) - 10} more in the JSON")

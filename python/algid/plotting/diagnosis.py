@@ -28,6 +28,7 @@ import numpy as np
 from scipy.signal import welch
 
 from ..chain import spring_deformation, spring_sides, springs
+from ..diagnosis.equations import force_form
 from ..diagnosis.locate import window_parameters
 from . import subplots
 
@@ -35,6 +36,8 @@ DPI = 90
 C_BEFORE = "#c0392b"
 C_AFTER = "#2471a3"
 C_MEAS = "#999999"
+#: Units of the parameters of a DOF without force (its equation is per unit mass).
+PER_UNIT_MASS = {"m": "-", "c": "1/s", "k": "1/s^2"}
 
 
 def _subsample(N: int, max_points: int = 6000, seed: int = 0) -> np.ndarray:
@@ -50,6 +53,11 @@ def _label(d) -> str:
     return f"with {d.effect} ({'DOF' if k == 'dof' else 'spring'} {v})"
 
 
+def _target_unit(d, e: int) -> str:
+    """Unit of equation ``e``'s error: the force in the force form, else the acceleration."""
+    return d.units["force"] if force_form(d.P, e) else d.units["acceleration"]
+
+
 def fig_residuals_time(d):
     P = d.P
     before, after = d.residuals()
@@ -63,7 +71,7 @@ def fig_residuals_time(d):
             ax.plot(t, after[:, i], color=C_AFTER, lw=0.4, alpha=0.8, label=_label(d))
         rms_w = np.sqrt((P.windows(before[:, i]) ** 2).mean(axis=1))
         ax.step(tw, rms_w, where="mid", color="k", lw=1.0, label="RMS per window (linear)")
-        ax.set_ylabel(f"DOF {i + 1}\n[m/s$^2$]")
+        ax.set_ylabel(f"DOF {i + 1}\n[{_target_unit(d, i)}]")
         ax.grid(alpha=0.3)
     axes[0, 0].legend(loc="upper right", fontsize=7, ncol=3)
     axes[-1, 0].set_xlabel("time [s]")
@@ -109,7 +117,7 @@ def fig_residuals_spectrum(d):
         )
         for fn in d.extra.get("natural_hz", []):
             ax.axvline(fn, color="k", ls=":", lw=0.6)
-        ax.set_ylabel(f"DOF {i + 1}\n[(m/s$^2$)$^2$/Hz]")
+        ax.set_ylabel(f"DOF {i + 1}\n[({_target_unit(d, i)})^2/Hz]")
         ax.grid(alpha=0.3, which="both")
     axes[0, 0].legend(loc="lower left", fontsize=7, ncol=2)
     axes[-1, 0].set_xlabel("frequency [Hz]  (dotted: natural frequencies of the fitted chain)")
@@ -125,7 +133,7 @@ def _binned(z, r, bins=30):
     return np.bincount(idx, weights=z, minlength=bins) / cnt, np.bincount(idx, weights=r, minlength=bins) / cnt
 
 
-def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: str):
+def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: str, force_unit: str):
     """Two rows per item: the total force against the amplitude variable with the linear
     law, and below it the unexplained force alone (scatter and binned mean), which is
     where a nonlinearity shows. ``items``: (label, z, linear_force, unexplained, coef_txt)."""
@@ -151,8 +159,8 @@ def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: s
         bot.set_xlabel(xlabel)
         for ax in (top, bot):
             ax.grid(alpha=0.3)
-    axes[0, 0].set_ylabel(f"{ylabel} [N]")
-    axes[1, 0].set_ylabel("unexplained force [N]")
+    axes[0, 0].set_ylabel(f"{ylabel} [{force_unit}]")
+    axes[1, 0].set_ylabel(f"unexplained force [{force_unit}]")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return fig
@@ -170,9 +178,17 @@ def fig_restoring_force(d):
         # Unexplained force attributed to the spring: + in eq. j, - in eq. j-1 (mean of sides).
         r = np.mean([-s * force_resid[:, e] for e, s in spring_sides(P.n, j)], axis=0)
         name = f"spring {j}" + (" (k1+k2)" if P.n == 1 else "")
-        items.append((f"{name}: binned law explains {expl.get(j, 0):.0%}", dj, k * dj, r, f"linear k = {k:.4g} N/m"))
+        items.append(
+            (f"{name}: binned law explains {expl.get(j, 0):.0%}", dj, k * dj, r, f"linear k = {k:.4g} {d.units['k']}")
+        )
+    unit, scale = ("mm", 1e3) if d.units["displacement"] == "m" else (d.units["displacement"], 1.0)
     return _force_panels(
-        "Restoring force per spring against its deformation", items, "deformation [mm]", 1e3, "restoring force"
+        "Restoring force per spring against its deformation",
+        items,
+        f"deformation [{unit}]",
+        scale,
+        "restoring force",
+        d.units["force"],
     )
 
 
@@ -190,10 +206,13 @@ def fig_damping_force(d):
                 v,
                 c[i] * v,
                 -force_resid[:, i],
-                f"linear c = {c[i]:.3g} N s/m",
+                f"linear c = {c[i]:.3g} {d.units['c']}",
             )
         )
-    return _force_panels("Damping force per mass against its velocity", items, "velocity [m/s]", 1.0, "damping force")
+    velocity = f"velocity [{d.units['velocity']}]"
+    return _force_panels(
+        "Damping force per mass against its velocity", items, velocity, 1.0, "damping force", d.units["force"]
+    )
 
 
 def fig_window_parameters(d):
@@ -207,7 +226,8 @@ def fig_window_parameters(d):
         names = wp["least_squares"][e]["names"]
         ref = lin.theta[e]
         for k, nm in enumerate(names):
-            ax.plot(t, vals[:, k] / ref[k], "o-", ms=3, lw=1, label=f"{nm} ({ref[k]:.4g})")
+            unit = d.units[nm[0]] if lin.forced[e] else PER_UNIT_MASS[nm[0]]
+            ax.plot(t, vals[:, k] / ref[k], "o-", ms=3, lw=1, label=f"{nm} ({ref[k]:.4g} {unit})")
         if "online" in wp:
             on = wp["online"]
             m = np.array([r["mass"][e] for r in on])

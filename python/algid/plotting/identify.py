@@ -2,8 +2,10 @@
 
 One panel per family (masses, dampings, springs): every parameter's estimate history
 relative to its final value, with the one-sigma band of the bootstrap, so that a user sees
-when the estimates settled and how far they can be trusted; parameters that are not valid
-are drawn dashed and named with their status. Built on ``matplotlib.figure.Figure`` (no
+when the estimates settled and how far they can be trusted. The legend gives every final
+estimate in the units of the recording (``res.units``: kg, N s/m, N/m for SI data, V s^2/V,
+V s/V, V/V for forces and displacements in volts); parameters that are not valid are drawn
+dashed and named with their status. Built on ``matplotlib.figure.Figure`` (no
 pyplot, no backend switch): it works headless and inside notebooks alike.
 """
 
@@ -31,7 +33,7 @@ def estimates_figure(res):
             rel = 100 * (H[:, p] / final - 1)
             band = 100 * S[:, p] / abs(final)
             style = "-" if v.valid else "--"
-            label = v.name if v.status == "ok" else f"{v.name} ({v.status})"
+            label = f"{v.name} = {final:.4g} {res.units[fam]}" + ("" if v.status == "ok" else f" ({v.status})")
             (line,) = ax.plot(t, rel, style, lw=1.2, label=label)
             ax.fill_between(t, rel - band, rel + band, color=line.get_color(), alpha=0.15, lw=0)
         ax.axhline(0.0, color="0.4", lw=0.6)

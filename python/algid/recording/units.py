@@ -55,23 +55,57 @@ def conversion_note(role: str, label: str, factor: float) -> str:
     return f"{role} {normalise(label)} -> {SI_UNITS[role]} (x {factor:.9g})"
 
 
+#: Order of each motion as a derivative of the displacement.
+_ORDER = {"displacement": 0, "velocity": 1, "acceleration": 2}
+
+
+def _factor(symbol: str, power: int) -> str:
+    """``symbol^power`` (``power`` > 0), a compound symbol (``"V/g"``) in parentheses."""
+    text = f"({symbol})" if any(ch in symbol for ch in " /^()") else symbol
+    return text if power == 1 else f"{text}^{power}"
+
+
+def unit_label(units: dict[str, str], motion: str, force: int = 0, length: int = 0, time: int = 0) -> str:
+    """Label of the unit force^``force`` length^``length`` s^``time`` in the units of a
+    recording whose forces are in ``units["force"]`` and whose ``motion`` (``"acceleration"``,
+    ``"velocity"`` or ``"displacement"``) is in ``units[motion]``.
+
+    A length is the motion's unit integrated back to a displacement (``V s^2`` when the
+    accelerations are in V); a motion in SI stands for the metre. The force and motion
+    labels are kept apart even when they are the same word: a cubic spring of a Silverbox
+    recorded in volts is in ``V/V^3`` (``force=1, length=-3``), in SI ``N/m^3``.
+    """
+    unit = units.get(motion, SI_UNITS[motion])
+    order = _ORDER[motion]
+    if unit == SI_UNITS[motion]:  # per metre, whatever the motion measured
+        unit, order = "m", 0
+    powers = [(units.get("force", SI_UNITS["force"]), force), (unit, length), ("s", time + order * length)]
+    if [p for _, p in powers if p] == [1]:  # one unit alone: as it is written
+        return next(sym for sym, p in powers if p)
+    up = " ".join(_factor(sym, p) for sym, p in powers if p > 0)
+    down = [_factor(sym, -p) for sym, p in powers if p < 0]
+    if not down:
+        return up or "-"
+    below = down[0] if len(down) == 1 else f"({' '.join(down)})"
+    return f"{up or '1'}/{below}"
+
+
 def parameter_unit_labels(units: dict[str, str], motion: str) -> dict[str, str]:
     """Unit labels of the masses, dampings and springs identified from forces in
     ``units["force"]`` and the motion ``motion`` (``"acceleration"``, ``"velocity"`` or
-    ``"displacement"``) in ``units[motion]``.
+    ``"displacement"``) in ``units[motion]`` (:func:`unit_label`).
 
     SI data give ``{"m": "kg", "c": "N s/m", "k": "N/m"}``; forces and displacements in
     volts give ``{"m": "V s^2/V", "c": "V s/V", "k": "V/V"}``.
     """
-    force = units.get("force", SI_UNITS["force"])
-    unit = units.get(motion, SI_UNITS[motion])
-    if force == SI_UNITS["force"] and unit == SI_UNITS[motion]:
-        return {"m": "kg", "c": "N s/m", "k": "N/m"}
-    if unit == SI_UNITS[motion]:  # forces in a label, motion in SI: per metre
-        unit, motion = "m", "displacement"
-    per = {
-        "displacement": (f"{force} s^2/{unit}", f"{force} s/{unit}", f"{force}/{unit}"),
-        "velocity": (f"{force} s/{unit}", f"{force}/{unit}", f"{force}/({unit} s)"),
-        "acceleration": (f"{force}/{unit}", f"{force}/({unit} s)", f"{force}/({unit} s^2)"),
-    }[motion]
-    return dict(zip("mck", per))
+    labels = {name: unit_label(units, motion, force=1, length=-1, time=t) for name, t in zip("mck", (2, 1, 0))}
+    return labels | ({"m": "kg"} if labels["m"] == "N s^2/m" else {})
+
+
+def signal_unit_labels(units: dict[str, str], motion: str) -> dict[str, str]:
+    """Unit labels of the force and of the motion integrated or differentiated from
+    ``motion`` in ``units[motion]`` (:func:`unit_label`): ``{"force": "N", "displacement":
+    "m", "velocity": "m/s", "acceleration": "m/s^2"}`` for SI data; ``V``, ``V``, ``V/s``,
+    ``V/s^2`` for forces and displacements in volts."""
+    dims = {"force": (1, 0, 0), "displacement": (0, 1, 0), "velocity": (0, 1, -1), "acceleration": (0, 1, -2)}
+    return {role: unit_label(units, motion, *dim) for role, dim in dims.items()}
