@@ -10,6 +10,7 @@ from .candidates import MAIN_PARAM
 from .core import METRIC, METRIC_FORCE
 from .units import SI
 
+
 def _clean(x):
     """JSON-safe floats (NaN/inf -> None)."""
     if isinstance(x, dict):
