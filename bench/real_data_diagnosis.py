@@ -44,7 +44,7 @@ def silverbox_recording(data: Path, part: str = "all") -> Recording:
     u, y = z["V1_input_V"].astype(float), z["V2_output_V"].astype(float)
     sl = {"arrow": slice(0, 40000), "multisine": slice(40000, None), "all": slice(None)}[part]
     u, y = u[sl], y[sl]
-    return Recording(t=np.arange(u.size) / fs, u=u, x=y)
+    return Recording(t=np.arange(u.size) / fs, u=u, x=y, units={"force": "V", "displacement": "V"})
 
 
 def f16_arrays(data: Path, level: int, kind: str = "FullMSine") -> tuple[np.ndarray, np.ndarray, float]:
