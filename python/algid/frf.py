@@ -32,8 +32,8 @@ from .modal import state_matrix
 OUTPUTS = ("displacement", "velocity", "acceleration")
 #: Units of the FRF of each output, forces in N.
 UNITS = {"displacement": "m/N", "velocity": "(m/s)/N", "acceleration": "(m/s^2)/N"}
-#: Welch segments of the H1 estimate when none is asked for (about 2 x 16 with half overlap).
-SEGMENTS = 16
+#: Record length / segment length of the H1 estimate when none is asked for (about 15 half-overlapping segments).
+SEGMENTS = 8
 
 
 def _check_output(output: str) -> None:
@@ -108,7 +108,7 @@ class FrfEstimate:
 
 def h1_estimate(u: np.ndarray, y: np.ndarray, dt: float, nperseg: int | None = None, output="acceleration"):
     """H1 of outputs ``y`` (T, n) per forces ``u`` (T, n) [N] sampled every ``dt`` [s]
-    (``nperseg``: Welch segment length, default a power of two giving about :data:`SEGMENTS`)."""
+    (``nperseg``: Welch segment length, default the power of two at most T / :data:`SEGMENTS`)."""
     from scipy.signal import csd
 
     u, y = np.atleast_2d(np.asarray(u, float).T).T, np.atleast_2d(np.asarray(y, float).T).T

@@ -1,6 +1,6 @@
 """Figure ``frf.png``: the model's FRF against the H1 estimate from the recording.
 
-Three panels over frequency [Hz]: magnitude (log), phase [deg] and the multiple coherence of
+Three panels over frequency [Hz] (log scale): magnitude (log), phase [deg] and the multiple coherence of
 every drive-point FRF ``H[e, e]`` (the response of mass e to its own force) of a forced mass;
 measured solid, model dashed in the same colour. Units follow the recording's motion
 (``algid.frf.UNITS``) unless ``units`` names others (e.g. data in volts).
@@ -41,6 +41,7 @@ def frf_figure(estimate, chain=None, units: str | None = None, title: str = ""):
     coh.set_ylabel("coherence [-]")
     coh.set_ylim(0, 1.05)
     coh.set_xlabel("frequency [Hz]")
+    coh.set_xscale("log")  # shared: every panel
     for ax in (mag, pha, coh):
         ax.grid(alpha=0.3)
     if mag.get_legend_handles_labels()[0]:
