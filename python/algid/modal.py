@@ -133,8 +133,8 @@ def state_matrix(chain: Chain) -> np.ndarray:
     n = chain.n
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
-    A[n:, :n] = -np.linalg.solve(M, K)
-    A[n:, n:] = -np.linalg.solve(M, C)
+    A[n:, :n] = 0.0 - np.linalg.solve(M, K)  # 0.0 - : no negative zeros in the printed matrix
+    A[n:, n:] = 0.0 - np.linalg.solve(M, C)
     return A
 
 
