@@ -130,6 +130,34 @@ def test_h1_of_a_long_simulated_recording_matches_the_model():
     assert np.median(one.coherence[band]) < 0.9
 
 
+def _quantities(chain: Chain) -> np.ndarray:
+    ma = chain.modes()
+    return np.concatenate([ma.frequencies_hz, ma.damping_ratios] + [np.abs(m.shape) for m in ma.modes])
+
+
+@pytest.mark.parametrize(
+    "chain",
+    [
+        TABLE1,
+        Chain([1.5, 0.7], [2.0, 9.0], [600.0, 300.0, 900.0]),  # non-proportional
+        Chain([1.0, 2.0], [50.0, 70.0], [10.0, 10.0, 10.0]),  # both modes overdamped
+        Chain([2.0, 1.0, 0.5], [1.0, 2.0, 0.5], [500.0, 300.0, 200.0, 0.0], "free"),
+    ],
+)
+def test_perturbation_jacobian_agrees_with_central_differences(chain):
+    from algid.modal import jacobian
+
+    theta = _packed(chain)
+    n, J = chain.n, jacobian(chain)
+    for p in range(theta.size - (chain.boundary == "free")):  # a free end's k_{n+1} = 0 cannot move down
+        h = 1e-5 * theta[p]
+        up, down = theta.copy(), theta.copy()
+        up[p] += h
+        down[p] -= h
+        fd = [_quantities(Chain(t[:n], t[n : 2 * n], t[2 * n :], chain.boundary)) for t in (up, down)]
+        np.testing.assert_allclose(J[:, p], (fd[0] - fd[1]) / (2 * h), rtol=1e-5, atol=1e-8 * np.abs(J).max())
+
+
 def test_uncertainty_propagation_agrees_with_monte_carlo():
     chain = TABLE1
     sigma = SIGMA_REL * _packed(chain)

@@ -21,9 +21,10 @@ so that its largest entry is 1 (complex in general). With proportional damping
 ``K phi = w^2 M phi``, normalised ``phi^T M phi = 1`` [kg^-1/2] (``real_shape``).
 
 Uncertainty: ``sigma_q = sqrt(diag(J Sigma J^T))`` for every modal quantity ``q`` (``f_n``,
-``zeta``, ``|shape|``), ``J`` the forward-difference Jacobian of ``q`` with respect to the
-parameters ``m, c, k`` and ``Sigma`` their covariance (``diag(sigma^2)`` from the
-estimates' standard deviations).
+``zeta``, ``|shape|``), ``J`` its first-order Jacobian with respect to the parameters
+``m, c, k`` (eigenvalue and eigenvector perturbation of ``A``, :func:`jacobian`; O(n^3), one
+eigen-decomposition) and ``Sigma`` their covariance (``diag(sigma^2)`` from the estimates'
+standard deviations).
 """
 
 from __future__ import annotations
@@ -34,11 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .chain import Chain
+from .chain import Chain, deformation_matrix
 
 KINDS = ("underdamped", "overdamped", "rigid")
-#: Relative step of the forward differences.
-STEP = 1e-7
 
 
 @dataclass(frozen=True)
@@ -211,31 +210,70 @@ def modes(chain: Chain) -> ModalAnalysis:
     return ModalAnalysis(tuple(replace(m, sigma_shape=nan) for m in out), prop)
 
 
-def _quantities(chain: Chain) -> np.ndarray:
-    """``[f_n..., zeta..., |shape| ...]`` of every mode: what the uncertainty is propagated to."""
-    ma = modes(chain)
-    return np.concatenate([ma.frequencies_hz, ma.damping_ratios] + [np.abs(m.shape) for m in ma.modes])
-
-
-def jacobian(chain: Chain) -> np.ndarray:
-    """Forward-difference Jacobian of :func:`_quantities` with respect to the chain's
-    parameters ``m1..mn, c1..cn, k1..k{n+1}``; NaN where a step changes the modes' kinds."""
-    theta = np.concatenate([chain.mass, chain.damping, chain.stiffness])
-    q0 = _quantities(chain)
-    kinds = [m.kind for m in modes(chain).modes]
-    J = np.zeros((q0.size, theta.size))
+def rank_one_derivatives(chain: Chain, V: np.ndarray, Vinv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(a, b)``, each (3n+1, 2n): ``V^-1 (dA / dtheta_p) V = outer(a_p, b_p)`` for every
+    parameter ``theta = m1..mn, c1..cn, k1..k{n+1}``. Each derivative of ``A`` is rank one:
+    mass ``i`` scales its row of ``[-M^-1 K, -M^-1 C]`` (``-A[n+i] / m_i``), damper ``i`` is
+    ``-1/m_i`` on its diagonal, spring ``j`` adds ``-M^-1 d_j d_j^T`` (``d_j`` its row of the
+    deformation matrix)."""
     n = chain.n
-    for p in range(theta.size):
-        if chain.boundary == "free" and p == theta.size - 1:
-            continue  # k_{n+1} = 0 is known, not estimated
-        h = STEP * (abs(theta[p]) if theta[p] != 0 else 1.0)
-        t = theta.copy()
-        t[p] += h
-        moved = Chain(t[:n], t[n : 2 * n], t[2 * n :], chain.boundary)
-        if [m.kind for m in modes(moved).modes] != kinds:
-            J[:, p] = np.nan
+    A = state_matrix(chain)
+    m = chain.mass
+    D = deformation_matrix(n)
+    a = np.concatenate([Vinv[:, n:].T, Vinv[:, n:].T, (Vinv[:, n:] @ (-(D / m).T)).T])
+    b = np.concatenate([-(A[n:] @ V) / m[:, None], -V[n:] / m[:, None], D @ V[:n]])
+    return a, b
+
+
+def _mode_derivatives(mode: Mode, i: int, lam: np.ndarray, dlam: np.ndarray, x: np.ndarray, dx: np.ndarray):
+    """``(d f_n, d zeta, d |shape|)`` per parameter of ``mode``, whose eigenvalue ``i`` (and,
+    if overdamped, its partner) moves by ``dlam`` (P, 2n) and shape ``x`` (n,) by ``dx`` (P, n)."""
+    if mode.kind == "underdamped":
+        ev, d = lam[i], dlam[:, i]
+        wn = abs(ev)
+        dwn = (np.conj(ev) * d).real / wn
+        dzeta = -d.real / wn + ev.real * dwn / wn**2
+    else:  # overdamped: w_n^2 = l1 l2, zeta = -(l1 + l2) / 2 w_n
+        dist = np.abs(lam - mode.eigenvalues[1])
+        dist[i] = np.inf
+        j = int(np.argmin(dist))
+        l1, l2, d1, d2 = lam[i].real, lam[j].real, dlam[:, i].real, dlam[:, j].real
+        wn = np.sqrt(l1 * l2)
+        dwn = (l2 * d1 + l1 * d2) / (2 * wn)
+        dzeta = -(d1 + d2) / (2 * wn) - mode.damping_ratio * dwn / wn
+    r = int(np.argmax(np.abs(x)))
+    shape = x / x[r]
+    dshape = dx / x[r] - np.outer(dx[:, r], x) / x[r] ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dabs = (np.conj(shape)[None, :] * dshape).real / np.abs(shape)[None, :]
+    dabs[:, r] = 0.0  # the normalising entry is 1 whatever the parameters
+    return dwn / (2 * np.pi), dzeta, dabs
+
+
+def jacobian(chain: Chain, ma: ModalAnalysis | None = None) -> np.ndarray:
+    """First-order Jacobian of ``[f_n..., zeta..., |shape| ...]`` (mode by mode) with respect
+    to ``m1..mn, c1..cn, k1..k{n+1}``, by perturbation of the diagonalisable
+    ``A = V Lambda V^-1``: with ``G = V^-1 dA V = outer(a, b)`` (:func:`rank_one_derivatives`),
+    ``d lambda_i = G_ii`` and ``d v_i = sum_{k != i} G_ki / (lambda_i - lambda_k) v_k`` (the
+    part along ``v_i`` only rescales the shape, which the normalisation takes out). O(n^3)
+    with one eigen-decomposition. Rows of rigid-body modes, and of shapes of repeated
+    eigenvalues, are NaN: there first order does not hold."""
+    ma = modes(chain) if ma is None else ma
+    n = chain.n
+    lam, V = np.linalg.eig(state_matrix(chain))
+    a, b = rank_one_derivatives(chain, V, np.linalg.inv(V))  # (P, 2n) each
+    dlam = a * b
+    k = len(ma.modes)
+    J = np.full((2 * k + k * n, 3 * n + 1), np.nan)
+    for m, mode in enumerate(ma.modes):
+        if mode.kind == "rigid":
             continue
-        J[:, p] = (_quantities(moved) - q0) / h
+        i = int(np.argmin(np.abs(lam - mode.eigenvalues[0])))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            weights = np.where(np.arange(lam.size) == i, 0.0, 1.0 / (lam[i] - lam))  # (2n,)
+        dx = ((a * weights) @ V[:n].T) * b[:, [i]]  # (P, n): sum_k V[:n, k] a_pk b_pi / (l_i - l_k)
+        df, dz, ds = _mode_derivatives(mode, i, lam, dlam, V[:n, i], dx)
+        J[m], J[k + m], J[2 * k + m * n : 2 * k + (m + 1) * n] = df, dz, ds.T
     return J
 
 
@@ -262,9 +300,9 @@ def modal_analysis(source, sigma=None, covariance=None) -> ModalAnalysis:
     cov = np.diag(np.asarray(sigma, dtype=float) ** 2) if covariance is None else np.asarray(covariance, dtype=float)
     if cov.shape != (size, size):
         raise ValueError(f"the covariance must be ({size}, {size}) for n = {chain.n}, got {cov.shape}")
-    J = jacobian(chain)
+    J = jacobian(chain, ma)
     with np.errstate(invalid="ignore"):
-        sd = np.sqrt(np.einsum("qp,pr,qr->q", J, cov, J))
+        sd = np.sqrt(np.sum((J @ cov) * J, axis=1))  # diag(J Sigma J^T)
     k = len(ma.modes)
     shapes = sd[2 * k :].reshape(k, chain.n)
     out = tuple(

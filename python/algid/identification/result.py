@@ -111,7 +111,11 @@ class Identification(PackedParameters):
         admissible estimate."""
         from ..modal import identification_modes
 
-        return identification_modes(self)
+        key = (self.theta.tobytes(), self.sigma.tobytes())  # computed once for the table and the JSON
+        cached = self.__dict__.get("_modes")
+        if cached is None or cached[0] != key:
+            self.__dict__["_modes"] = cached = (key, identification_modes(self))
+        return cached[1]
 
     def verdict(self, name: str) -> Verdict:
         """The verdict of parameter ``name`` (``"m1"``, ``"k2"``, ...)."""
