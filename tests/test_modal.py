@@ -35,6 +35,8 @@ def test_overdamped_and_rigid_one_dof():
     assert over.kind == "overdamped" and len(over.eigenvalues) == 2
     assert over.frequency_hz == pytest.approx(np.sqrt(k / m) / (2 * np.pi), rel=1e-10)
     assert over.damping_ratio == pytest.approx(c / (2 * np.sqrt(k * m)), rel=1e-10)
+    (critical,) = Chain([m], [20.0], [k, 0.0]).modes(sigma=[0.1, 0.1, 1.0, 0.0]).modes
+    assert critical.damping_ratio == pytest.approx(1.0, abs=1e-7) and np.isnan(critical.sigma_damping_ratio)
     (rigid,) = Chain([m], [c], [0.0, 0.0]).modes().modes
     assert rigid.kind == "rigid" and rigid.frequency_hz == 0.0 and np.isnan(rigid.damping_ratio)
     assert sorted(lam.real for lam in rigid.eigenvalues) == pytest.approx([-c / m, 0.0], abs=1e-12)

@@ -38,6 +38,8 @@ import numpy as np
 from .chain import Chain, deformation_matrix
 
 KINDS = ("underdamped", "overdamped", "rigid")
+#: Eigenvalues closer than this (relative) are repeated: no first-order uncertainty there.
+REPEATED = 1e-6
 
 
 @dataclass(frozen=True)
@@ -256,8 +258,8 @@ def jacobian(chain: Chain, ma: ModalAnalysis | None = None) -> np.ndarray:
     ``A = V Lambda V^-1``: with ``G = V^-1 dA V = outer(a, b)`` (:func:`rank_one_derivatives`),
     ``d lambda_i = G_ii`` and ``d v_i = sum_{k != i} G_ki / (lambda_i - lambda_k) v_k`` (the
     part along ``v_i`` only rescales the shape, which the normalisation takes out). O(n^3)
-    with one eigen-decomposition. Rows of rigid-body modes, and of shapes of repeated
-    eigenvalues, are NaN: there first order does not hold."""
+    with one eigen-decomposition. Rows of rigid-body modes, and of modes with a repeated
+    eigenvalue (:data:`REPEATED`: critical damping), are NaN: first order does not hold there."""
     ma = modes(chain) if ma is None else ma
     n = chain.n
     lam, V = np.linalg.eig(state_matrix(chain))
@@ -266,13 +268,14 @@ def jacobian(chain: Chain, ma: ModalAnalysis | None = None) -> np.ndarray:
     k = len(ma.modes)
     J = np.full((2 * k + k * n, 3 * n + 1), np.nan)
     for m, mode in enumerate(ma.modes):
-        if mode.kind == "rigid":
-            continue
         i = int(np.argmin(np.abs(lam - mode.eigenvalues[0])))
-        with np.errstate(divide="ignore", invalid="ignore"):
+        others = np.abs(np.delete(lam, i) - lam[i])
+        if mode.kind == "rigid" or others.min() <= REPEATED * abs(lam[i]):
+            continue  # not differentiable (a kind change, or a defective pair at critical damping)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             weights = np.where(np.arange(lam.size) == i, 0.0, 1.0 / (lam[i] - lam))  # (2n,)
-        dx = ((a * weights) @ V[:n].T) * b[:, [i]]  # (P, n): sum_k V[:n, k] a_pk b_pi / (l_i - l_k)
-        df, dz, ds = _mode_derivatives(mode, i, lam, dlam, V[:n, i], dx)
+            dx = ((a * weights) @ V[:n].T) * b[:, [i]]  # (P, n): sum_k V[:n, k] a_pk b_pi / (l_i - l_k)
+            df, dz, ds = _mode_derivatives(mode, i, lam, dlam, V[:n, i], dx)
         J[m], J[k + m], J[2 * k + m * n : 2 * k + (m + 1) * n] = df, dz, ds.T
     return J
 
