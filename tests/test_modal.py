@@ -231,3 +231,24 @@ def test_to_control_without_python_control_is_one_line(monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_control)
     with pytest.raises(ImportError, match="needs python-control: pip install control"):
         TABLE1.to_control()
+
+
+def test_recording_h1_is_labelled_in_the_recordings_units(tmp_path):
+    from types import SimpleNamespace
+
+    from algid.frf import recording_h1
+    from algid.plotting.frf import frf_figure, save_frf
+
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((4096, 1))
+    x = np.convolve(u[:, 0], [0.5, 0.3, 0.2])[:4096, None]  # any linear response
+    si = SimpleNamespace(u=u, a=None, v=None, x=x, dt=1e-3)
+    assert recording_h1(si).unit == "m/N"
+    volts = SimpleNamespace(**vars(si), units={"force": "V", "displacement": "V"})
+    est = recording_h1(volts)
+    assert est.unit == "V/V" and est.output == "displacement"
+    # the same FIR filter in the frequency domain: H = 0.5 + 0.3 z^-1 + 0.2 z^-2
+    z = np.exp(-2j * np.pi * est.f_hz * 1e-3)
+    np.testing.assert_allclose(est.H[:, 0, 0], 0.5 + 0.3 * z + 0.2 * z**2, atol=0.02)
+    assert save_frf(est, tmp_path).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert frf_figure(est).axes[0].get_ylabel() == "|H| [V/V]"

@@ -95,7 +95,8 @@ class FrfEstimate:
 
     f_hz : (F,) frequencies [Hz]; H : (F, n, n) response of mass e per force on mass j (NaN
     columns for unforced masses); coherence : (F, n) multiple coherence of every output [-];
-    segments : Welch segments averaged; nperseg : samples per segment; output : the motion.
+    segments : Welch segments averaged; nperseg : samples per segment; output : the motion;
+    units : the unit of H when the recording is not in SI.
     """
 
     f_hz: np.ndarray
@@ -104,6 +105,12 @@ class FrfEstimate:
     segments: int
     nperseg: int
     output: str = "acceleration"
+    units: str = ""  #: unit of H (``UNITS[output]`` when empty)
+
+    @property
+    def unit(self) -> str:
+        """Unit label of ``H``: the recording's motion unit per its force unit."""
+        return self.units or UNITS[self.output]
 
 
 def h1_estimate(u: np.ndarray, y: np.ndarray, dt: float, nperseg: int | None = None, output="acceleration"):
@@ -134,8 +141,16 @@ def h1_estimate(u: np.ndarray, y: np.ndarray, dt: float, nperseg: int | None = N
 
 def recording_h1(rec, nperseg: int | None = None) -> FrfEstimate:
     """H1 of a :class:`algid.Recording`: accelerations when it has them, else velocities or
-    displacements (the output is named in the estimate)."""
+    displacements (the output is named in the estimate); labelled in the recording's units
+    when it declares any (``Recording.units``, by role)."""
     from .recording import motion
 
+    from dataclasses import replace
+
     kind, y = motion(rec)
-    return h1_estimate(rec.u, y, rec.dt, nperseg, output=kind)
+    est = h1_estimate(rec.u, y, rec.dt, nperseg, output=kind)
+    labels = getattr(rec, "units", None) or {}  # a recording's declared units, by role (SI when absent)
+    if labels.get(kind) or labels.get("force"):
+        si = {"force": "N", "acceleration": "m/s^2", "velocity": "m/s", "displacement": "m"}
+        est = replace(est, units=f"{labels.get(kind) or si[kind]}/{labels.get('force') or si['force']}")
+    return est

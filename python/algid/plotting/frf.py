@@ -2,8 +2,9 @@
 
 Three panels over frequency [Hz] (log scale): magnitude (log), phase [deg] and the multiple coherence of
 every drive-point FRF ``H[e, e]`` (the response of mass e to its own force) of a forced mass;
-measured solid, model dashed in the same colour. Units follow the recording's motion
-(``algid.frf.UNITS``) unless ``units`` names others (e.g. data in volts).
+measured solid, model dashed in the same colour. Units are the estimate's
+(:attr:`algid.frf.FrfEstimate.unit`: the recording's declared units, else SI) unless
+``units`` names others.
 """
 
 from __future__ import annotations
@@ -17,9 +18,7 @@ from . import subplots
 
 def frf_figure(estimate, chain=None, units: str | None = None, title: str = ""):
     """The figure of an :class:`algid.frf.FrfEstimate` and, if given, the model of ``chain``."""
-    from ..frf import UNITS
-
-    unit = units or UNITS[estimate.output]
+    unit = units or estimate.unit
     f, H = estimate.f_hz, estimate.H
     keep = f > 0
     model = chain.frf(f[keep], estimate.output) if chain is not None else None
