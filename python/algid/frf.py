@@ -143,9 +143,9 @@ def recording_h1(rec, nperseg: int | None = None) -> FrfEstimate:
     """H1 of a :class:`algid.Recording`: accelerations when it has them, else velocities or
     displacements (the output is named in the estimate); labelled in the recording's units
     when it declares any (``Recording.units``, by role)."""
-    from .recording import motion
-
     from dataclasses import replace
+
+    from .recording import motion
 
     kind, y = motion(rec)
     est = h1_estimate(rec.u, y, rec.dt, nperseg, output=kind)
