@@ -188,23 +188,3 @@ def test_plots_write_the_estimate_histories(table1_csv, tmp_path):
     assert proc.returncode == 0, proc.stderr
     png = tmp_path / "figs" / "estimates.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
-
-
-def test_progress_lines_only_for_slow_stages(monkeypatch):
-    import io
-
-    from algid import progress
-
-    log = io.StringIO()
-    p = progress.Progress("identify", stream=log)
-    p("quick", 0.0)
-    p("quick", 1.0)
-    assert log.getvalue() == ""  # not a terminal, under a second: nothing
-    monkeypatch.setattr(progress, "SHOW_AFTER_S", 0.0)
-    p("slow", 0.0)
-    p("slow", 0.5)
-    p("slow", 1.0)
-    assert log.getvalue().startswith("[identify] slow done in ") and log.getvalue().count("\n") == 1
-    quiet = io.StringIO()
-    progress.Progress("identify", quiet=True, stream=quiet)("slow", 1.0)
-    assert quiet.getvalue() == ""

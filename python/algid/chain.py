@@ -173,6 +173,79 @@ class Chain:
             k = np.array([k[0] + k[1], np.nan])
         return np.concatenate([self.mass, self.damping, k])
 
+    @classmethod
+    def from_packed(cls, theta, n: int, boundary: str = "fixed") -> Chain:
+        """The chain of packed estimates ``m1..mn, c1..cn, k1..k{n+1}`` (3n+1,) as the estimators
+        and ``algid identify`` report them: for n = 1 with walls ``k1`` holds ``k1 + k2`` (the
+        springs act in parallel; ``k2`` NaN becomes 0), at a free end ``k{n+1}`` is 0. Raises a
+        one-line ``ValueError`` naming every parameter without an estimate or with an inadmissible one."""
+        theta = np.array(theta, dtype=float).reshape(-1)
+        names = parameter_names(n)
+        if theta.size != len(names):
+            raise ValueError(f"{theta.size} packed parameters, expected 3n+1 = {len(names)} for n = {n}")
+        if boundary == "free" or n == 1:
+            theta[-1] = 0.0 if not np.isfinite(theta[-1]) else theta[-1]
+        missing = [name for name, v in zip(names, theta) if not np.isfinite(v)]
+        if missing:
+            raise ValueError(f"no estimate of {', '.join(missing)}: a chain needs every parameter")
+        bad = [f"{name} = {v:.4g}" for name, v in zip(names, theta) if v < 0 or (name[0] == "m" and v == 0)]
+        if bad:
+            raise ValueError(f"inadmissible estimates {', '.join(bad)}: a chain needs m > 0, c >= 0, k >= 0")
+        return cls(theta[:n], theta[n : 2 * n], theta[2 * n :], boundary)
+
+    @staticmethod
+    def read_json(source) -> dict:
+        """An ``algid identify`` JSON document from a dict or a path."""
+        if isinstance(source, dict):
+            return source
+        import json
+        from pathlib import Path
+
+        try:
+            doc = json.loads(Path(source).read_text(encoding="utf-8"))
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{source}: not JSON ({err.msg}, line {err.lineno})") from None
+        if not isinstance(doc, dict) or not {"n", "mass", "damping", "stiffness"} <= set(doc):
+            raise ValueError(f"{source}: not an algid identify result (needs n, mass, damping, stiffness)")
+        return doc
+
+    @classmethod
+    def from_json(cls, source) -> Chain:
+        """The chain an ``algid identify`` result (dict or path of its JSON) describes.
+
+        The JSON's lists ``mass``, ``damping``, ``stiffness`` hold ``m1..mn``, ``c1..cn``,
+        ``k1..k{n+1}`` (spring ``j`` is ``stiffness[j-1]``); see :meth:`from_packed` for n = 1
+        and free ends."""
+        doc = cls.read_json(source)
+        packed = [np.nan if v is None else v for v in doc["mass"] + doc["damping"] + doc["stiffness"]]
+        return cls.from_packed(packed, int(doc["n"]), doc.get("boundary", "fixed"))
+
+    def modes(self, sigma=None, covariance=None):
+        """Damped modes (:func:`algid.modal.modal_analysis`), with uncertainties from the
+        standard deviations ``sigma`` (3n+1,) or the ``covariance`` of ``m, c, k`` if given."""
+        from .modal import modal_analysis
+
+        return modal_analysis(self, sigma=sigma, covariance=covariance)
+
+    def state_space(self, output: str = "acceleration"):
+        """``scipy.signal.StateSpace`` from the forces [N] to the displacements, velocities or
+        accelerations (``output``) of every mass (:func:`algid.frf.state_space`)."""
+        from .frf import state_space
+
+        return state_space(self, output)
+
+    def to_control(self, output: str = "acceleration"):
+        """``control.StateSpace`` (python-control) of :meth:`state_space`."""
+        from .frf import to_control
+
+        return to_control(self, output)
+
+    def frf(self, f_hz, output: str = "acceleration") -> np.ndarray:
+        """Frequency response (F, n, n) at ``f_hz`` [Hz] (:func:`algid.frf.frf`)."""
+        from .frf import frf
+
+        return frf(self, f_hz, output)
+
     @staticmethod
     def random(n: int, rng: np.random.Generator, boundary: str = "fixed") -> Chain:
         """A chain with parameters drawn log-uniformly around Table 1's magnitudes."""

@@ -15,6 +15,12 @@ import warnings
 
 from .messages import one_line
 
+#: What goes where; the epilog of ``identify --help`` and ``diagnose --help``.
+STREAMS = (
+    "The summary goes to stdout, progress (on a terminal only) and one-line errors to stderr. "
+    "With --json - the JSON goes to stdout and the summary to stderr; --quiet drops the summary."
+)
+
 
 def error_line(command: str, err: BaseException) -> str:
     """The one line an exception of ``algid COMMAND`` ends with."""

@@ -79,6 +79,7 @@ import numpy as np
 
 from .chain import TABLE1, Chain, parameter_names
 from .messages import one_line
+from .progress import Progress
 
 __all__ = ["add_parser", "run", "demo_chain", "run_scenario", "summarize", "settle_time", "format_summary", "jsonable"]
 
@@ -533,23 +534,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return p
 
 
-class _ProgressPrinter:
-    """Prints the simulation's progress every 2 % on one line of ``stream``."""
-
-    def __init__(self, stream: Any = sys.stderr) -> None:
-        self.stream = stream
-        self.last = -1  # percentage printed last
-
-    def __call__(self, frac: float) -> None:
-        pct = int(100 * frac)
-        if pct != self.last and (pct % 2 == 0 or pct == 100):
-            self.last = pct
-            self.stream.write(f"\rsimulating closed loop ... {pct:3d} %")
-            if pct >= 100:
-                self.stream.write("\n")
-            self.stream.flush()
-
-
 def run(args: argparse.Namespace) -> int:
     """Run ``algid demo``; returns the exit code (0 ok, 2 bad arguments)."""
     if args.n < 1:
@@ -561,6 +545,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.duration > 0.5:
         print("algid demo: --duration must be > 0.5 s", file=sys.stderr)
         return 2
+    progress = Progress("demo")
     try:
         res, summary = run_scenario(
             args.n,
@@ -568,7 +553,7 @@ def run(args: argparse.Namespace) -> int:
             args.noise_db,
             args.seed,
             args.duration,
-            progress=_ProgressPrinter(),
+            progress=progress.fraction("simulating closed loop"),
             estimator=args.estimator,
             excitation_n=args.excitation,
             actuator_lag_s=1e-3 * args.actuator_lag_ms,
@@ -576,6 +561,8 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(one_line(f"algid demo: error: {exc}"), file=sys.stderr)
         return 2
+    finally:
+        progress.close()
     print(format_summary(summary))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -583,10 +570,11 @@ def run(args: argparse.Namespace) -> int:
         json.dump(jsonable(summary), fh, indent=2)
     written = [out / "summary.json"]
     if not args.no_plots:
-        sys.stderr.write("writing figures ...\n")
         from .plotting.demo import write_figures
 
+        progress("writing figures")
         written += write_figures(res, summary, out)
+        progress.close()
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
 

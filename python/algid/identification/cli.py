@@ -1,10 +1,12 @@
-"""``algid identify RECORDING [--json OUT] [--trace CSV] [--plots DIR] [--estimator auto|window|continuous]``.
+"""``algid identify RECORDING [--json OUT|-] [--trace CSV] [--plots DIR] [--estimator auto|window|continuous]``.
 
 Estimates every mass, damping and spring of the chain in a recording with one standard
-deviation each, and says of every estimate whether it is valid and, if not, why
-(:func:`algid.identify`). The table goes to stdout, one line per invalid estimate and the
-progress to stderr. Exit codes: 0 when something was identified (invalid entries carry
-their reasons), 3 when nothing in the recording is identifiable, 2 on bad input.
+deviation each, says of every estimate whether it is valid and, if not, why
+(:func:`algid.identify`), and gives the modes of the estimated chain (natural frequency and
+damping ratio with one standard deviation, :mod:`algid.modal`). The table goes to stdout
+(to stderr with ``--json -``, which puts the JSON on stdout), one line per invalid estimate
+and the progress to stderr. Exit codes: 0 when something was identified (invalid entries
+carry their reasons), 3 when nothing in the recording is identifiable, 2 on bad input.
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ import json
 import sys
 from pathlib import Path
 
-from ..cli import error_line
+from ..chain import Chain
+from ..cli import STREAMS, error_line
 from ..messages import quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
@@ -32,8 +35,10 @@ def add_parser(sub) -> None:
         "identify",
         help="estimate m, c, k of a chain from a recording, with uncertainties",
         description="Estimate every mass, damping and spring of the chain in a recording, with "
-        "one standard deviation each and a verdict (valid, or why not). The "
-        "estimator is chosen from the recording unless --estimator says otherwise.",
+        "one standard deviation each and a verdict (valid, or why not), and the modes of the "
+        "estimated chain (natural frequency, damping ratio). The estimator is chosen from the "
+        "recording unless --estimator says otherwise.",
+        epilog=STREAMS,
     )
     p.add_argument(
         "recording",
@@ -41,9 +46,19 @@ def add_parser(sub) -> None:
         help="CSV/TSV/TXT (optionally .gz, .bz2, .xz, .zip), .npz, HDF5 or UFF 58 with time, forces u1..un "
         "and accelerations a1..an (or velocities v1..vn, displacements x1..xn)",
     )
-    p.add_argument("--json", type=Path, help="write the estimates, uncertainties and verdicts as JSON")
+    p.add_argument(
+        "--json",
+        type=Path,
+        metavar="OUT",
+        help="write the estimates, uncertainties, verdicts and modes as JSON to OUT ('-': stdout)",
+    )
     p.add_argument("--trace", type=Path, help="write the estimate history (with sigma_ columns) as CSV")
-    p.add_argument("--plots", type=Path, metavar="DIR", help="write estimates.png (histories with one-sigma bands)")
+    p.add_argument(
+        "--plots",
+        type=Path,
+        metavar="DIR",
+        help="write estimates.png (histories with one-sigma bands) and frf.png (model vs H1 of the recording)",
+    )
     p.add_argument(
         "--boundary",
         choices=("fixed", "free"),
@@ -62,7 +77,7 @@ def add_parser(sub) -> None:
         default=REPLICATES,
         help=f"bootstrap replicates for the uncertainties (default {REPLICATES})",
     )
-    p.add_argument("--quiet", action="store_true", help="no progress and no table")
+    p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     add_recording_options(p)
     p.set_defaults(func=run)
 
@@ -81,7 +96,7 @@ def run(args) -> int:
     progress = Progress("identify", quiet=args.quiet)
     try:
         for path, flag in ((args.json, "--json"), (args.trace, "--trace")):
-            if path is not None:
+            if path is not None and not (flag == "--json" and str(path) == "-"):
                 _check_output(path, flag)
         if args.replicates < 2:
             raise IdentifyError(f"--replicates must be >= 2, got {args.replicates}")
@@ -93,14 +108,12 @@ def run(args) -> int:
             raise IdentifyError(str(err)) from err
         finally:
             progress.close()
-        if args.json is not None:
+        if args.json is not None and str(args.json) != "-":
             args.json.write_text(json.dumps(result.to_json(), indent=2) + "\n", encoding="utf-8")
         if args.trace is not None:
             result.write_trace(args.trace)
         if args.plots is not None:
-            from ..plotting.identify import save_figures
-
-            save_figures(result, args.plots)
+            _write_figures(result, rec, args.plots, progress)
     except (RecordingError, IdentifyError) as err:
         print(error_line("identify", err), file=sys.stderr)
         return 2
@@ -109,9 +122,29 @@ def run(args) -> int:
         return 2
     for line in result.reasons:
         print(f"algid identify: {line}", file=sys.stderr)
+    to_stdout = args.json is not None and str(args.json) == "-"
+    if to_stdout:
+        print(json.dumps(result.to_json(), indent=2))
     if not args.quiet:
-        print(result.summary())
+        print(result.summary(), file=sys.stderr if to_stdout else sys.stdout)
     if not result.identified_any:
         print("algid identify: nothing in this recording is identifiable", file=sys.stderr)
         return 3
     return 0
+
+
+def _write_figures(result, rec, folder: Path, progress: Progress) -> None:
+    """``estimates.png`` and ``frf.png`` (the estimated chain's FRF, if it has one, against
+    the recording's H1)."""
+    from ..frf import recording_h1
+    from ..plotting.frf import save_frf
+    from ..plotting.identify import save_figures
+
+    progress("writing figures", None)
+    try:
+        save_figures(result, folder)
+        modal, _ = result.modes()
+        chain = Chain.from_packed(result.theta, result.n, result.boundary) if modal is not None else None
+        save_frf(recording_h1(rec), folder, chain)
+    finally:
+        progress.close()

@@ -108,6 +108,18 @@ class Identification(PackedParameters):
         """One line per parameter that is not ``ok`` (``"k3: ..."``)."""
         return [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
 
+    def modes(self):
+        """``(ModalAnalysis, "")`` of the estimated chain with uncertainties from ``sigma``
+        (:func:`algid.modal.modal_analysis`), or ``(None, reason)`` when a parameter has no
+        admissible estimate."""
+        from ..modal import identification_modes
+
+        key = (self.theta.tobytes(), self.sigma.tobytes())  # computed once for the table and the JSON
+        cached = self.__dict__.get("_modes")
+        if cached is None or cached[0] != key:
+            self.__dict__["_modes"] = cached = (key, identification_modes(self))
+        return cached[1]
+
     def verdict(self, name: str) -> Verdict:
         """The verdict of parameter ``name`` (``"m1"``, ``"k2"``, ...)."""
         return next(v for v in self.verdicts if v.name == name)
@@ -164,6 +176,10 @@ class Identification(PackedParameters):
             "units": dict(self.units),
             "recording_notes": list(self.recording_notes),
         }
+        modal, why = self.modes()
+        doc["modes"] = modal.to_json() if modal is not None else None
+        if modal is None:
+            doc["modes_reason"] = why
         if n == 1 and self.boundary == "fixed":
             doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
         if self.motion != "acceleration":
@@ -220,4 +236,8 @@ class Identification(PackedParameters):
             flag = "" if v.status == "ok" else f"  [{v.status}]"
             lines.append(f"  {v.name:>4} = {txt}{sd} {units[v.name[0]]}{flag}")
         lines.append(f"valid: {self.valid} (DOF: {', '.join(str(bool(x)) for x in self.valid_dof)})")
+        modal, why = self.modes()
+        if modal is not None and not self.valid:
+            lines.append("modes of the estimates as they are (not every estimate is valid):")
+        lines.append(modal.table() if modal is not None else f"modes: n/a ({why})")
         return "\n".join(lines)
