@@ -36,9 +36,9 @@ def add_recording_options(parser) -> None:
     )
     g.add_argument(
         "--units",
-        metavar="ROLE=UNIT,..",
+        metavar="ROLE=UNIT[,ROLE=UNIT]",
         help="units of the signals, overriding the header, e.g. force=V,displacement=V; "
-        "mm, um, g, kN, ms, ... are converted to SI, other units (V, counts) kept as labels",
+        "mm, um, g, kN, ms and the like are converted to SI, other units (V, counts) kept as labels",
     )
     rate = g.add_mutually_exclusive_group()
     rate.add_argument("--rate", type=float, metavar="HZ", help="sampling rate, for a file without a time column")
