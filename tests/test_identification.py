@@ -171,6 +171,17 @@ def test_noisy_record_continuous_within_the_issue_targets_and_sigma(table1_40db)
     assert np.all(res.sigma > 0)
 
 
+def test_weak_form_windows_for_measured_accelerations_algebraic_for_derived(table1_40db):
+    res = algid.identify(table1_40db, replicates=2)
+    assert res.plan.method == "weak_form"
+    # the estimate is the joint weak-form solution; its history ends on it and is finite
+    assert np.all(np.isfinite(res.history)) and res.history.shape[0] > 10
+    np.testing.assert_allclose(res.history[-1], res.raw, rtol=0.02)
+    axis = algid.identify(positioning_axis(seed=3, duration_s=20.0).recording, boundary="free", replicates=2)
+    assert axis.plan.method == "algebraic" and axis.motion == "displacement"
+    assert algid.identify(table1_40db, estimator="window", replicates=2).plan.method == ""
+
+
 def test_single_window_on_a_long_noisy_record_is_flagged_by_its_uncertainty(table1_40db):
     res = algid.identify(table1_40db, estimator="window")
     assert res.plan.estimator == "window"

@@ -20,6 +20,13 @@ Rules (every threshold named below):
   chain without springs, such as a positioning axis, has no mode; its windows must hold
   whole moves). Clipped to at least :data:`MIN_WINDOW_SAMPLES` samples and at most the
   record over :data:`MIN_WINDOW_RESULTS` / ``stagger``.
+* **Window results** (``method``): the weak-form windows (GLS over every test-function row,
+  bias-compensated, joined by their summed normal equations; ``docs/continuous.md``) when
+  the record carries measured accelerations, whose sensor noise is white as their weights
+  and bias terms assume; the paper's algebraic windows behind the prefilter when the
+  accelerations are derived from velocities or displacements, whose noise the
+  differentiation colours (positioning axis of ``bench/identify.py``, 1 um encoder: mass
+  within 0.04-0.06 % with algebraic windows, 0.3-1.1 % with weak-form ones).
 * **Prefilter** (the same low-pass on forces and accelerations, which leaves eq. 1
   unchanged): :data:`PREFILTER_MARGIN` times the top of the signal band or of the natural
   frequencies, whichever is higher; off when that is above :data:`PREFILTER_MAX` of the
@@ -68,6 +75,7 @@ class Plan:
     prefilter_hz: float  #: continuous prefilter cut-off [Hz] (0 = off; nan for the single window)
     stagger: int  #: continuous windows in flight
     window_basis: str  #: what set the window length
+    method: str = ""  #: continuous window results: "weak_form" or "algebraic" ("" for the single window)
 
     def to_json(self) -> dict:
         d = asdict(self)
@@ -164,7 +172,8 @@ def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto", f_natu
         reason = f"{why} record: reseeded windows of the recording's time scale, aggregated"
     if estimator == "window":
         return Plan("window", reason, float("nan"), float("nan"), 1, "the whole record")
-    return Plan("continuous", reason, L, prefilter_hz(nm, f_natural), STAGGER, basis)
+    method = "weak_form" if nm.motion == "acceleration" else "algebraic"
+    return Plan("continuous", reason, L, prefilter_hz(nm, f_natural), STAGGER, basis, method)
 
 
 def window_candidates(plan: Plan, nm: NoiseModel, duration_s: float) -> list[Plan]:

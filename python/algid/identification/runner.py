@@ -3,13 +3,16 @@
 
 * Single window: :class:`algid.ChainEstimator` from the first sample to the last; the
   estimate is eq. 7 at the end, the history its value after every sample.
-* Continuous: :class:`algid.ContinuousEstimator` with the plan's window and prefilter; the
-  estimate aggregates *every* window result of the record (:func:`aggregate`, an
-  interquartile mean per parameter: the window results are heavy-tailed ratios of random
-  determinants, so the middle half is averaged and the tails are dropped, which costs
-  little against the mean on Gaussian results and is immune to the odd wild window). The
-  history is that aggregate over the window results harvested up to each of at most
-  :data:`HISTORY_ROWS` instants.
+* Continuous: :class:`algid.ContinuousEstimator` with the plan's window, prefilter and
+  window method. Weak-form windows: the estimate is the estimator's own, the solution of
+  the summed normal equations of every window of the record, and the history its running
+  value at up to :data:`HISTORY_ROWS` instants. Algebraic windows: the estimate aggregates
+  *every* window result of the record (:func:`aggregate`, an interquartile mean per
+  parameter: the window results are heavy-tailed ratios of random determinants, so the
+  middle half is averaged and the tails are dropped, which costs little against the mean
+  on Gaussian results and is immune to the odd wild window), the history that aggregate
+  over the window results harvested up to each history instant. Either way ``spread`` is
+  the scatter of the window results.
 
 Parameters are packed ``m1..mn, c1..cn, k1..k{n+1}`` (interior springs fused as the
 estimators do; n = 1 with walls: k1 holds k1 + k2, k2 is NaN; free end: k_{n+1} = 0).
@@ -96,30 +99,53 @@ def _spring_validity(valid: np.ndarray, boundary: str) -> np.ndarray:
 
 
 def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan, history: bool = True) -> Run:
-    """Reseeded staggered windows of the plan, aggregated over the whole record (and, with
-    ``history``, over the window results up to each history instant)."""
+    """Reseeded staggered windows of the plan over the whole record, with (``history``) the
+    estimate's course or (without) its final value only."""
+    T = a.shape[0]
+    weak = plan.method == "weak_form"
     est = ContinuousEstimator(
         a.shape[1],
         dt,
         boundary=boundary,
-        method="algebraic",  # the plans' window lengths and prefilters are tuned for these windows
+        method=plan.method or "algebraic",
         window_s=plan.window_s,
         prefilter_hz=plan.prefilter_hz,
         stagger=plan.stagger,
         detect=False,
+        **_band(plan, dt),
     )
-    out = est.run(a, u, stride=max(1, a.shape[0]))
+    out = est.run(a, u, stride=max(1, T // HISTORY_ROWS) if (weak and history) else T)
     W, at = out["windows"], out["window_sample"]
     keep = np.any(np.isfinite(W), axis=1)
     W, at = W[keep], at[keep]
     if W.shape[0] == 0:
         nan = np.full(a.shape[1] * 3 + 1, np.nan)
-        return Run(theta=nan, time_s=np.array([a.shape[0] * dt]), history=nan[None, :], windows=0)
+        return Run(theta=nan, time_s=np.array([T * dt]), history=nan[None, :], windows=0)
+    spread = 1.4826 * _column_median(np.abs(W - _column_median(W)))
+    if weak:
+        theta = np.asarray(est.estimate, float)
+        rows = np.any(np.isfinite(out["estimate"]), axis=1) if history else np.zeros(0, bool)
+        if not rows.any():
+            return Run(
+                theta=theta, time_s=np.array([T * dt]), history=theta[None, :], windows=int(W.shape[0]), spread=spread
+            )
+        hist, at_s = out["estimate"][rows], out["time_s"][rows]
+        return Run(theta=theta, time_s=at_s, history=hist, windows=int(W.shape[0]), spread=spread)
     rows = min(HISTORY_ROWS, W.shape[0]) if history else 1
     stops = np.unique(np.linspace(1, W.shape[0], rows).round().astype(int))
-    history = np.array([aggregate(W[:s]) for s in stops])
-    spread = 1.4826 * _column_median(np.abs(W - _column_median(W)))
-    return Run(theta=aggregate(W), time_s=at[stops - 1] * dt, history=history, windows=int(W.shape[0]), spread=spread)
+    hist = np.array([aggregate(W[:s]) for s in stops])
+    return Run(theta=aggregate(W), time_s=at[stops - 1] * dt, history=hist, windows=int(W.shape[0]), spread=spread)
+
+
+def _band(plan: Plan, dt: float) -> dict:
+    """Weak-form windows: test functions up to the plan's prefilter cut-off (1.25 x the top of
+    the signal band and of the modes), as the algebraic windows' low-pass; the estimator's
+    default (fs/20) when the plan has no prefilter."""
+    if plan.method != "weak_form" or not plan.prefilter_hz > 0:
+        return {}
+    L = round(plan.window_s / dt)  # the estimator's limits: 2 <= Q = band L dt, 2 Q + 1 <= L / 2, band < 0.45 fs
+    Q = int(np.clip(np.floor(plan.prefilter_hz * L * dt), 2, (L // 2 - 1) // 2))
+    return {"band_hz": min((Q + 0.5) / (L * dt), 0.449 / dt)}
 
 
 def run_plan(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan, history: bool = True) -> Run:
