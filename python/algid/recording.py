@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import display
 from .messages import listing, quote, quote_path
 
 __all__ = [
@@ -153,6 +154,13 @@ class Recording:
                 for i in range(self.n):
                     out[f"{key}{i + 1}"] = arr[:, i]
         return out
+
+    # ---- display: one-line repr, notebook table (algid.display) -------------------------
+    def _display_fields(self) -> dict:
+        return display.recording_fields(self)
+
+    __repr__ = display.Displayed.__repr__
+    _repr_html_ = display.Displayed._repr_html_
 
 
 def _as_2d(name: str, value, T: int) -> np.ndarray:
