@@ -120,8 +120,10 @@ class ContinuousEstimator(Displayed, PackedParameters):
     config : ContinuousConfig, optional
         A whole configuration; ``dt``, ``boundary`` and ``options`` override its fields.
     **options
-        Fields of :class:`ContinuousConfig` (defaults: ``ContinuousConfig()``):
+        Fields of :class:`ContinuousConfig` (defaults: ``ContinuousConfig()``), listed below.
 
+    Other Parameters
+    ----------------
     method : {"weak_form", "algebraic"}
         Window results: GLS over all weak-form rows with bias compensation (default), or the
         paper's exactly determined algebraic windows behind the prefilter.
@@ -175,9 +177,14 @@ class ContinuousEstimator(Displayed, PackedParameters):
         Run the change detector (default True).
     amortize : bool
         Spread the per-parameter aggregation over the samples between window results.
-    min_samples, min_hadamard
-        Validity rule of each window (see :class:`algid.ChainEstimator`).
+    min_samples : int
+        Samples since a window's start before its solution is trusted.
+    min_hadamard : float
+        Lowest equilibrated Hadamard ratio trusted (the validity rule of each window, see
+        :class:`algid.ChainEstimator`).
 
+    Notes
+    -----
     Threads: one estimator serves one thread at a time; a call on an object whose ``run()``
     is in progress in another thread raises ``RuntimeError``.
     """

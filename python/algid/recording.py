@@ -92,8 +92,10 @@ class Recording:
     n : number of degrees of freedom; taken from ``u`` when None.
     path : file the recording was read from, if any.
 
-    The constructor validates (see the module docstring) and raises
-    :class:`RecordingError`.
+    Raises
+    ------
+    RecordingError
+        The constructor validates (see the module docstring).
     """
 
     t: np.ndarray
