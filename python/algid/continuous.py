@@ -105,9 +105,8 @@ class ContinuousEstimator(Displayed, PackedParameters):
     """Continuous algebraic estimator of an n-DOF chain: restarted staggered windows, a running
     estimate with uncertainty per parameter, change events.
 
-    The vocabulary is :class:`algid.ChainEstimator`'s: :meth:`reset`, :attr:`valid` (n,) per
-    DOF, :attr:`ready` (every DOF valid), ``sample`` and ``time_s`` in ``run()``; DOF and
-    array positions are 0-based, parameter names (``m1``, ``k2``) and :meth:`spring` 1-based.
+    Names as :class:`algid.ChainEstimator`'s (``reset``, ``valid`` per DOF, ``ready``, ``sample``,
+    ``time_s``); positions 0-based, parameter names (``k2``) and :meth:`spring` 1-based.
 
     Parameters
     ----------
@@ -180,8 +179,7 @@ class ContinuousEstimator(Displayed, PackedParameters):
     min_samples : int
         Samples since a window's start before its solution is trusted.
     min_hadamard : float
-        Lowest equilibrated Hadamard ratio trusted (the validity rule of each window, see
-        :class:`algid.ChainEstimator`).
+        Lowest equilibrated Hadamard ratio trusted (each window's validity rule).
 
     Notes
     -----
