@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import html
 import re
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ import pytest
 import algid
 from algid.chain import TABLE1
 from algid.diagnosis.engine import diagnose
-from algid.display import number
+from algid.display import html_table, number, parameter_rows, recording_fields
 from signals import multisine, simulate_chain
 
 
@@ -82,3 +83,17 @@ def test_identification_and_diagnosis_show_their_verdicts(table1_recording) -> N
     assert "\n" not in text and len(text) < 200
     assert _fields(text)["gap_before"] == number(d.gap_before, 4)
     assert _html_rows(d._repr_html_())["effect"] == repr(d.effect)
+
+
+def test_declared_units_label_the_summary_and_the_estimates() -> None:
+    """A recording in volts says so; estimates carry the units they are given (SI otherwise)."""
+    volts = SimpleNamespace(
+        n=1, t=np.arange(5.0), duration_s=4.0, dt=1.0, u=np.zeros((5, 1)), a=None, v=None, x=np.ones((5, 1)),
+        units={"time": "s", "force": "V", "displacement": "V"}, is_si=lambda: False,
+    )  # fmt: skip
+    assert recording_fields(volts)["units"] == "time:s force:V displacement:V"
+    assert "units" not in recording_fields(SimpleNamespace(**{**vars(volts), "is_si": lambda: True}))
+    rows = parameter_rows(["m1", "c1", "k1"], [1.0, 2.0, 3.0], None, {"m": "V s^2/V", "c": "V s/V", "k": "V/V"})
+    assert [r[3] for r in rows] == ["V s^2/V", "V s/V", "V/V"]
+    assert [r[3] for r in parameter_rows(["k1"], [3.0])] == ["N/m"]
+    assert "<td>V/V</td>" in html_table("X", {}, rows)

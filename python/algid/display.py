@@ -46,11 +46,13 @@ def html_table(name: str, fields: dict, parameters: list[tuple] | None = None) -
     return out
 
 
-def parameter_rows(names: list[str], values, sigmas=None) -> list[tuple]:
-    """``(name, value, sigma, unit)`` rows of packed estimates (sigma None when not known)."""
+def parameter_rows(names: list[str], values, sigmas=None, units: dict | None = None) -> list[tuple]:
+    """``(name, value, sigma, unit)`` rows of packed estimates (sigma None when not known);
+    ``units`` labels ``m``, ``c``, ``k`` (default :data:`PARAMETER_UNITS`, SI)."""
+    units = units or PARAMETER_UNITS
     values = np.asarray(values, dtype=float)
     sig = [None] * len(names) if sigmas is None else [float(s) for s in np.asarray(sigmas, dtype=float)]
-    return [(p, float(v), s, PARAMETER_UNITS[p[0]]) for p, v, s in zip(names, values, sig)]
+    return [(p, float(v), s, units[p[0]]) for p, v, s in zip(names, values, sig)]
 
 
 def validity(valid) -> str:
@@ -80,6 +82,9 @@ def recording_fields(rec) -> dict:
         "dt_s": number(rec.dt),
         "signals": "+".join(signals),
     }
+    units = getattr(rec, "units", None)
+    if units and not rec.is_si():  # a recording that declares non-SI units says which
+        fields["units"] = " ".join(f"{role}:{label}" for role, label in units.items())
     if getattr(rec, "path", None) is not None:
         fields["path"] = repr(str(rec.path))
     return fields

@@ -122,7 +122,7 @@ class Identification(PackedParameters):
         }
 
     def _display_parameters(self) -> list[tuple]:
-        return parameter_rows(self.names, self.theta, self.sigma)
+        return parameter_rows(self.names, self.theta, self.sigma, getattr(self, "units", None))
 
     __repr__ = Displayed.__repr__
     _repr_html_ = Displayed._repr_html_
