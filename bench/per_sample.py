@@ -182,7 +182,7 @@ def python_figures(a: np.ndarray, u: np.ndarray, reps: int, isa: str | None = No
         clock = statistics.median(-(time.perf_counter_ns() - time.perf_counter_ns()) for _ in range(2000))
         per_call = []
         for rep in range(reps + 1):
-            est.reseed()
+            est.reset()
             for j in range(samples):
                 t0 = time.perf_counter_ns()
                 est.update(a[j], u[j])

@@ -28,8 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _core
-from .chain import parameter_names
-from .estimator import Status, as_record, as_sample, config_fields, dofs, estimator_class, make_config
+from .chain import parameter_names, spring_columns
+from .display import Displayed, number, parameter_rows, validity
+from .estimator import Status, as_record, as_sample, config_fields, dofs, estimator_class, make_config, spring_index
 
 ChangeKind = _core.ChangeKind
 #: Configuration of a :class:`ContinuousEstimator` (the C++ ``ContinuousConfig``; its defaults,
@@ -62,6 +63,18 @@ def unpack(vec: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return vec[:n], vec[n : 2 * n], vec[2 * n :]
 
 
+def finite_dofs(vec: np.ndarray, n: int, boundary: str) -> np.ndarray:
+    """(n,) per DOF: the mass, the damping and every spring its equation identifies (see
+    :func:`algid.chain.spring_columns`) are finite in the packed vector ``vec``."""
+    m, c, k = unpack(vec, n)
+    return np.array(
+        [
+            np.isfinite(m[e]) and np.isfinite(c[e]) and all(np.isfinite(k[j - 1]) for j, _ in cols)
+            for e, cols in enumerate(spring_columns(n, boundary))
+        ]
+    )
+
+
 class PackedParameters:
     """Mass, damping and stiffness views of a packed ``estimate`` vector
     ``m1..mn, c1..cn, k1..k{n+1}`` (the order of :func:`parameter_names`)."""
@@ -83,10 +96,17 @@ class PackedParameters:
         """Springs k_1..k_{n+1} [N/m] (n+1,)."""
         return unpack(self.estimate, self.n)[2]
 
+    def spring(self, j: int) -> float:
+        """Spring ``k_j`` [N/m], ``j`` 1-based (1..n+1) as in :attr:`names` and the JSON."""
+        return float(self.stiffness[spring_index(j, self.n)])
 
-class ContinuousEstimator(PackedParameters):
-    """Continuous algebraic estimator of an n-DOF chain: reseeded staggered windows, a running
+
+class ContinuousEstimator(Displayed, PackedParameters):
+    """Continuous algebraic estimator of an n-DOF chain: restarted staggered windows, a running
     estimate with uncertainty per parameter, change events.
+
+    Names as :class:`algid.ChainEstimator`'s (``reset``, ``valid`` per DOF, ``ready``, ``sample``,
+    ``time_s``); positions 0-based, parameter names (``k2``) and :meth:`spring` 1-based.
 
     Parameters
     ----------
@@ -99,8 +119,10 @@ class ContinuousEstimator(PackedParameters):
     config : ContinuousConfig, optional
         A whole configuration; ``dt``, ``boundary`` and ``options`` override its fields.
     **options
-        Fields of :class:`ContinuousConfig` (defaults: ``ContinuousConfig()``):
+        Fields of :class:`ContinuousConfig` (defaults: ``ContinuousConfig()``), listed below.
 
+    Other Parameters
+    ----------------
     method : {"weak_form", "algebraic"}
         Window results: GLS over all weak-form rows with bias compensation (default), or the
         paper's exactly determined algebraic windows behind the prefilter.
@@ -154,9 +176,13 @@ class ContinuousEstimator(PackedParameters):
         Run the change detector (default True).
     amortize : bool
         Spread the per-parameter aggregation over the samples between window results.
-    min_samples, min_hadamard
-        Validity rule of each window (see :class:`algid.ChainEstimator`).
+    min_samples : int
+        Samples since a window's start before its solution is trusted.
+    min_hadamard : float
+        Lowest equilibrated Hadamard ratio trusted (each window's validity rule).
 
+    Notes
+    -----
     Threads: one estimator serves one thread at a time; a call on an object whose ``run()``
     is in progress in another thread raises ``RuntimeError``.
     """
@@ -207,8 +233,13 @@ class ContinuousEstimator(PackedParameters):
         return self._impl.sigma
 
     @property
+    def valid(self) -> np.ndarray:
+        """(n,) per DOF: every parameter of its equation has a finite running estimate."""
+        return finite_dofs(self.estimate, self.n, self.boundary)
+
+    @property
     def ready(self) -> bool:
-        """True once every identified parameter has an estimate."""
+        """Every DOF :attr:`valid`: every identified parameter has an estimate."""
         return bool(self._impl.ready)
 
     @property
@@ -307,8 +338,16 @@ class ContinuousEstimator(PackedParameters):
             after=float(after),
         )
 
-    def __repr__(self) -> str:
-        return (
-            f"ContinuousEstimator(n={self.n}, dt={self.dt}, boundary={self.boundary!r}, "
-            f"window_s={self.options['window_s']}, stagger={self.options['stagger']})"
-        )
+    def _display_fields(self) -> dict:
+        return {
+            "n": self.n,
+            "dt": number(self.dt),
+            "boundary": repr(self.boundary),
+            "method": repr(str(self.options["method"])),
+            "window_s": number(self.window_samples * self.dt),
+            "window_results": self.window_results,
+            "valid": validity(self.valid),
+        }
+
+    def _display_parameters(self) -> list[tuple]:
+        return parameter_rows(self.names, self.estimate, self.sigma)

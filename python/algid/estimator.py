@@ -17,6 +17,9 @@ import os
 import numpy as np
 
 from . import _core
+from .chain import parameter_names
+from .deprecation import Histories, renamed_method
+from .display import Displayed, number, parameter_rows, validity
 
 #: Chain sizes compiled as fixed-size C++ instantiations; any other n >= 1 runs the run-time
 #: sized estimator (the same arithmetic; about 1.1-1.4x the cost per DOF-sample).
@@ -143,7 +146,16 @@ def as_record(accel, force, n: int) -> tuple[np.ndarray, np.ndarray]:
     return a, u
 
 
-class ChainEstimator:
+def spring_index(j: int, n: int) -> int:
+    """The 0-based position in ``stiffness`` of spring ``k_j`` (``j`` 1-based, 1..n+1, as in
+    the parameter names and the JSON); IndexError otherwise."""
+    j = operator.index(j)
+    if not 1 <= j <= n + 1:
+        raise IndexError(f"springs are numbered k1..k{n + 1} (1-based), got {j}")
+    return j - 1
+
+
+class ChainEstimator(Displayed):
     """On-line algebraic estimator of an n-DOF chain (eqs. 2-7 of the paper).
 
     Parameters
@@ -165,9 +177,16 @@ class ChainEstimator:
 
     Notes
     -----
+    Vocabulary shared with :class:`algid.ContinuousEstimator`: :meth:`reset` restarts,
+    :attr:`valid` is per DOF (n,), :attr:`ready` is every DOF valid, ``run()`` returns
+    ``sample`` and ``time_s`` for every row. Indexing: DOF are 0-based like numpy
+    (:meth:`theta` of DOF ``i`` holds ``m_{i+1}, c_{i+1}, k_{i+1}, k_{i+2}``); parameters keep
+    their 1-based names (``m1``, ``k2``: :attr:`names`, the JSON of ``algid identify``), and
+    :meth:`spring` takes that 1-based spring number (``spring(j) == stiffness[j - 1]``).
+
     Estimates after sample k describe the window ``[t0, t_k - delay_samples * dt]``
     (the quadrature centres its stencil). A non-finite sample, or one so large that the
-    window's systems overflow, reseeds the estimator (status ``BadInput``); ``valid`` is never
+    window's systems overflow, resets the estimator (status ``BadInput``); ``valid`` is never
     true for an estimate that is not a number.
 
     Threads: one estimator serves one thread at a time. ``run()`` releases the GIL; any call
@@ -184,6 +203,8 @@ class ChainEstimator:
         cfg = make_config(config if config is not None else ChainConfig(), dt, boundary, options)
         self._impl = estimator_class("Chain", n)(cfg, n)
         self.n, self.dt, self.boundary = n, float(cfg.dt), str(cfg.boundary)
+        #: parameter names of the packed order ``m1..mn, c1..cn, k1..k{n+1}`` (1-based)
+        self.names = parameter_names(n)
 
     @property
     def config(self) -> ChainConfig:
@@ -200,9 +221,12 @@ class ChainEstimator:
         a, u = as_sample(accel, force, self.n)
         return Status(self._impl.update(a, u))
 
-    def reseed(self) -> None:
-        """Restart the window: the next sample is the new t0."""
+    def reset(self) -> None:
+        """Restart the window: the next sample is the new t0 (every estimate invalid until
+        the window has grown again)."""
         self._impl.reseed()
+
+    reseed = renamed_method("reseed", "reset")
 
     @property
     def mass(self) -> np.ndarray:
@@ -219,10 +243,20 @@ class ChainEstimator:
         """Fused springs k_1..k_{n+1} [N/m] (n = 1 with walls: k_1 = k_1 + k_2, k_2 NaN)."""
         return self._impl.stiffness
 
+    def spring(self, j: int) -> float:
+        """Spring ``k_j`` [N/m], ``j`` 1-based (1..n+1) as in :attr:`names` and the JSON."""
+        return float(self.stiffness[spring_index(j, self.n)])
+
     @property
     def valid(self) -> np.ndarray:
-        """Per-DOF validity of the eq. 7 estimates."""
+        """(n,) per DOF: its eq. 7 estimates are trusted now (enough samples since t0, a
+        well-conditioned system, finite values)."""
         return np.asarray(self._impl.valid, dtype=bool)
+
+    @property
+    def ready(self) -> bool:
+        """Every DOF :attr:`valid`."""
+        return bool(self.valid.all())
 
     @property
     def window(self) -> float:
@@ -230,8 +264,9 @@ class ChainEstimator:
         return float(self._impl.window)
 
     def theta(self, dof: int) -> np.ndarray:
-        """Eq. 7 ``[m_i, c_i, k_i, k_{i+1}]`` of DOF ``dof`` (0-based); both estimates of
-        an interior spring are here (slot 3 of DOF i and slot 2 of DOF i+1)."""
+        """Eq. 7 estimates of DOF ``dof`` (0-based, 0..n-1): ``[m, c, k_left, k_right]``,
+        i.e. ``m{dof+1}, c{dof+1}, k{dof+1}, k{dof+2}`` in the 1-based names; both estimates
+        of an interior spring are here (slot 3 of DOF i and slot 2 of DOF i+1)."""
         return self._impl.theta(int(dof))
 
     def theta_instant(self, dof: int) -> np.ndarray:
@@ -250,11 +285,27 @@ class ChainEstimator:
 
         Returns
         -------
-        dict with ``status`` (T,), ``mass`` (T, n), ``damping`` (T, n), ``stiffness``
-        (T, n+1), ``valid`` (T, n) and ``time_index`` (T,): the sample index whose window
-        end the row describes (``k - delay_samples``).
+        dict
+            ``status`` (T,), ``mass`` (T, n), ``damping`` (T, n), ``stiffness`` (T, n+1),
+            ``valid`` (T, n); ``sample`` (T,): the sample index whose window end the row
+            describes (``k - delay_samples``) and ``time_s`` (T,) that instant ``sample * dt``
+            [s]. The old key ``time_index`` still answers ``out["time_index"]`` (deprecated,
+            it is ``sample``).
         """
         a, u = as_record(accel, force, self.n)
         out = dict(self._impl.run(a, u, bool(full)))
-        out["time_index"] = np.arange(a.shape[0]) - self.delay_samples
-        return out
+        out["sample"] = np.arange(a.shape[0]) - self.delay_samples
+        out["time_s"] = out["sample"] * self.dt
+        return Histories(out, {"time_index": "sample"})
+
+    def _display_fields(self) -> dict:
+        return {
+            "n": self.n,
+            "dt": number(self.dt),
+            "boundary": repr(self.boundary),
+            "window_s": number(self.window),
+            "valid": validity(self.valid),
+        }
+
+    def _display_parameters(self) -> list[tuple]:
+        return parameter_rows(self.names, np.concatenate([self.mass, self.damping, self.stiffness]))

@@ -291,7 +291,11 @@ def modal_analysis(source, sigma=None, covariance=None) -> ModalAnalysis:
         taken as independent; or
     covariance : (3n+1, 3n+1) their covariance.
 
-    Without either (and for a bare Chain) the ``sigma_*`` fields are NaN.
+    Returns
+    -------
+    ModalAnalysis
+        The modes; without ``sigma`` or ``covariance`` (and for a bare Chain) their
+        ``sigma_*`` fields are NaN.
     """
     chain, packed_sigma = _chain_and_sigma(source)
     if sigma is None and covariance is None and packed_sigma is not None:

@@ -25,6 +25,7 @@ from typing import Callable
 import numpy as np
 
 from ..chain import Chain
+from ..display import Displayed, number
 from ..noise import channel, white_floor, without_hum
 from ..recording import Recording, accelerations, derivative
 from ..recording import motion as recording_motion
@@ -143,6 +144,21 @@ class Diagnosis:
     @property
     def metric(self) -> str:
         return METRIC
+
+    # ---- display: one-line repr, notebook table (algid.display) -------------------------
+    def _display_fields(self) -> dict:
+        parts = (self.location or {}).get("parts", [self.location] if self.location else [])
+        where = "+".join(f"{'DOF' if 'dof' in p else 'spring'} {next(iter(p.values()))}" for p in parts)
+        return {
+            "effect": repr(self.effect),
+            "location": repr(where) if where else None,
+            "gap_before": number(self.gap_before, 4),
+            "gap_after": number(self.gap_after, 4),
+            "candidates": len(self.ranking),
+        }
+
+    __repr__ = Displayed.__repr__
+    _repr_html_ = Displayed._repr_html_
 
     def residuals(self) -> tuple[np.ndarray, np.ndarray]:
         """In-sample equation errors (N, n) of the linear model and of the model with the

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..chain import parameter_names
 from ..continuous import PackedParameters, unpack
+from ..display import Displayed, number, parameter_rows
 from ..noise import NoiseModel
 from .plan import Plan
 from .verdicts import Verdict, dof_validity
@@ -124,12 +125,22 @@ class Identification(PackedParameters):
         """The verdict of parameter ``name`` (``"m1"``, ``"k2"``, ...)."""
         return next(v for v in self.verdicts if v.name == name)
 
-    def __repr__(self) -> str:
-        ok = sum(v.valid for v in self.verdicts)
-        return (
-            f"<Identification n={self.n} {self.boundary} estimator={self.plan.estimator} "
-            f"valid={self.valid} ({ok}/{len(self.verdicts)} parameters valid)>"
-        )
+    # ---- display: one-line repr, notebook table (algid.display) -------------------------
+    def _display_fields(self) -> dict:
+        return {
+            "n": self.n,
+            "boundary": repr(self.boundary),
+            "estimator": repr(self.plan.estimator),
+            "samples": self.samples,
+            "dt_s": number(self.dt),
+            "valid": f"{sum(v.valid for v in self.verdicts)}/{len(self.verdicts)} parameters",
+        }
+
+    def _display_parameters(self) -> list[tuple]:
+        return parameter_rows(self.names, self.theta, self.sigma, getattr(self, "units", None))
+
+    __repr__ = Displayed.__repr__
+    _repr_html_ = Displayed._repr_html_
 
     # ---- output ------------------------------------------------------------------------
     def to_json(self) -> dict:

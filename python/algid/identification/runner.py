@@ -86,7 +86,7 @@ def run_window(a: np.ndarray, u: np.ndarray, dt: float, boundary: str) -> Run:
     hist[~np.repeat(np.all(out["valid"], axis=1, keepdims=True), hist.shape[1], axis=1)] = np.nan
     theta = np.concatenate([est.mass, est.damping, est.stiffness])
     theta[np.concatenate([~est.valid, ~est.valid, _spring_validity(est.valid, boundary)])] = np.nan
-    return Run(theta=theta, time_s=out["time_index"] * dt, history=hist, windows=0)
+    return Run(theta=theta, time_s=out["time_s"], history=hist, windows=0)
 
 
 def _spring_validity(valid: np.ndarray, boundary: str) -> np.ndarray:

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import display
 from .units import ROLES, SI_UNITS
 
 #: Fewest samples a recording may have (the estimator's quadrature needs a few).
@@ -46,7 +47,10 @@ class Recording:
         a label that is not SI (``"V"``, ``"counts"``) says what the numbers are.
     notes : what the reader did that the user should know (columns ignored, units converted).
 
-    The constructor validates (see :mod:`algid.recording`) and raises :class:`RecordingError`.
+    Raises
+    ------
+    RecordingError
+        The constructor validates (see :mod:`algid.recording`).
     """
 
     t: np.ndarray
@@ -130,6 +134,13 @@ class Recording:
         from .frame import to_frame
 
         return to_frame(self)
+
+    # ---- display: one-line repr, notebook table (algid.display) -------------------------
+    def _display_fields(self) -> dict:
+        return display.recording_fields(self)
+
+    __repr__ = display.Displayed.__repr__
+    _repr_html_ = display.Displayed._repr_html_
 
 
 def require(module: str, extra: str, what: str):
