@@ -182,6 +182,24 @@ def test_weak_form_windows_for_measured_accelerations_algebraic_for_derived(tabl
     assert algid.identify(table1_40db, estimator="window", replicates=2).plan.method == ""
 
 
+def test_sigma_counts_the_methods_own_error_near_the_sampling_rate():
+    # a force band-limited to fs/5, noise-free: the quadrature of such content is off by about
+    # 0.2 % on masses and springs; the noise-free surrogate measures it and sigma includes it
+    from scipy.signal import butter, sosfiltfilt
+
+    rng = np.random.default_rng(0)
+    fs, T = 1000.0, 10.0
+    u = sosfiltfilt(butter(6, 200.0, fs=fs, output="sos"), rng.standard_normal((int(T * fs), 3)), axis=0) * 20
+    r = simulate(TABLE1, u, T, fs)
+    res = algid.identify(Recording(t=r.t, u=r.u, a=r.a), replicates=2)
+    truth = TABLE1.identifiable()
+    err = res.theta - truth
+    assert np.abs(err / truth).max() > 1e-3  # the effect is there ...
+    assert np.all(np.abs(err) < 3 * res.sigma)  # ... and inside the uncertainty
+    np.testing.assert_allclose(res.method_bias[:3], err[:3], rtol=0.3)
+    assert res.to_json()["parameters"][0]["method_bias"] == pytest.approx(res.method_bias[0])
+
+
 def test_single_window_on_a_long_noisy_record_is_flagged_by_its_uncertainty(table1_40db):
     res = algid.identify(table1_40db, estimator="window")
     assert res.plan.estimator == "window"

@@ -184,6 +184,8 @@ def identify(
     correct = np.isfinite(boot.bias) & (np.abs(boot.bias) > BIAS_Z * stderr_bias)
     theta = np.where(correct, run.theta - np.nan_to_num(boot.bias), run.theta)
     sigma = np.where(correct, np.sqrt(boot.sigma**2 + stderr_bias**2), boot.sigma)
+    method_bias = np.where(np.isfinite(boot.method_bias), boot.method_bias, 0.0)
+    sigma = np.sqrt(sigma**2 + method_bias**2)  # the method's own error on this spectrum, not removed
     with np.errstate(invalid="ignore", divide="ignore"):
         excess = np.where(np.isfinite(run.spread / boot.spread), run.spread / boot.spread, 1.0)
     sigma = sigma * np.maximum(excess, 1.0)
@@ -203,6 +205,7 @@ def identify(
         sigma=sigma,
         raw=run.theta,
         bias=np.where(correct, boot.bias, 0.0),
+        method_bias=method_bias,
         verdicts=verdicts,
         time_s=run.time_s,
         history=run.history,

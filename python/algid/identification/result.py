@@ -31,7 +31,8 @@ class Identification(PackedParameters):
     noise : noise model and signal band of the recording (:class:`algid.noise.NoiseModel`).
     theta, sigma : (3n+1,) estimates ``m1..mn, c1..cn, k1..k{n+1}`` [kg, N s/m, N/m] and
         one standard deviation each.
-    raw : the estimates before the bias correction; bias : the correction taken off.
+    raw : the estimates before the bias correction; bias : the correction taken off;
+    method_bias : the estimator's own error on a noise-free surrogate of the record (in sigma).
     verdicts : one :class:`~.verdicts.Verdict` per parameter.
     time_s, history, history_sigma : estimate history (R rows) and its standard deviation.
     windows : continuous window results aggregated (0 for the single window).
@@ -49,6 +50,7 @@ class Identification(PackedParameters):
     sigma: np.ndarray
     raw: np.ndarray
     bias: np.ndarray
+    method_bias: np.ndarray
     verdicts: list
     time_s: np.ndarray
     history: np.ndarray
@@ -155,6 +157,7 @@ class Identification(PackedParameters):
                 "valid": v.valid,
                 "reason": v.reason or None,
                 "bias_corrected": _num(self.bias[p]),
+                "method_bias": _num(self.method_bias[p]),
                 "force_share": _num(v.share),
                 "sigma_force_share": _num(v.sigma_share),
             }
