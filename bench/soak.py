@@ -10,7 +10,13 @@ reports the resident memory of the process, the cost per sample (median and wors
 hour's chunks, so a chunk's mean), the largest relative error of the running estimates at
 the end of the hour and the change events raised (on a constant chain: false alarms).
 
-    python bench/soak.py [--hours 24] [--n 3 10] [--snr 40 20] [--json bench/results/soak.json]
+With ``--dropouts`` every chunk carries one sensor dropout on a random accelerometer, in turn:
+a run of NaN (0.2-2 s), the channel frozen at its last reading (0.2-2 s), or the channel
+clipped for the whole chunk at a range of 0.6-0.9 of the chunk's largest reading; the hourly
+rows add the dropout runs the estimator reported, its ``BAD_INPUT`` samples and the runs
+injected. None of them may raise a change event.
+
+    python bench/soak.py [--hours 24] [--n 3 10] [--snr 40 20] [--dropouts] [--json bench/results/soak.json]
 """
 
 from __future__ import annotations
@@ -76,7 +82,26 @@ def rss_mb() -> float:
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def soak(n: int, snr_db: float, hours: float, chunk_s: float, seed: int = 0, progress=print) -> list[dict]:
+def inject_dropout(a: np.ndarray, k: int, rng) -> np.ndarray:
+    """Chunk ``k``'s dropout (module docstring) on a random channel of ``a`` (T, n), in place."""
+    T, n = a.shape
+    ch = int(rng.integers(n))
+    length = int(rng.integers(200, 2000))
+    start = int(rng.integers(1, T - length))
+    kind = k % 3
+    if kind == 0:
+        a[start : start + length, ch] = np.nan
+    elif kind == 1:
+        a[start : start + length, ch] = a[start - 1, ch]
+    else:
+        limit = rng.uniform(0.6, 0.9) * np.abs(a[:, ch]).max()
+        a[:, ch] = np.clip(a[:, ch], -limit, limit)
+    return a
+
+
+def soak(
+    n: int, snr_db: float, hours: float, chunk_s: float, seed: int = 0, progress=print, dropouts: bool = False
+) -> list[dict]:
     """Run the soak of one configuration; one row per simulated hour."""
     chain = TABLE1 if n == 3 else Chain.random(n, np.random.default_rng(n))
     plant = ModalPlant(chain, seed)
@@ -88,17 +113,21 @@ def soak(n: int, snr_db: float, hours: float, chunk_s: float, seed: int = 0, pro
     chunks_per_hour = int(round(3600.0 / chunk_s))
     sigma = None
     rows = []
+    runs0 = 0
     for hour in range(int(np.ceil(hours))):
-        costs, events = [], 0
-        for _ in range(chunks_per_hour):
+        costs, events, bad = [], 0, 0
+        for k in range(chunks_per_hour):
             a, u = plant.chunk(T)
             if sigma is None:
                 sigma = crlb.rms(a) * 10 ** (-snr_db / 20)
             a = a + sigma * rng.standard_normal(a.shape)
+            if dropouts:
+                inject_dropout(a, k, rng)
             start = time.perf_counter()
             out = est.run(a, u, stride=T)
             costs.append((time.perf_counter() - start) / T)
             events += len(out["events"])
+            bad += int(np.count_nonzero(out["status"] == int(algid.Status.BAD_INPUT)))
         err = np.abs(est.estimate[known] / truth[known] - 1)
         rows.append(
             {
@@ -110,8 +139,12 @@ def soak(n: int, snr_db: float, hours: float, chunk_s: float, seed: int = 0, pro
                 "us_per_sample_worst_chunk": 1e6 * float(np.max(costs)),
                 "max_rel_error_pct": 100 * float(np.max(err)),
                 "false_alarms": events,
+                "dropouts_injected": chunks_per_hour if dropouts else 0,
+                "dropout_runs_reported": est.dropouts["runs"] - runs0,
+                "bad_input_samples": bad,
             }
         )
+        runs0 = est.dropouts["runs"]
         progress(_row(rows[-1]))
     return rows
 
@@ -119,7 +152,8 @@ def soak(n: int, snr_db: float, hours: float, chunk_s: float, seed: int = 0, pro
 def _row(r: dict) -> str:
     return (
         f"| {r['n']} | {r['snr_db']:g} dB | {r['hour']} | {r['rss_mb']:.1f} | {r['us_per_sample_median']:.2f} / "
-        f"{r['us_per_sample_worst_chunk']:.2f} | {r['max_rel_error_pct']:.3f} | {r['false_alarms']} |"
+        f"{r['us_per_sample_worst_chunk']:.2f} | {r['max_rel_error_pct']:.3f} | {r['false_alarms']} | "
+        f"{r['dropouts_injected']} / {r['dropout_runs_reported']} / {r['bad_input_samples']} |"
     )
 
 
@@ -129,11 +163,17 @@ def main() -> None:
     ap.add_argument("--n", type=int, nargs="+", default=[3, 10], help="chain sizes")
     ap.add_argument("--snr", type=float, nargs="+", default=[40.0, 20.0], help="SNR on the accelerations [dB]")
     ap.add_argument("--chunk-s", type=float, default=60.0, help="samples per run() call [s]")
+    ap.add_argument("--dropouts", action="store_true", help="a sensor dropout in every chunk (module docstring)")
     ap.add_argument("--json", type=Path, help="write the rows as JSON")
     args = ap.parse_args()
-    print("| n | noise | hour | RSS [MB] | us per sample, median / worst chunk | max error [%] | change events |")
-    print("|---|---|---|---|---|---|---|")
-    rows = [r for n in args.n for snr in args.snr for r in soak(n, snr, args.hours, args.chunk_s)]
+    print(
+        "| n | noise | hour | RSS [MB] | us per sample, median / worst chunk | max error [%] | change events "
+        "| dropouts injected / stuck-clipped runs reported / NaN samples |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
+    rows = [
+        r for n in args.n for snr in args.snr for r in soak(n, snr, args.hours, args.chunk_s, dropouts=args.dropouts)
+    ]
     total = {}
     for r in rows:
         key = (r["n"], r["snr_db"])

@@ -50,7 +50,12 @@ void bind_config_classes(py::module_& m) {
   py::enum_<algid::Status>(m, "Status")
       .value("OK", algid::Status::kOk)
       .value("WARMUP", algid::Status::kWarmup)
-      .value("BAD_INPUT", algid::Status::kBadInput);
+      .value("BAD_INPUT", algid::Status::kBadInput)
+      .value("DROPOUT", algid::Status::kDropout);
+  py::enum_<algid::Dropout>(m, "Dropout")
+      .value("NONE", algid::Dropout::kNone)
+      .value("STUCK", algid::Dropout::kStuck)
+      .value("CLIPPED", algid::Dropout::kClipped);
   py::enum_<algid::ChangeKind>(m, "ChangeKind")
       .value("NONE", algid::ChangeKind::kNone)
       .value("STEP", algid::ChangeKind::kStep)
@@ -103,7 +108,11 @@ void bind_config_classes(py::module_& m) {
       .def_readwrite("detect", &Cont::detect, "run the change detector")
       .def_readwrite("amortize", &Cont::amortize, "spread the per-parameter work over the samples")
       .def_readwrite("outlier_ratio", &Cont::outlier_ratio,
-                     "a sample beyond this many times its channel's running RMS is bad input; 0: off");
+                     "a sample beyond this many times its channel's running RMS is bad input; 0: off")
+      .def_readwrite("stuck_samples", &Cont::stuck_samples,
+                     "an acceleration repeating one value this many samples is a dropout; 0: off")
+      .def_readwrite("clip_samples", &Cont::clip_samples,
+                     "an acceleration repeating its largest or smallest value this many samples is clipped; 0: off");
   cont.def(
       "validate",
       [](const Cont& c, int n) {

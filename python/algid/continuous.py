@@ -101,7 +101,53 @@ class PackedParameters:
         return float(self.stiffness[spring_index(j, self.n)])
 
 
-class ContinuousEstimator(Displayed, PackedParameters):
+class _ScheduleView:
+    """Read-only views of a C++ continuous estimator's schedule and sensor checks (``_impl``)."""
+
+    _impl: object
+
+    @property
+    def dropouts(self) -> dict:
+        """Acceleration dropouts seen so far (stuck or clipped channels, whose samples were
+        discarded: status ``DROPOUT``): ``samples``, ``runs``, the ``last`` run's kind
+        (``"stuck"``, ``"clipped"`` or ``None``) and its ``channel`` (1-based DOF, or None)."""
+        kind = self._impl.last_dropout.name.lower()
+        channel = int(self._impl.dropout_channel)
+        return {
+            "samples": int(self._impl.dropout_samples),
+            "runs": int(self._impl.dropout_runs),
+            "last": None if kind == "none" else kind,
+            "channel": None if channel < 0 else channel + 1,
+        }
+
+    @property
+    def hop_samples(self) -> int:
+        """Samples between two window results."""
+        return int(self._impl.hop_samples)
+
+    @property
+    def noise_rms(self) -> np.ndarray:
+        """Noise RMS per channel used by the weak-form windows (accelerations then forces,
+        (2n,); estimated unless given; -1 with algebraic windows)."""
+        return np.asarray(self._impl.noise_rms)
+
+    @property
+    def settle_samples(self) -> int:
+        """Samples skipped after a (re)start while the prefilter settles."""
+        return int(self._impl.settle_samples)
+
+    @property
+    def prefilter_hz(self) -> float:
+        """Prefilter cut-off in force [Hz] (0: off)."""
+        return float(self._impl.prefilter_hz)
+
+    @property
+    def window_samples(self) -> int:
+        """Window length M [samples]."""
+        return int(self._impl.window_samples)
+
+
+class ContinuousEstimator(Displayed, _ScheduleView, PackedParameters):
     """Continuous algebraic estimator of an n-DOF chain: restarted staggered windows, a running
     estimate with uncertainty per parameter, change events.
 
@@ -180,6 +226,10 @@ class ContinuousEstimator(Displayed, PackedParameters):
         Samples since a window's start before its solution is trusted.
     min_hadamard : float
         Lowest equilibrated Hadamard ratio trusted (each window's validity rule).
+    stuck_samples, clip_samples : int
+        An acceleration that has moved, then repeats one value for ``stuck_samples`` samples
+        (default 16), or its largest or smallest value so far for ``clip_samples`` (default 3),
+        is a dropout: discarded like a NaN (:attr:`dropouts`); 0 = off.
 
     Notes
     -----
@@ -251,32 +301,6 @@ class ContinuousEstimator(Displayed, PackedParameters):
     def window_results(self) -> int:
         """Window results harvested so far."""
         return int(self._impl.window_results)
-
-    @property
-    def hop_samples(self) -> int:
-        """Samples between two window results."""
-        return int(self._impl.hop_samples)
-
-    @property
-    def noise_rms(self) -> np.ndarray:
-        """Noise RMS per channel used by the weak-form windows (accelerations then forces,
-        (2n,); estimated unless given; -1 with algebraic windows)."""
-        return np.asarray(self._impl.noise_rms)
-
-    @property
-    def settle_samples(self) -> int:
-        """Samples skipped after a (re)start while the prefilter settles."""
-        return int(self._impl.settle_samples)
-
-    @property
-    def prefilter_hz(self) -> float:
-        """Prefilter cut-off in force [Hz] (0: off)."""
-        return float(self._impl.prefilter_hz)
-
-    @property
-    def window_samples(self) -> int:
-        """Window length M [samples]."""
-        return int(self._impl.window_samples)
 
     def since_restart(self, param: int) -> int:
         """Window results aggregated into parameter ``param`` since its last restart."""

@@ -505,6 +505,30 @@ void weak_form_is_exact(algid::Boundary boundary) {
 
 }  // namespace
 
+// The dropout rules on hand-made channels (detail/dropout.hpp): a channel that never moved is
+// not stuck; a repeat shorter than the rule is not a dropout; a frozen channel is stuck from the
+// sample that completes the run until it moves; a repeat at the running extreme is clipped.
+template <int Channels>
+void dropout_rules() {
+  algid::detail::DropoutDetector<double, Channels> d;
+  d.configure(2, 4, 3);
+  int ch = 0;
+  const double rest[2] = {0.0, 0.0};
+  for (int k = 0; k < 10; ++k) CHECK(d.check(rest, ch) == algid::Dropout::kNone);  // never moved
+  const double seq[][2] = {{1.0, 0.5}, {2.0, -0.5}, {1.5, 0.2}, {1.5, 0.1}, {1.5, 0.3}};
+  for (const auto& x : seq) CHECK(d.check(x, ch) == algid::Dropout::kNone);  // 1.5 three times: not yet
+  const double frozen[2] = {1.5, 0.4};
+  CHECK(d.check(frozen, ch) == algid::Dropout::kStuck && ch == 0);  // the fourth 1.5
+  const double moving[2] = {1.6, 0.45};
+  CHECK(d.check(moving, ch) == algid::Dropout::kNone && ch == -1);
+  const double top[2] = {1.55, 0.5};  // channel 1 at its largest value so far
+  CHECK(d.check(top, ch) == algid::Dropout::kNone);
+  CHECK(d.check(top, ch) == algid::Dropout::kNone);
+  CHECK(d.check(top, ch) == algid::Dropout::kClipped && ch == 1);
+  d.reset();
+  for (int k = 0; k < 10; ++k) CHECK(d.check(top, ch) == algid::Dropout::kNone);  // forgotten: never moved
+}
+
 int main() {
   algid_test::guards_fire();
   no_allocation_in_hot_path<1, double>();
@@ -525,5 +549,7 @@ int main() {
   step_is_tracked();
   free_end_and_single_dof();
   prefilter_keeps_the_model();
+  dropout_rules<2>();
+  dropout_rules<algid::Dynamic>();
   return algid_test::finish("test_continuous");
 }

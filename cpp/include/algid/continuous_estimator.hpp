@@ -63,6 +63,7 @@
 /// constructor for every N: firmware without a heap uses WindowMethod::kAlgebraic.
 
 #include "algid/chain_estimator.hpp"
+#include "algid/detail/dropout.hpp"
 #include "algid/detail/prefilter.hpp"
 #include "algid/detail/robust.hpp"
 #include "algid/detail/storage.hpp"
@@ -138,6 +139,15 @@ struct ContinuousConfig {
   /// A finite sample beyond this many times its channel's running RMS (time constant one
   /// window, measured once a window of samples has passed) is treated as bad input; 0: off.
   Scalar outlier_ratio = Scalar(1e8);
+  /// An acceleration that has moved and then repeats one value exactly for this many samples in
+  /// a row is a dead sensor (detail/dropout.hpp): its samples are discarded like bad input and
+  /// update() returns kDropout; 0: off. Short, because the windows harvested before a run is
+  /// recognised keep its frozen samples (a2 frozen 2 s in tests/test_dropouts.py: masses and
+  /// springs within 0.5 % with 16, 4.8 % off with 500).
+  long stuck_samples = 16;
+  /// An acceleration that repeats its largest or smallest value so far for this many samples in
+  /// a row is clipped: discarded the same way; 0: off.
+  long clip_samples = 3;
 };
 
 /// Why a ContinuousConfig is rejected (kNone: accepted).
@@ -157,6 +167,7 @@ enum class ContinuousConfigError {
   kBadHorizon,
   kBadPrefilter,
   kBadOutlierRatio,
+  kBadDropout,
   kBadDofs,
   kBadBand,
   kBadNoise,
@@ -184,6 +195,7 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
     case ContinuousConfigError::kBadPrefilter:
       return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in [1e-6/dt, 0.45/dt) [Hz], prefilter_order 2 or 4";
     case ContinuousConfigError::kBadOutlierRatio: return "outlier_ratio must be 0 (off) or finite and > 1";
+    case ContinuousConfigError::kBadDropout: return "stuck_samples and clip_samples must be 0 (off) or >= 2";
     case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
     case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
     case ContinuousConfigError::kBadNoise: return to_string(WeakFormConfigError::kBadNoise);
@@ -274,6 +286,8 @@ class ContinuousEstimator {
     }
     if (!std::isfinite(c.outlier_ratio) || (c.outlier_ratio != Scalar(0) && !(c.outlier_ratio > Scalar(1))))
       return ContinuousConfigError::kBadOutlierRatio;
+    if (c.stuck_samples < 0 || c.stuck_samples == 1 || c.clip_samples < 0 || c.clip_samples == 1)
+      return ContinuousConfigError::kBadDropout;
     return ContinuousConfigError::kNone;
   }
 
@@ -313,6 +327,7 @@ class ContinuousEstimator {
       // ln(1e6) / decay: the start-up transient is below 1e-6 of the signal when windows start
       settle_ = static_cast<long>(std::ceil(Scalar(13.815510557964274) / filter_.decay() / config_.dt));
     }
+    dropout_.configure(n_, config_.stuck_samples, config_.clip_samples);
     for (int e = 0; e < config_.stagger; ++e) offset_[e] = window_samples_ * e / config_.stagger;
     long spacing = window_samples_;  // fewest samples between two window results
     for (int e = 0; e < config_.stagger; ++e) {
@@ -358,6 +373,11 @@ class ContinuousEstimator {
     mean_square_.fill(Scalar(0));
     accepted_ = 0;
     out_of_range_ = 0;
+    dropout_.reset();
+    dropout_samples_ = 0;
+    dropout_runs_ = 0;
+    last_dropout_ = Dropout::kNone;
+    dropout_channel_ = -1;
     samples_ = 0;
     results_ = 0;
     event_count_ = 0;
@@ -366,8 +386,9 @@ class ContinuousEstimator {
 
   /// Consume one simultaneous sample of the accelerations [m/s^2] and forces [N].
   /// A sample plausible() refuses (not finite, not finite squared, or an outlier) is discarded
-  /// and the windows in flight are dropped (the aggregation is kept). Returns kWarmup until every
-  /// identified parameter has an estimate.
+  /// and the windows in flight are dropped (the aggregation is kept): kBadInput. So is a sample
+  /// in which an acceleration is stuck or clipped (`stuck_samples`, `clip_samples`): kDropout.
+  /// Returns kWarmup until every identified parameter has an estimate.
   /// @realtime no allocation, no throw, O(K N) plus at most `budget` parameters' aggregation
   Status update(const Scalar* accel, const Scalar* force) noexcept {
     event_count_ = 0;
@@ -376,6 +397,11 @@ class ContinuousEstimator {
       restart_windows();
       work();
       return Status::kBadInput;
+    }
+    if (dropped(accel)) {
+      restart_windows();
+      work();
+      return Status::kDropout;
     }
     const Scalar* a = accel;
     const Scalar* f = force;
@@ -458,6 +484,13 @@ class ContinuousEstimator {
   const Vector<Scalar, kParams>& last_variance() const noexcept { return last_variance_; }
   /// The weak-form windows (nullptr with algebraic windows), e.g. for noise_rms().
   const WeakForm* weak_form() const noexcept { return weak_.get(); }
+  /// Samples discarded as dropouts (stuck or clipped accelerations) since construction or reset().
+  long dropout_samples() const noexcept { return dropout_samples_; }
+  /// Runs of dropout samples since construction or reset().
+  long dropout_runs() const noexcept { return dropout_runs_; }
+  /// Kind of the latest dropout run (kNone: none yet) and its acceleration channel (0-based, -1: none).
+  Dropout last_dropout() const noexcept { return last_dropout_; }
+  int dropout_channel() const noexcept { return dropout_channel_; }
   /// Window results harvested since construction or reset().
   long window_results() const noexcept { return results_; }
   /// Window results aggregated into parameter j's estimate since its last restart.
@@ -575,6 +608,23 @@ class ContinuousEstimator {
       mean_square_[n_ + i] += alpha * (force[i] * force[i] - mean_square_[n_ + i]);
     }
     ++accepted_;
+    return true;
+  }
+
+  // A stuck or clipped acceleration (detail/dropout.hpp); counts a new run when the previous
+  // sample was not one.
+  bool dropped(const Scalar* accel) noexcept {
+    int channel = -1;
+    const Dropout kind = dropout_.check(accel, channel);
+    const bool was = in_dropout_;
+    in_dropout_ = kind != Dropout::kNone;
+    if (!in_dropout_) return false;
+    ++dropout_samples_;
+    if (!was) {
+      ++dropout_runs_;
+      last_dropout_ = kind;
+      dropout_channel_ = channel;
+    }
     return true;
   }
 
@@ -940,6 +990,12 @@ class ContinuousEstimator {
   detail::Storage<Scalar, kChannels> mean_square_{};  // running mean square of every raw channel
   long accepted_ = 0;  // plausible samples since construction, reset() or a new level
   long out_of_range_ = 0;  // finite samples out of range in a row
+  detail::DropoutDetector<Scalar, N> dropout_{};
+  bool in_dropout_ = false;
+  long dropout_samples_ = 0;
+  long dropout_runs_ = 0;
+  Dropout last_dropout_ = Dropout::kNone;
+  int dropout_channel_ = -1;
   bool filtered_ = false;
   long settle_ = 0;
   std::array<long, MaxStagger> phase_{};

@@ -42,6 +42,7 @@ enum class Status {
   kOk = 0,        ///< sample consumed; see the per-DOF validity flags for the estimates
   kWarmup = 1,    ///< sample consumed, but the quadrature stencil is not full yet (no estimate)
   kBadInput = 2,  ///< a non-finite sample, or one whose integrals overflow: the estimator reseeded
+  kDropout = 3,   ///< ContinuousEstimator: an acceleration stuck or clipped (detail/dropout.hpp): discarded
 };
 
 namespace detail {

@@ -113,6 +113,8 @@ def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan:
         stagger=plan.stagger,
         detect=False,
         **_band(plan, dt),
+        # derived accelerations repeat exactly while an encoder's axis stands still: not a dead sensor
+        **({} if plan.method == "weak_form" else {"stuck_samples": 0, "clip_samples": 0}),
     )
     out = est.run(a, u, stride=max(1, T // HISTORY_ROWS) if (weak and history) else T)
     W, at = out["windows"], out["window_sample"]
