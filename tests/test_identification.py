@@ -200,6 +200,21 @@ def test_sigma_counts_the_methods_own_error_near_the_sampling_rate():
     assert res.to_json()["parameters"][0]["method_bias"] == pytest.approx(res.method_bias[0])
 
 
+def test_white_force_up_to_the_nyquist_rate():
+    # broadband forcing: every spectrum is flat, the force stands nowhere above "its floor"; the
+    # coherence between forces and accelerations says the flat top is signal (noise.coherent_share)
+    rng = np.random.default_rng(0)
+    fs, T = 1000.0, 10.0
+    r = simulate(TABLE1, 10 * rng.standard_normal((int(T * fs), 3)), T, fs, noise_db=40, seed=1)
+    rec = Recording(t=r.t, u=r.u, a=r.a)
+    nm = analyse(rec.u, rec.a, 1 / fs)
+    assert nm.f_hi > 0.8 * nm.nyquist and nm.forces[0].snr_db > 30
+    res = algid.identify(rec, replicates=2)
+    assert res.plan.noise_rms[0] > 0  # the noise model's levels, not the fourth differences
+    err = np.abs(res.theta / TABLE1.identifiable() - 1)
+    assert res.valid and err[:3].max() < 0.005 and err[6:].max() < 0.005 and err[3:6].max() < 0.02
+
+
 def test_single_window_on_a_long_noisy_record_is_flagged_by_its_uncertainty(table1_40db):
     res = algid.identify(table1_40db, estimator="window")
     assert res.plan.estimator == "window"

@@ -14,6 +14,11 @@ Per channel (every force, and every measured acceleration or displacement):
 * **Signal**: the PSD bins more than :data:`DETECT` times above the floor; ``f_hi`` is the
   frequency below which :data:`POWER` of their power above the floor lies, ``f_mid`` the
   median frequency of that power (half below, half above).
+* **Broadband forcing**: a force whose spectrum is flat to the Nyquist rate stands nowhere
+  above "its floor". When a forced channel shows no signal, the multiple coherence of the
+  motions with the forces decides (:func:`coherent_share`): over the upper third of the
+  spectrum noise coheres with nothing, signal does; if it coheres, every floor is read from
+  the share of the spectrum the forces do not explain.
 * **Encoder resolution** of a displacement channel: the largest ``q`` such that every
   reading is a whole multiple of ``q`` (to 1e-6 q) with at least 3 distinct counts; 0 when
   the readings are not quantised. Quantisation adds white noise of variance ``q^2 / 12``.
@@ -196,11 +201,13 @@ def white_floor(f: np.ndarray, S: np.ndarray) -> np.ndarray:
     return out[0] if one else out
 
 
-def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False) -> Channel:
-    """Spectral summary of one signal (module docstring)."""
+def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False, incoherent=None) -> Channel:
+    """Spectral summary of one signal (module docstring); ``incoherent`` (F,): the share of
+    each PSD bin that the other channels do not explain (:func:`coherent_share`), when the
+    floor is to be read from that share rather than from the whole spectrum."""
     x = np.asarray(x, dtype=float)
     f, S = psd(x, dt)
-    floor = float(white_floor(f, S))
+    floor = float(white_floor(f, S if incoherent is None else S * incoherent))
     above = np.where(S > DETECT * floor, S - floor, 0.0)
     total = float(above.sum())
     if total > 0:
@@ -240,6 +247,14 @@ def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "accelerat
         channel(f"{sym}{i + 1}", motion[:, i], dt, quantised=kind == "displacement") for i in range(motion.shape[1])
     ]
     setting = [c for c in forces if np.any(u[:, int(c.name[1:]) - 1] != 0.0)]
+    incoherent = coherent_share(u, motion, dt) if any(not np.isfinite(c.f_hi) for c in setting) else None
+    if incoherent is not None:  # broadband forcing: the flat top of the spectra is signal
+        forces = [channel(f"u{i + 1}", u[:, i], dt, incoherent=incoherent) for i in range(u.shape[1])]
+        motions = [
+            channel(f"{sym}{i + 1}", motion[:, i], dt, kind == "displacement", incoherent)
+            for i in range(motion.shape[1])
+        ]
+        setting = [c for c in forces if np.any(u[:, int(c.name[1:]) - 1] != 0.0)]
     if kind == "acceleration":
         setting += motions
     found = [c for c in setting if np.isfinite(c.f_hi)]
@@ -253,6 +268,30 @@ def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "accelerat
     return NoiseModel(
         dt=float(dt), motion=kind, forces=forces, motions=motions, f_hi=float(f_hi), f_mid=f_mid, band_source=source
     )
+
+
+#: Median multiple coherence over the upper third of the spectrum above which its flat top is
+#: signal (broadband forcing), not noise.
+COHERENT = 0.9
+
+
+def coherent_share(u: np.ndarray, motion: np.ndarray, dt: float):
+    """For a force that stands nowhere above its own floor (white, or broadband up to the
+    Nyquist rate: its spectrum is all "floor"): ``1 - gamma^2`` (F,), the share of each PSD bin
+    the forces do not explain, with ``gamma^2`` the mean over the motion channels of their
+    multiple coherence with every forced channel; None when the upper third of the spectrum
+    is not coherent (median below :data:`COHERENT`), i.e. when that flat top is noise after all.
+    Noise is what no other channel explains, so the floor is read from this share."""
+    from .frf import h1_estimate
+
+    if not np.any(u != 0.0):
+        return None
+    est = h1_estimate(u, motion, dt, nperseg=segment_length(u.shape[0], dt))
+    gamma2 = np.clip(np.nan_to_num(np.mean(est.coherence, axis=1)), 0.0, 1.0)
+    top = est.f_hz >= (2.0 / 3.0) * est.f_hz[-1]
+    if not np.median(gamma2[top]) >= COHERENT:
+        return None
+    return np.maximum(1.0 - gamma2, 1e-12)
 
 
 #: Mains frequencies [Hz] whose lines (and harmonics) are looked for.

@@ -55,6 +55,12 @@ MIN_WINDOW_SAMPLES = 48
 SHORTEN_MAX = 0.5
 #: Multiples of the first guess of the window length that are tried.
 WINDOW_MULTIPLES = (0.5, 0.7, 1.0, 1.4, 2.0)
+#: A force whose median frequency is above this share of the Nyquist rate is broadband (white
+#: up to the sampling rate): its period says nothing of the chain's time scale.
+BROADBAND = 0.3
+#: A signal band reaching this share of the Nyquist rate: the weak form takes its noise levels
+#: from the noise model (the signals' fourth differences would count signal as noise).
+BROADBAND_BAND = 0.8
 #: Windows in flight (staggered) of the continuous estimator.
 STAGGER = 4
 #: Prefilter cut-off over the top of the band.
@@ -76,6 +82,9 @@ class Plan:
     stagger: int  #: continuous windows in flight
     window_basis: str  #: what set the window length
     method: str = ""  #: continuous window results: "weak_form" or "algebraic" ("" for the single window)
+    #: weak form: white-noise RMS of the accelerations and forces from the noise model, or -1 to let
+    #: the estimator read it off the signals' fourth differences
+    noise_rms: tuple = (-1.0, -1.0)
 
     def to_json(self) -> dict:
         d = asdict(self)
@@ -121,8 +130,10 @@ def window_length(nm: NoiseModel, duration_s: float, f_natural: np.ndarray) -> t
     fn = fn[np.isfinite(fn) & (fn > 2.0 / duration_s) & (fn <= nm.f_hi)]
     if fn.size:
         f_ref, basis = 2.0 * float(fn.min()), f"half a period of the lowest natural frequency ({fn.min():.3g} Hz)"
-    elif np.isfinite(nm.f_mid) and nm.f_mid > 0:
+    elif np.isfinite(nm.f_mid) and 0 < nm.f_mid < BROADBAND * nm.nyquist:
         f_ref, basis = nm.f_mid, f"one period of the force's median frequency ({nm.f_mid:.3g} Hz)"
+    elif np.isfinite(nm.f_mid):
+        f_ref, basis = 10.0 / duration_s, f"a tenth of the record (broadband force, median frequency {nm.f_mid:.3g} Hz)"
     else:
         f_ref, basis = 10.0 / duration_s, "a tenth of the record (no force stands out of its noise)"
     lo, hi = window_limits(nm, duration_s)
@@ -173,7 +184,12 @@ def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto", f_natu
     if estimator == "window":
         return Plan("window", reason, float("nan"), float("nan"), 1, "the whole record")
     method = "weak_form" if nm.motion == "acceleration" else "algebraic"
-    return Plan("continuous", reason, L, prefilter_hz(nm, f_natural), STAGGER, basis, method)
+    plan = Plan("continuous", reason, L, prefilter_hz(nm, f_natural), STAGGER, basis, method)
+    if method == "weak_form" and nm.f_hi >= BROADBAND_BAND * nm.nyquist:
+        # signal up to the Nyquist rate: fourth differences are signal, not noise
+        rms = [float(np.sqrt(np.mean([c.sigma**2 for c in chans]))) for chans in (nm.motions, nm.forces)]
+        plan = replace(plan, noise_rms=tuple(rms))
+    return plan
 
 
 def window_candidates(plan: Plan, nm: NoiseModel, duration_s: float) -> list[Plan]:

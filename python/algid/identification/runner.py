@@ -113,6 +113,7 @@ def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan:
         stagger=plan.stagger,
         detect=False,
         **_band(plan, dt),
+        **({"accel_noise": plan.noise_rms[0], "force_noise": plan.noise_rms[1]} if plan.noise_rms[0] >= 0 else {}),
         # derived accelerations repeat exactly while an encoder's axis stands still: not a dead sensor
         **({} if plan.method == "weak_form" else {"stuck_samples": 0, "clip_samples": 0}),
     )
