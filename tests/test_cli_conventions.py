@@ -162,3 +162,23 @@ def test_demo_writes_no_carriage_returns_into_a_log(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "\r" not in proc.stderr and "\r" not in proc.stdout
     assert proc.stderr == ""  # progress is for terminals; a log gets only what the demo says on purpose
+
+
+def test_from_a_pandas_csv_to_modes_and_frf_in_one_command(tmp_path):
+    # the issue's path: a CSV as pandas writes it (index column, `time`, units in the header) to a
+    # modal table with damping ratios and a model-vs-measured FRF plot, in one command
+    pd = pytest.importorskip("pandas")
+    from algid.simulator import simulate
+
+    chain = Chain(np.array([2.0]), np.array([6.0]), np.array([2000.0, 0.0]))  # f_n 5.03 Hz, zeta 0.0335
+    rng = np.random.default_rng(3)
+    r = simulate(chain, 10 * rng.standard_normal((10000, 1)), 10.0, 1000.0, noise_db=50, noise_on=("accel", "force"))
+    frame = pd.DataFrame({"time [s]": r.t, "u1 [N]": r.u[:, 0], "a1 [m/s^2]": r.a[:, 0]})
+    frame.to_csv(tmp_path / "rig.csv")  # with pandas' index column
+    proc = _algid("identify", tmp_path / "rig.csv", "--plots", tmp_path / "plots", "--json", tmp_path / "r.json")
+    assert proc.returncode == 0, proc.stderr
+    mode = json.loads((tmp_path / "r.json").read_text())["modes"][0]
+    assert mode["frequency_hz"] == pytest.approx(np.sqrt(2000.0 / 2.0) / (2 * np.pi), rel=0.01)
+    assert mode["damping_ratio"] == pytest.approx(6.0 / (2 * np.sqrt(2000.0 * 2.0)), rel=0.1)
+    assert re.search(r"damping ratio|zeta", proc.stdout, re.I), proc.stdout
+    assert (tmp_path / "plots" / "frf.png").read_bytes()[:8] == PNG
