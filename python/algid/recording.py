@@ -62,6 +62,8 @@ DT_RANGE_S = (1e-9, 3600.0)
 CSV_CHUNK_LINES = 8192
 #: Points of the interpolating polynomial :func:`accelerations` differentiates.
 DEFAULT_DIFF_POINTS = 5
+#: File suffixes :func:`load_recording` reads (lower case); folders are searched for these.
+SUFFIXES = (".csv", ".npz")
 
 _NAME = re.compile(r"^([uavx])([1-9][0-9]*)$")
 _KIND = {"u": "force", "a": "acceleration", "v": "velocity", "x": "displacement"}
