@@ -7,11 +7,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from signals import multisine
 
 from algid.chain import Chain
 from algid.recording import Recording, save_recording
 from algid.simulator import simulate
+from signals import multisine
 
 #: Effects mixed into a fleet (None: the linear chain), cycled over the recordings.
 EFFECTS = (

@@ -14,14 +14,11 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 pytest.importorskip("distributed")
 pytest.importorskip("pyarrow")
 pd = pytest.importorskip("pandas")
-
-from fleet_recordings import write_bad, write_fleet  # noqa: E402
 
 import algid  # noqa: E402
 from algid.cli import main  # noqa: E402
@@ -32,6 +29,7 @@ from algid.fleet.store import ResultStore  # noqa: E402
 from algid.fleet.summary import summary  # noqa: E402
 from algid.fleet.task import Options, content_key  # noqa: E402
 from algid.recording import RecordingError, load_recording  # noqa: E402
+from fleet_recordings import write_bad, write_fleet  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "python"), str(REPO / "tests")])}
@@ -89,7 +87,11 @@ def test_rows_equal_identify_and_diagnose_run_one_by_one(fleet, diagnosed, tmp_p
         for column, value in ((p["name"], p["value"]), (f"sigma_{p['name']}", p["sigma"])):
             assert row[column] == value or (value is None and math.isnan(row[column]))
     assert (row["valid"], row["estimator"], row["n"]) == (ident["valid"], ident["estimator"], ident["n"])
-    assert (row["effect"], row["gap_before"], row["gap_after"]) == (diag["effect"], diag["gap_before"], diag["gap_after"])
+    assert (row["effect"], row["gap_before"], row["gap_after"]) == (
+        diag["effect"],
+        diag["gap_before"],
+        diag["gap_after"],
+    )
     assert (json.loads(row["location"]), json.loads(row["params"])) == (diag["location"], diag["params"])
 
 
@@ -97,7 +99,9 @@ def test_a_second_run_skips_every_recording_it_has(fleet, diagnosed, client):
     out, first = diagnosed
     again = algid.batch(fleet, out, client, diagnose=True)
     assert again.attrs["counts"] == {"ok": 0, "failed": 0, "skipped": 12}
-    pd.testing.assert_frame_equal(again.sort_values("path").reset_index(drop=True), first.sort_values("path").reset_index(drop=True))
+    pd.testing.assert_frame_equal(
+        again.sort_values("path").reset_index(drop=True), first.sort_values("path").reset_index(drop=True)
+    )
     assert len(ResultStore(out).parts()) == 1  # nothing written twice
 
 
@@ -151,3 +155,110 @@ def test_a_missing_extra_is_one_line_naming_it(monkeypatch, capsys, tmp_path):
     assert main(["batch", str(tmp_path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "algid[batch]" in err and err.startswith("algid batch: error:")
+
+
+def _parts(out: Path) -> list[Path]:
+    return sorted((out / "results").glob("part-*.parquet"))
+
+
+def test_a_killed_batch_resumes_without_losing_or_repeating_a_row(fleet, diagnosed, client, tmp_path):
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "algid.cli", "batch", str(fleet), "--out", str(out), "--diagnose"]
+    proc = subprocess.Popen(cmd + ["--workers", "1", "--part-rows", "1", "--quiet"], env=ENV, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 90
+        while len(_parts(out)) < 3 and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # the client and its worker processes, at once
+        proc.wait()
+    written = len(ResultStore(out).read())
+    assert 3 <= written < 12, "the batch was not killed half way"
+    resumed = algid.batch(fleet, out, client, diagnose=True)
+    assert resumed.attrs["counts"]["skipped"] == written
+    assert sum(resumed.attrs["counts"].values()) == 12
+    raw = pd.concat([pd.read_parquet(p) for p in _parts(out)], ignore_index=True)
+    assert len(raw) == 12 and raw["key"].is_unique  # every recording once, none twice
+    columns = ["path", "key", "status", "error", "k1", "sigma_k1", "effect", "gap_after"]
+    first = diagnosed[1][columns].sort_values("path").reset_index(drop=True)
+    again = resumed[columns].sort_values("path").reset_index(drop=True)
+    pd.testing.assert_frame_equal(again, first, check_dtype=False)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def scheduler():
+    """A ``dask scheduler`` and a ``dask worker`` started as separate processes; torn down after."""
+    from distributed import Client
+
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    mod = [sys.executable, "-m"]
+    procs = [
+        subprocess.Popen(
+            mod
+            + [
+                "distributed.cli.dask_scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                address.rsplit(":", 1)[1],
+                "--no-dashboard",
+            ],
+            env=ENV,
+            stderr=subprocess.DEVNULL,
+        )
+    ]
+    procs.append(
+        subprocess.Popen(
+            mod
+            + [
+                "distributed.cli.dask_worker",
+                address,
+                "--nworkers",
+                "1",
+                "--nthreads",
+                "1",
+                "--no-dashboard",
+                "--memory-limit",
+                "2GiB",
+            ],
+            env=ENV,
+            stderr=subprocess.DEVNULL,
+        )
+    )
+    try:
+        with Client(address, timeout="30s") as c:
+            c.wait_for_workers(1, timeout=60)
+        yield address
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+
+
+def test_the_same_batch_through_a_scheduler_address(fleet, diagnosed, scheduler, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert (
+        main(["batch", str(fleet / "three" / "m00"), str(fleet / "bad"), "--out", str(out), "--scheduler", scheduler])
+        == 0
+    )
+    err = capsys.readouterr().err
+    assert err.strip().splitlines()[-1].startswith("algid batch: 3 ok, 3 failed, 0 skipped")
+    remote = ResultStore(out).read().set_index("path").sort_index()
+    local = diagnosed[1].set_index("path").loc[remote.index]
+    columns = ["status", "error", "n", "valid"] + [c for c in local.columns if c[0] in "mck" and c[1:].isdigit()]
+    pd.testing.assert_frame_equal(remote[columns], local[columns], check_dtype=False)
+    assert set(remote["worker_pid"].dropna()).isdisjoint(set(local["worker_pid"]))
+    machines = pd.read_csv(out / "summary.csv").set_index("machine")
+    assert machines.loc["m00", "ok"] == 3 and machines.loc["bad", "failed"] == 3
+    assert all((out / f).stat().st_size > 0 for f in ("histories.png", "verdicts.png"))

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ..identification.plan import ESTIMATORS
 from ..identification.surrogate import REPLICATES
+from .engine import PART_ROWS
 
 #: Failed recordings named on stderr; the rest are in the results' ``error`` column.
 SHOWN_FAILURES = 10
@@ -35,13 +36,18 @@ def add_parser(sub) -> None:
         "A rerun skips the recordings already done (same content, version and options).",
     )
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="recording files, folders or glob patterns")
-    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created; resumed if it exists)")
+    p.add_argument(
+        "--out", type=Path, required=True, metavar="DIR", help="output folder (created; resumed if it exists)"
+    )
     p.add_argument("--diagnose", action="store_true", help="also diagnose every recording (algid diagnose)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask scheduler (tcp://host:port)")
     p.add_argument("--workers", type=int, metavar="N", help="processes of the embedded cluster (default: cores)")
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
     p.add_argument("--estimator", choices=ESTIMATORS, default="auto", help="as algid identify --estimator")
     p.add_argument("--replicates", type=int, default=REPLICATES, help=f"bootstrap replicates (default {REPLICATES})")
+    p.add_argument(
+        "--part-rows", type=int, default=PART_ROWS, metavar="N", help=f"rows per Parquet part (default {PART_ROWS})"
+    )
     p.add_argument("--quiet", action="store_true", help="no progress, no summary")
     p.set_defaults(func=run)
 
@@ -72,9 +78,10 @@ def run(args) -> int:
     from .deps import require
     from .engine import batch
 
-    if args.workers is not None and args.workers < 1:
-        print(error_line("batch", ValueError(f"--workers must be >= 1, got {args.workers}")), file=sys.stderr)
-        return 2
+    for flag, value in (("--workers", args.workers), ("--part-rows", args.part_rows)):
+        if value is not None and value < 1:
+            print(error_line("batch", ValueError(f"{flag} must be >= 1, got {value}")), file=sys.stderr)
+            return 2
     require()
     logging.getLogger("distributed").setLevel(logging.ERROR)
     bar = _bar(args.quiet)
@@ -84,7 +91,7 @@ def run(args) -> int:
         bar.set_postfix(counts, refresh=False)
 
     options = {"diagnose": args.diagnose, "boundary": args.boundary, "estimator": args.estimator}
-    options.update(replicates=args.replicates, progress=progress if bar is not None else None)
+    options.update(replicates=args.replicates, part_rows=args.part_rows, progress=progress if bar is not None else None)
     try:
         if args.scheduler:
             from distributed import Client

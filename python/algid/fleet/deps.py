@@ -1,4 +1,4 @@
-"""The ``batch`` extra: dask[distributed], pyarrow and pandas, imported on first use."""
+"""The ``batch`` extra: dask[distributed], pyarrow, pandas and tqdm, imported on first use."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ def require() -> None:
         import distributed  # noqa: F401
         import pandas  # noqa: F401
         import pyarrow.parquet  # noqa: F401
+        import tqdm  # noqa: F401
     except ImportError as err:
         raise BatchDependencyError(
-            f"batch needs dask[distributed], pyarrow and pandas ({err.name or 'a package'} is missing): {EXTRA}"
+            f"batch needs dask[distributed], pyarrow, pandas and tqdm ({err.name or 'a package'} is missing): {EXTRA}"
         ) from None

@@ -36,14 +36,21 @@ class ResultStore:
     def write(self, rows: list[dict]) -> Path | None:
         """Append ``rows`` as one part file; returns its path (None for no rows)."""
         import pandas as pd
+        import pyarrow as pa
+        import pyarrow.parquet as pq
 
         if not rows:
             return None
         table = pd.DataFrame(rows)
         table["recorded_at"] = pd.to_datetime(table.get("recorded_at"), unit="s", utc=True)
+        arrow = pa.Table.from_pandas(table, preserve_index=False)
+        # a column with no value in this part (no error among its rows) is text, as in the others
+        arrow = arrow.cast(
+            pa.schema([f.with_type(pa.string()) if pa.types.is_null(f.type) else f for f in arrow.schema])
+        )
         name = f"part-{self._stamp}-{next(self._seq):06d}.parquet"
         tmp = self.folder / f".{name}.tmp"
-        table.to_parquet(tmp, index=False, engine="pyarrow")
+        pq.write_table(arrow, tmp)
         os.replace(tmp, self.folder / name)
         return self.folder / name
 
