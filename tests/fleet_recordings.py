@@ -37,18 +37,20 @@ def recording(chain: Chain, duration_s: float, seed: int, effect=None, noise_db:
     return Recording(t=sim.t, u=sim.u, a=sim.a)
 
 
+def write_recording(folder: Path, machine: int, index: int, n: int, duration_s: float, suffix=".npz") -> Path:
+    """Recording ``index`` of machine ``machine`` (``folder/m{machine:02d}/rec{index:04d}``): the
+    chain ``Chain.random(n, default_rng(machine))``, seed ``1000 machine + index``, whose residues
+    pick the effect and the noise level."""
+    chain = Chain.random(n, np.random.default_rng(machine))
+    (folder / f"m{machine:02d}").mkdir(parents=True, exist_ok=True)
+    seed = 1000 * machine + index
+    rec = recording(chain, duration_s, seed, EFFECTS[seed % len(EFFECTS)], NOISE_DB[seed % len(NOISE_DB)])
+    return save_recording(folder / f"m{machine:02d}" / f"rec{index:04d}{suffix}", rec)
+
+
 def write_fleet(folder: Path, machines: int, per_machine: int, n: int, duration_s: float, suffix=".npz") -> list[Path]:
-    """``machines`` folders ``m00, m01, ...`` of ``per_machine`` recordings each; machine i's
-    chain is ``Chain.random(n, default_rng(i))``; effects and noise levels cycle."""
-    paths = []
-    for i in range(machines):
-        chain = Chain.random(n, np.random.default_rng(i))
-        (folder / f"m{i:02d}").mkdir(parents=True, exist_ok=True)
-        for j in range(per_machine):
-            seed = 1000 * i + j
-            rec = recording(chain, duration_s, seed, EFFECTS[seed % len(EFFECTS)], NOISE_DB[seed % len(NOISE_DB)])
-            paths.append(save_recording(folder / f"m{i:02d}" / f"rec{j:04d}{suffix}", rec))
-    return paths
+    """``machines`` folders of ``per_machine`` recordings each (:func:`write_recording`)."""
+    return [write_recording(folder, i, j, n, duration_s, suffix) for i in range(machines) for j in range(per_machine)]
 
 
 def write_bad(folder: Path) -> dict[str, Path]:

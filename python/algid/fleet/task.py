@@ -11,7 +11,8 @@ file (the same functions make both), flattened to columns:
   ``valid_parameters``, ``reasons``; per parameter ``m1..``, ``c1..``, ``k1..`` [kg, N s/m, N/m]
   and ``sigma_m1..``; the undamped natural frequencies ``f1_hz..`` of the estimates;
 * with ``diagnose``: ``effect``, ``location`` and ``params`` (JSON), ``gap_before``, ``gap_after``;
-* ``load_s``, ``identify_s``, ``diagnose_s``, ``task_s`` [s], ``worker_pid``, ``rss_mb``
+* ``load_s``, ``identify_s``, ``diagnose_s``, ``task_s`` [s], ``finished_at`` [s since the epoch],
+  ``worker_pid``, ``rss_mb``
   (the worker's resident memory after the recording [MiB]), ``algid_version``.
 """
 
@@ -28,8 +29,6 @@ from ..identification.surrogate import REPLICATES
 
 #: Bytes hashed at a time (the hash never holds a whole file).
 HASH_BLOCK = 1 << 20
-#: Columns every row has, failed or not (the rest depend on n and on --diagnose).
-BASE_COLUMNS = ("key", "path", "name", "machine", "recorded_at", "status", "error", "task_s", "worker_pid", "rss_mb")
 
 
 @dataclass(frozen=True)
@@ -150,6 +149,6 @@ def run_one(path: str, options: Options, done: frozenset = frozenset()) -> dict:
         row.update(status="ok", error=None)
     except (Exception, MemoryError) as err:  # noqa: BLE001 - one bad recording never stops the batch
         row.update(status="failed", error=error_text(err))
-    row.update(task_s=time.perf_counter() - clock, worker_pid=os.getpid(), rss_mb=_rss_mb())
+    row.update(task_s=time.perf_counter() - clock, finished_at=time.time(), worker_pid=os.getpid(), rss_mb=_rss_mb())
     row["algid_version"] = __version__
     return row
