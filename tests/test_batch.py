@@ -185,6 +185,24 @@ def test_a_killed_batch_resumes_without_losing_or_repeating_a_row(fleet, diagnos
     pd.testing.assert_frame_equal(again, first, check_dtype=False)
 
 
+def test_a_worker_killed_mid_batch_loses_and_repeats_nothing(fleet, tmp_path):
+    from distributed import Client
+
+    killed = []
+    with local_cluster(2) as cluster, Client(cluster) as c:
+        victim = next(iter(c.run(os.getpid).values()))
+
+        def kill_once(counts: dict) -> None:
+            if not killed:
+                os.kill(victim, signal.SIGKILL)  # the nanny starts a new worker; Dask reruns its tasks
+                killed.append(sum(counts.values()))
+
+        table = algid.batch(fleet / "three", tmp_path, c, progress=kill_once)
+    assert killed and table.attrs["counts"] == {"ok": 6, "failed": 0, "skipped": 0}
+    raw = pd.concat([pd.read_parquet(p) for p in _parts(tmp_path)], ignore_index=True)
+    assert len(raw) == 6 and raw["key"].is_unique
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

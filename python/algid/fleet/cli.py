@@ -26,15 +26,17 @@ SHOWN_FAILURES = 10
 CONNECT_TIMEOUT = "20s"
 
 
+DESCRIPTION = (
+    "Identify, and with --diagnose diagnose, every recording of the inputs on Dask; one Parquet row per "
+    "recording in DIR/results, a per-machine summary and plots. A rerun skips the recordings already "
+    "done (same content, version and options)."
+)
+
+
 def add_parser(sub) -> None:
     """Register ``algid batch``."""
-    p = sub.add_parser(
-        "batch",
-        help="identify (and diagnose) folders of recordings on Dask, results to Parquet",
-        description="Identify, and with --diagnose diagnose, every recording of the inputs on Dask; "
-        "one Parquet row per recording in DIR/results, a per-machine summary and plots. "
-        "A rerun skips the recordings already done (same content, version and options).",
-    )
+    summary = "identify (and diagnose) folders of recordings on Dask, results to Parquet"
+    p = sub.add_parser("batch", help=summary, description=DESCRIPTION)
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="recording files, folders or glob patterns")
     p.add_argument(
         "--out", type=Path, required=True, metavar="DIR", help="output folder (created; resumed if it exists)"

@@ -77,9 +77,8 @@ class _Writer:
 def _lost_row(path: Path, err: BaseException) -> dict:
     from ..cli import error_text
 
-    return {"key": None, "path": str(path), "name": path.name, "machine": path.parent.name, "status": "failed"} | {
-        "error": f"lost by Dask: {error_text(err)}"
-    }
+    row = {"key": None, "path": str(path), "name": path.name, "machine": path.parent.name, "status": "failed"}
+    return {**row, "error": f"lost by Dask: {error_text(err)}"}
 
 
 def _run(client, paths: list[Path], options: Options, writer: _Writer, progress: ProgressFn) -> tuple[dict, list]:
@@ -98,23 +97,25 @@ def _run(client, paths: list[Path], options: Options, writer: _Writer, progress:
 
     queue = as_completed([submit(p) for _, p in zip(range(window), pending)])
     counts, keys = {"ok": 0, "failed": 0, "skipped": 0}, []
-    for future in queue:
-        try:
-            row = future.result()
-        except Exception as err:  # noqa: BLE001 - a task Dask gave up on (its worker kept dying)
-            row = _lost_row(origin[future.key], err)
-        origin.pop(future.key, None)
-        future.release()
-        counts[row["status"]] += 1
-        keys.append(row["key"] or "path:" + row["path"])
-        if row["status"] != "skipped":
-            writer.add(row)
-        nxt = next(pending, None)
-        if nxt is not None:
-            queue.add(submit(nxt))
-        if progress is not None:
-            progress(counts)
-    writer.flush()
+    try:
+        for future in queue:
+            try:
+                row = future.result()
+            except Exception as err:  # noqa: BLE001 - a task Dask gave up on (its worker kept dying)
+                row = _lost_row(origin[future.key], err)
+            origin.pop(future.key, None)
+            future.release()
+            counts[row["status"]] += 1
+            keys.append(row["key"] or "path:" + row["path"])
+            if row["status"] != "skipped":
+                writer.add(row)
+            nxt = next(pending, None)
+            if nxt is not None:
+                queue.add(submit(nxt))
+            if progress is not None:
+                progress(counts)
+    finally:  # an interrupted batch (Ctrl-C) keeps the rows it has
+        writer.flush()
     return counts, keys
 
 
