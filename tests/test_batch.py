@@ -280,3 +280,4 @@ def test_the_same_batch_through_a_scheduler_address(fleet, diagnosed, scheduler,
     machines = pd.read_csv(out / "summary.csv").set_index("machine")
     assert machines.loc["m00", "ok"] == 3 and machines.loc["bad", "failed"] == 3
     assert all((out / f).stat().st_size > 0 for f in ("histories.png", "verdicts.png"))
+    assert main(["batch", str(fleet / "bad"), "--out", str(tmp_path / "bad"), "--scheduler", scheduler]) == 3
