@@ -25,6 +25,15 @@ def springs(table) -> list[str]:
     return sorted((c for c in table.columns if _SPRING.match(c)), key=lambda c: int(c[1:]))
 
 
+def valid_mask(table):
+    """Boolean Series: the rows identified with every DOF valid (False where failed)."""
+    import pandas as pd
+
+    if "valid" not in table.columns:
+        return pd.Series(False, index=table.index)
+    return (table["status"] == "ok") & table["valid"].eq(True)
+
+
 def stiffness_shift_z(rows) -> float:
     """Largest ``z_j`` between the first and the last row (sorted by time); NaN if undefined."""
     if len(rows) < 2:
@@ -53,7 +62,7 @@ def summary(table):
     out = []
     for machine, rows in table.groupby("machine", sort=True):
         ok = rows[rows["status"] == "ok"]
-        valid = ok[ok["valid"].astype(bool)] if "valid" in ok.columns else ok.iloc[:0]
+        valid = rows[valid_mask(rows)]
         z = stiffness_shift_z(valid.sort_values("recorded_at")) if len(valid) else math.nan
         out.append(
             {

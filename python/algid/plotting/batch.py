@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..fleet.summary import springs
+from ..fleet.summary import springs, valid_mask
 from . import subplots
 
 #: Machines drawn in the histories figure.
@@ -19,7 +19,7 @@ MAX_PANELS = 12
 
 def histories_figure(table):
     """Spring estimates over time per machine (valid identifications)."""
-    ok = table[(table["status"] == "ok") & table.get("valid", False).astype(bool)]
+    ok = table[valid_mask(table)]
     machines = sorted(ok["machine"].unique())[:MAX_PANELS] if len(ok) else []
     fig, axes = subplots(max(len(machines), 1), 1, figsize=(9, 2.2 * max(len(machines), 1) + 0.8), squeeze=False)
     for ax, machine in zip(axes[:, 0], machines):
@@ -39,7 +39,7 @@ def histories_figure(table):
 def verdicts_figure(table):
     """Counts of the outcomes and of the diagnosis verdicts."""
     ok = table["status"] == "ok"
-    valid = ok & table.get("valid", False).astype(bool)
+    valid = valid_mask(table)
     outcomes = {"failed": int((~ok).sum()), "not valid": int((ok & ~valid).sum()), "valid": int(valid.sum())}
     panels = [("identification", outcomes)]
     if "effect" in table.columns:
