@@ -198,7 +198,7 @@ def test_a_worker_killed_mid_batch_loses_and_repeats_nothing(fleet, tmp_path):
     with local_cluster(2) as cluster, Client(cluster) as c:
         victim = next(iter(c.run(os.getpid).values()))
 
-        def kill_once(counts: dict) -> None:
+        def kill_once(counts: dict, total: int) -> None:
             if not killed:
                 os.kill(victim, signal.SIGKILL)  # the nanny starts a new worker; Dask reruns its tasks
                 killed.append(sum(counts.values()))

@@ -88,7 +88,8 @@ def run(args) -> int:
     logging.getLogger("distributed").setLevel(logging.ERROR)
     bar = _bar(args.quiet)
 
-    def progress(counts: dict) -> None:
+    def progress(counts: dict, total: int) -> None:
+        bar.total = total
         bar.update(1)
         bar.set_postfix(counts, refresh=False)
 

@@ -39,7 +39,7 @@ RETRIES = 2
 #: Worker settings of the embedded cluster (merged into this process's Dask configuration).
 NO_PROFILER = {"worker": {"profile": {"enabled": False}}}
 
-ProgressFn = Optional[Callable[[dict], None]]
+ProgressFn = Optional[Callable[[dict, int], None]]
 
 
 def local_cluster(workers: int | None = None):
@@ -121,7 +121,7 @@ def _run(client, paths: list[Path], options: Options, writer: _Writer, progress:
             if nxt is not None:
                 queue.add(submit(nxt))
             if progress is not None:
-                progress(counts)
+                progress(counts, len(paths))
     finally:  # an interrupted batch (Ctrl-C) keeps the rows it has
         writer.flush()
     return counts, keys
@@ -153,7 +153,8 @@ def batch(
     diagnose, boundary, estimator, replicates : as ``algid diagnose`` / ``algid identify``.
     part_rows, part_seconds : a part file is written every ``part_rows`` rows or
         ``part_seconds`` [s], whichever comes first.
-    progress : called with the counts ``{"ok", "failed", "skipped"}`` after every recording.
+    progress : called after every recording with the counts ``{"ok", "failed", "skipped"}`` and
+        the number of recordings in the batch.
 
     Returns
     -------
