@@ -11,7 +11,9 @@ file (the same functions make both), flattened to columns:
   ``valid_parameters``, ``reasons``; per parameter ``m1..``, ``c1..``, ``k1..`` [kg, N s/m, N/m]
   and ``sigma_m1..``; the undamped natural frequencies ``f1_hz..`` of the estimates;
 * with ``diagnose``: ``effect``, ``location`` and ``params`` (JSON), ``gap_before``, ``gap_after``;
-* ``load_s``, ``identify_s``, ``diagnose_s``, ``task_s`` [s], ``finished_at`` [s since the epoch],
+* ``load_s``, ``identify_s``, ``diagnose_s``, ``task_s`` [s], ``cpu_s`` (the worker process's CPU
+  time over the task [s]: below ``task_s`` when the worker waited for a core), ``finished_at``
+  [s since the epoch],
   ``worker_pid``, ``rss_mb``
   (the worker's resident memory after the recording [MiB]), ``algid_version``.
 """
@@ -137,7 +139,7 @@ def run_one(path: str, options: Options, done: frozenset = frozenset()) -> dict:
     from .. import __version__
     from ..cli import error_text
 
-    clock = time.perf_counter()
+    clock, cpu = time.perf_counter(), time.process_time()
     p = Path(path)
     row = {"key": None, "path": str(p), "name": p.name, "machine": p.parent.name}
     try:
@@ -149,6 +151,12 @@ def run_one(path: str, options: Options, done: frozenset = frozenset()) -> dict:
         row.update(status="ok", error=None)
     except (Exception, MemoryError) as err:  # noqa: BLE001 - one bad recording never stops the batch
         row.update(status="failed", error=error_text(err))
-    row.update(task_s=time.perf_counter() - clock, finished_at=time.time(), worker_pid=os.getpid(), rss_mb=_rss_mb())
+    row.update(
+        task_s=time.perf_counter() - clock,
+        cpu_s=time.process_time() - cpu,
+        finished_at=time.time(),
+        worker_pid=os.getpid(),
+        rss_mb=_rss_mb(),
+    )
     row["algid_version"] = __version__
     return row
