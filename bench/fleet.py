@@ -13,6 +13,8 @@ into a fresh output folder:
 * throughput [recordings/s] = count / wall time of the batch;
 * scaling efficiency of W workers = throughput(W) / (W throughput(1));
 * work per recording = the mean of the rows' ``task_s`` (hash, load, identify, on the worker);
+  CPU share = sum of ``cpu_s`` / sum of ``task_s``: 1 when every worker had a core of its own,
+  lower when the workers waited for one (a machine shared with other jobs);
 * Dask overhead per recording = (W wall - sum of task_s) / count: scheduling, transfers, the
   client's Parquet writes and the workers' idle time, in the same seconds as the work;
 * memory per worker: each worker's resident memory after its recordings (``rss_mb``), median
@@ -65,7 +67,7 @@ def memory(table) -> dict:
     return out
 
 
-def measure(paths: list[Path], data: Path, workers: int, scratch: Path) -> dict:
+def measure(paths: list[Path], workers: int, scratch: Path) -> dict:
     from distributed import Client
 
     out = scratch / f"out-{workers}"
@@ -75,7 +77,7 @@ def measure(paths: list[Path], data: Path, workers: int, scratch: Path) -> dict:
         client.gather(warm)  # imports and first-call costs paid before the clock starts
         load = os.getloadavg()[0]
         clock = time.perf_counter()
-        table = algid.batch(data, out, client)
+        table = algid.batch(paths, out, client)
         wall = time.perf_counter() - clock
     n = len(table)
     work = float(table["task_s"].mean())
@@ -87,6 +89,7 @@ def measure(paths: list[Path], data: Path, workers: int, scratch: Path) -> dict:
         "wall_s": wall,
         "throughput_per_s": n / wall,
         "work_per_recording_s": work,
+        "cpu_share": float(table["cpu_s"].sum() / table["task_s"].sum()),
         "identify_median_s": float(table["identify_s"].median()),
         "overhead_per_recording_s": overhead,
         "overhead_share": overhead / work,
@@ -113,18 +116,18 @@ def main() -> None:
     with local_cluster(max(args.workers)) as cluster, Client(cluster) as client:
         paths = generate(client, data, args.count, machines, args.duration)
     print(f"fleet: {len(paths)} recordings in {machines} folders of {data} ({time.perf_counter() - clock:.0f} s)")
-    runs = [measure(paths, data, w, data.parent / f"{data.name}-out") for w in args.workers]
+    runs = [measure(paths, w, data.parent / f"{data.name}-out") for w in args.workers]
     base = next((r["throughput_per_s"] for r in runs if r["workers"] == 1), None)
     print(
-        "| workers | recordings/s | efficiency | work/rec [s] | Dask overhead/rec [s] | overhead/work | RSS first -> last [MiB] |"
+        "| workers | recordings/s | efficiency | work/rec [s] | CPU share | Dask overhead/rec [s] | overhead/work | RSS first -> last [MiB] |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
     for r in runs:
         r["efficiency"] = None if base is None else r["throughput_per_s"] / (r["workers"] * base)
         rss = ", ".join(f"{m['first_mb']:.0f} -> {m['last_mb']:.0f}" for m in r["memory"].values())
         eff = "" if r["efficiency"] is None else f"{100 * r['efficiency']:.0f} %"
         print(
-            f"| {r['workers']} | {r['throughput_per_s']:.3f} | {eff} | {r['work_per_recording_s']:.3f} | "
+            f"| {r['workers']} | {r['throughput_per_s']:.3f} | {eff} | {r['work_per_recording_s']:.3f} | {r['cpu_share']:.2f} | "
             f"{r['overhead_per_recording_s']:.4f} | {100 * r['overhead_share']:.2f} % | {rss} |"
         )
     if args.json:
