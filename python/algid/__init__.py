@@ -3,6 +3,7 @@
 from .chain import TABLE1, Chain
 from .continuous import ChangeEvent, ContinuousConfig, ContinuousEstimator
 from .estimator import ISA, SIZES, ChainConfig, ChainEstimator, Status
+from .fleet import batch
 from .identification import Identification, identify
 from .recording import Recording, load_recording
 
@@ -19,6 +20,7 @@ __all__ = [
     "SIZES",
     "Status",
     "TABLE1",
+    "batch",
     "get_include",
     "identify",
     "load_recording",

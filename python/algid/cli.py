@@ -1,4 +1,4 @@
-"""The ``algid`` command: ``identify``, ``demo`` and ``diagnose``.
+"""The ``algid`` command: ``identify``, ``demo``, ``diagnose`` and ``batch``.
 
 Every failure ends in one line on stderr (at most ``algid.messages.MAX_LINE`` characters, quoted
 input shortened by ``algid.messages.quote``) and exit code 2; a closed pipe on stdout (``algid ... | head -1``)
@@ -22,21 +22,28 @@ STREAMS = (
 )
 
 
-def error_line(command: str, err: BaseException) -> str:
-    """The one line an exception of ``algid COMMAND`` ends with."""
+def error_text(err: BaseException) -> str:
+    """What went wrong, in one line: the message of an input error, else the exception's type
+    and message."""
     if isinstance(err, OSError) and err.strerror:
         what = f"{err.strerror}: {err.filename}" if err.filename else err.strerror
     elif isinstance(err, (ValueError, TypeError)) or type(err).__module__.startswith("algid"):
         what = str(err) or type(err).__name__
     else:
         what = f"{type(err).__name__}: {err}"
-    return one_line(f"algid {command}: error: {what}")
+    return one_line(what)
+
+
+def error_line(command: str, err: BaseException) -> str:
+    """The one line an exception of ``algid COMMAND`` ends with."""
+    return one_line(f"algid {command}: error: {error_text(err)}")
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand registered."""
     from . import __version__, demo
     from .diagnosis import cli as diagnosis_cli
+    from .fleet import cli as batch_cli
     from .identification import cli as identify_cli
 
     parser = argparse.ArgumentParser(
@@ -47,6 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_parser(sub)
     identify_cli.add_parser(sub)
     diagnosis_cli.add_parser(sub)
+    batch_cli.add_parser(sub)
     return parser
 
 

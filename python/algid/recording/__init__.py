@@ -65,6 +65,7 @@ from .text import COMPRESSIONS, CSV_CHUNK_LINES, TEXT_SUFFIXES
 from .units import SI_UNITS, parameter_unit_labels
 
 __all__ = [
+    "readable",
     "CSV_CHUNK_LINES",
     "DEFAULT_DIFF_POINTS",
     "DT_RANGE_S",
@@ -97,6 +98,15 @@ def _format(path: Path) -> tuple[str, str | None]:
     if ext in _OTHER_SUFFIXES and compression is None:
         return _OTHER_SUFFIXES[ext], None
     raise RecordingError(f"{path.name}: unknown extension {''.join(path.suffixes[-2:])!r} (expected {EXTENSIONS})")
+
+
+def readable(path) -> bool:
+    """Whether :func:`load_recording` reads files named like ``path`` (by extension only)."""
+    try:
+        _format(Path(path))
+    except RecordingError:
+        return False
+    return True
 
 
 def load_recording(

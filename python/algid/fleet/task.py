@@ -1,0 +1,162 @@
+"""What a worker does with one recording: hash it, skip it if done, else load, identify (and
+diagnose) it and return its row; a bad recording becomes a row with its one-line error.
+
+The row holds what ``algid identify --json`` and ``algid diagnose --json`` write for the same
+file (the same functions make both), flattened to columns:
+
+* ``key`` sha256 of the file's bytes, the algid version and the :class:`Options`; ``path``,
+  ``name``, ``machine`` (the folder's name), ``recorded_at`` (the file's modification time);
+* ``status`` ``ok`` or ``failed``, ``error`` the one line of a failure;
+* ``n``, ``boundary``, ``estimator``, ``samples``, ``duration_s``, ``fs_hz``, ``valid``,
+  ``valid_parameters``, ``reasons``; per parameter ``m1..``, ``c1..``, ``k1..`` [kg, N s/m, N/m]
+  and ``sigma_m1..``; the undamped natural frequencies ``f1_hz..`` of the estimates;
+* with ``diagnose``: ``effect``, ``location`` and ``params`` (JSON), ``gap_before``, ``gap_after``;
+* ``load_s``, ``identify_s``, ``diagnose_s``, ``task_s`` [s], ``cpu_s`` (the worker process's CPU
+  time over the task [s]: below ``task_s`` when the worker waited for a core), ``finished_at``
+  [s since the epoch],
+  ``worker_pid``, ``rss_mb``
+  (the worker's resident memory after the recording [MiB]), ``algid_version``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from ..identification.surrogate import REPLICATES
+
+#: Bytes hashed at a time (the hash never holds a whole file).
+HASH_BLOCK = 1 << 20
+
+
+@dataclass(frozen=True)
+class Options:
+    """The settings that change a recording's result (they enter its key).
+
+    boundary : right end of the chain, ``fixed`` or ``free``.
+    estimator : ``auto``, ``window`` or ``continuous`` (:func:`algid.identify`).
+    replicates : bootstrap replicates of the uncertainties.
+    diagnose : also run :func:`algid.diagnosis.diagnose`.
+    """
+
+    boundary: str = "fixed"
+    estimator: str = "auto"
+    replicates: int = REPLICATES
+    diagnose: bool = False
+
+    def __post_init__(self) -> None:
+        from ..identification.plan import ESTIMATORS
+
+        if self.boundary not in ("fixed", "free"):
+            raise ValueError(f"boundary must be 'fixed' or 'free', got {self.boundary!r}")
+        if self.estimator not in ESTIMATORS:
+            raise ValueError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {self.estimator!r}")
+        if self.replicates < 2:
+            raise ValueError(f"replicates must be >= 2, got {self.replicates}")
+
+    def fingerprint(self) -> bytes:
+        """The options and the algid version, canonically serialised."""
+        from .. import __version__
+
+        return json.dumps({**asdict(self), "algid": __version__}, sort_keys=True).encode()
+
+
+def content_key(path: Path, options: Options) -> str:
+    """sha256 of the file's bytes, then of ``options.fingerprint()``: the row's key."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(HASH_BLOCK), b""):
+            h.update(block)
+    h.update(b"\0")
+    h.update(options.fingerprint())
+    return h.hexdigest()
+
+
+def _rss_mb() -> float:
+    import psutil  # a dependency of distributed
+
+    return psutil.Process().memory_info().rss / 2**20
+
+
+def _identification_columns(doc: dict) -> dict:
+    """Columns of an ``algid identify`` JSON document."""
+    row = {key: doc[key] for key in ("n", "boundary", "estimator", "samples", "duration_s", "valid")}
+    row["fs_hz"] = 1.0 / doc["dt_s"]
+    row["valid_parameters"] = sum(p["valid"] for p in doc["parameters"])
+    row["reasons"] = "; ".join(doc["reasons"])
+    for p in doc["parameters"]:
+        row[p["name"]] = _float(p["value"])
+        row[f"sigma_{p['name']}"] = _float(p["sigma"])
+    return row
+
+
+def _diagnosis_columns(doc: dict) -> dict:
+    """Columns of an ``algid diagnose`` JSON document."""
+    return {
+        "effect": doc["effect"],
+        "location": json.dumps(doc["location"]),
+        "params": json.dumps(doc["params"]),
+        "gap_before": _float(doc["gap_before"]),
+        "gap_after": _float(doc["gap_after"]),
+    }
+
+
+def _float(v) -> float:
+    return float("nan") if v is None else float(v)
+
+
+def _analyse(path: Path, options: Options) -> dict:
+    """The result columns of one recording (raises on a bad one)."""
+    from ..diagnosis import diagnose
+    from ..diagnosis.report import to_json as diagnosis_json
+    from ..identification import identify
+    from ..identification.plan import natural_frequencies_hz
+    from ..recording import load_recording
+
+    clock = time.perf_counter()
+    rec = load_recording(path)
+    row = {"load_s": time.perf_counter() - clock}
+    clock = time.perf_counter()
+    result = identify(rec, options.boundary, options.estimator, replicates=options.replicates)
+    row["identify_s"] = time.perf_counter() - clock
+    row.update(_identification_columns(result.to_json()))
+    for i, f in enumerate(natural_frequencies_hz(result.theta, result.n, result.boundary)):
+        row[f"f{i + 1}_hz"] = float(f)
+    if options.diagnose:
+        clock = time.perf_counter()
+        row.update(_diagnosis_columns(diagnosis_json(diagnose(rec, boundary=options.boundary))))
+        row["diagnose_s"] = time.perf_counter() - clock
+    return row
+
+
+def run_one(path: str, options: Options, done: frozenset = frozenset()) -> dict:
+    """The row of the recording at ``path``, or ``{"key", "path", "status": "skipped"}`` when
+    its key is in ``done``. Never raises for a bad recording: its row says why."""
+    from .. import __version__
+    from ..cli import error_text
+
+    clock, cpu = time.perf_counter(), time.process_time()
+    p = Path(path)
+    row = {"key": None, "path": str(p), "name": p.name, "machine": p.parent.name}
+    try:
+        row["key"] = content_key(p, options)
+        if row["key"] in done:
+            return {**row, "status": "skipped"}
+        row["recorded_at"] = os.stat(p).st_mtime
+        row.update(_analyse(p, options))
+        row.update(status="ok", error=None)
+    except (Exception, MemoryError) as err:  # noqa: BLE001 - one bad recording never stops the batch
+        row.update(status="failed", error=error_text(err))
+    row.update(
+        task_s=time.perf_counter() - clock,
+        cpu_s=time.process_time() - cpu,
+        finished_at=time.time(),
+        worker_pid=os.getpid(),
+        rss_mb=_rss_mb(),
+    )
+    row["algid_version"] = __version__
+    return row
