@@ -42,7 +42,7 @@ def fleet(tmp_path_factory) -> Path:
     write_fleet(root / "three", 2, 3, 3, 2.0)
     write_fleet(root / "one", 1, 3, 1, 2.0, suffix=".csv")
     write_bad(root / "bad")
-    (root / "three" / "notes.txt").write_text("not a recording")
+    (root / "three" / "notes.md").write_text("not a recording")
     return root
 
 
@@ -69,7 +69,7 @@ def test_a_folder_of_good_malformed_and_empty_recordings(fleet, diagnosed):
         with pytest.raises(RecordingError) as err:
             load_recording(fleet / "bad" / name)
         assert failed.loc[name, "error"] == str(err.value)
-    assert "notes.txt" not in set(table["name"])
+    assert "notes.md" not in set(table["name"])
     stored = ResultStore(out).read()
     assert len(stored) == 12 and stored["key"].is_unique
     assert set(stored["effect"].dropna()) <= set(EFFECTS) | {"none", "unknown"}
