@@ -32,7 +32,8 @@ from algid.recording import RecordingError, load_recording  # noqa: E402
 from fleet_recordings import write_bad, write_fleet  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
-ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "python"), str(REPO / "tests")])}
+# child processes import the algid these tests run (the installed one), plus the tests' helpers
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(algid.__file__).parents[1]), str(REPO / "tests")])}
 
 
 @pytest.fixture(scope="module")
