@@ -967,12 +967,22 @@ class ContinuousEstimator {
     }
   }
 
-  // Parameter j restarted (step or drift): the joint forgets all it knew of j, and j's
-  // reported estimate is the track's (which follows a step within a second) until a ring of
-  // windows has arrived since; then j is forgotten once more, except for the newest ring
-  // minus K windows (none of which straddles the change), and the joint takes over again.
+  // Parameter j restarted (step or drift): the windows of the ring (the newest, which may
+  // straddle the change and fit no single value of j) leave the joint for every parameter;
+  // the joint forgets all it knew of j, and j's reported estimate is the track's (which
+  // follows a step within a second) until a ring of windows has arrived since; then j is
+  // forgotten once more, except for the newest ring minus K windows (none of which straddles
+  // the change), and the joint takes over again.
   void joint_restart(int j) noexcept {
     if (!joint_) return;
+    Joint& J = *joint_;
+    for (int age = 0; age < J.count; ++age) {
+      const int r = J.slot(age);
+      J.normal -= J.ring_normal[r];
+      J.rhs -= J.ring_rhs[r];
+      J.ring_normal[r].setZero();
+      J.ring_rhs[r].setZero();
+    }
     joint_forget(j, 0);
     joint_->fresh[j] = 0;
     joint_->trusted[j] = false;

@@ -136,22 +136,25 @@ class WeakFormWindows {
     Q_ = static_cast<int>(std::floor(band_of(config_) * static_cast<double>(L_) * dt() + 1e-9));
     J_ = Q_ + 3;
     F_ = 2 * Q_ + 1;
-    // window steps (rows, n DOFs, solve) within half a hop
-    const long half = std::max(1L, H_ / 2);
-    steps_ = static_cast<int>(std::max(1L, (static_cast<long>(n_) + 2 + half - 1) / half));
+    R_ = n_ * F_;
+    // window steps: rows, (P + 1) n products of a row block of W with a column, P + 1 rows of
+    // the normal equations, the solve; spread over three quarters of a hop
+    window_steps_ = 2 + (params_ + 1) * n_ + params_;
+    const long budget = std::max(1L, 3 * H_ / 4);
+    steps_ = static_cast<int>(std::max(1L, (static_cast<long>(window_steps_) + budget - 1) / budget));
     const int C = 2 * n_;
     z_.resize(J_);
     bins_.setZero(J_, C * K_);
     seg_.setZero(J_, C);
-    rows_.setZero(F_, 3 * n_ + n_);
-    weights_.resize(n_);
-    traces_.resize(n_);
-    for (int i = 0; i < n_; ++i) weights_[i].setZero(F_, F_);
-    sigma_.setZero(F_, F_);
-    chol_.setZero(F_, F_);
-    wnext_.setZero(F_, F_);
-    phi_.setZero(F_, 5);
-    wphi_.setZero(F_, 5);
+    rows_.setZero(F_, 4 * n_);
+    phi_.setZero(R_, params_ + 1);
+    xw_.setZero(R_, params_ + 1);
+    weight_.setZero(R_, R_);
+    chol_.setZero(R_, R_);
+    wnext_.setZero(R_, R_);
+    traces_.setZero(n_ * 5 * 9);
+    next_traces_.setZero(n_ * 5 * 9);
+    identity_traces_.setZero(9);
     normal_.setZero(params_, params_);
     rhs_.setZero(params_);
     solution_.setZero(params_);
@@ -169,18 +172,16 @@ class WeakFormWindows {
   /// @realtime no allocation, no throw
   void reset() noexcept {
     restart();
-    for (int i = 0; i < n_; ++i) {
-      weights_[i].setIdentity();
-      traces_[i] = identity_traces_;
-    }
+    weight_.setIdentity();
     weighted_ = false;
     for (int c = 0; c < 2 * n_; ++c) {
       noise_[c] = Noise{};
       history_[c] = History{};
     }
     model_.setConstant(std::numeric_limits<double>::quiet_NaN());
-    refresh_dof_ = 0;
     refresh_stage_ = 0;
+    refresh_pos_ = 0;
+    refresh_sub_ = 0;
     results_ = 0;
     result_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
     variance_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
@@ -230,13 +231,8 @@ class WeakFormWindows {
       if (hops_ >= K_) start_window();
       bins_.middleCols(static_cast<int>(hops_ % K_) * 2 * n, 2 * n).setZero();  // the oldest block restarts
     }
-    for (int s = 0; s < steps_; ++s) {
-      if (pending_) {
-        done = window_step() || done;
-      } else {
-        refresh_step();
-      }
-    }
+    for (int s = 0; s < steps_ && pending_; ++s) done = window_step() || done;
+    refresh_step();
     return done;
   }
 
@@ -263,6 +259,8 @@ class WeakFormWindows {
   long window_samples() const noexcept { return L_; }
   /// Samples between two window results.
   long hop_samples() const noexcept { return H_; }
+  /// Samples from the end of a window to its result.
+  long latency_samples() const noexcept { return (window_steps_ - 1) / steps_; }
   /// Highest harmonic Q of the test functions (F = 2Q+1 rows per DOF).
   int harmonics() const noexcept { return Q_; }
   /// The configuration in force.
@@ -285,9 +283,6 @@ class WeakFormWindows {
   struct History {
     double x[4] = {0.0, 0.0, 0.0, 0.0};
     int count = 0;
-  };
-  struct Traces {  // <W, Gde> for (d, e) = 00, 11, 22, 01, 02, 12
-    double t[6] = {0, 0, 0, 0, 0, 0};
   };
 
   double dt() const noexcept { return static_cast<double>(config_.dt); }
@@ -330,12 +325,11 @@ class WeakFormWindows {
       }
     }
     const double d2 = dt() * dt();
-    const int pairs[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
-    for (int p = 0; p < 6; ++p) {
-      gram_[p] = d2 * psi[pairs[p][0]] * psi[pairs[p][1]].transpose();
-      if (pairs[p][0] != pairs[p][1]) gram_[p] += gram_[p].transpose().eval();  // S01, S02, S12
-      identity_traces_.t[p] = gram_[p].trace() / (pairs[p][0] != pairs[p][1] ? 2.0 : 1.0);
-    }
+    for (int d = 0; d < 3; ++d)
+      for (int e = 0; e < 3; ++e) {
+        gram_[3 * d + e] = d2 * psi[d] * psi[e].transpose();
+        identity_traces_(3 * d + e) = gram_[3 * d + e].trace();
+      }
   }
 
   void observe(int c, double x) noexcept {
@@ -407,68 +401,112 @@ class WeakFormWindows {
     }
   }
 
-  // Columns of DOF i's equation: parameter index, and the rows_ columns combined.
-  int columns(int i, int* param) const noexcept {
-    int count = 0;
-    param[count++] = i;
-    param[count++] = n_ + i;
-    param[count++] = 2 * n_ + i;  // k_i (left spring; for n = 1 with a wall it holds k_1 + k_2)
-    const bool right = n_ > 1 && (i + 1 < n_ || config_.boundary == Boundary::kFixed);
-    if (right) param[count++] = 2 * n_ + i + 1;
-    return count;
-  }
+  // True if DOF i has a spring to its right in the model (a neighbour or the right wall).
+  bool right(int i) const noexcept { return n_ > 1 && (i + 1 < n_ || config_.boundary == Boundary::kFixed); }
 
-  // One DOF's corrected normal equations into normal_ / rhs_.
-  void add_dof(int i) noexcept {
+  // Row blocks [first, last] where column p of phi_ (a parameter, or p = params_: the
+  // right-hand side) has rows; first > last if none.
+  void span(int p, int& first, int& last) const noexcept {
     const int n = n_;
-    int param[4];
-    const int cols = columns(i, param);
-    phi_.col(0) = rows_.col(2 * n + i);
-    phi_.col(1) = -rows_.col(n + i);
-    phi_.col(2) = rows_.col(i);
-    if (i > 0) phi_.col(2) -= rows_.col(i - 1);
-    if (cols == 4) {
-      phi_.col(3) = rows_.col(i);
-      if (i + 1 < n) phi_.col(3) -= rows_.col(i + 1);
+    if (p < 2 * n) {
+      first = last = p % n;
+    } else if (p < params_) {  // spring j = p - 2n joins DOF j-1 and j
+      const int j = p - 2 * n;
+      first = j > 0 && right(j - 1) ? j - 1 : j;
+      last = j < n ? j : n - 1;
+      if (j == n && !right(n - 1)) first = last + 1;
+    } else {
+      first = 0;
+      last = n - 1;
     }
-    phi_.col(4) = rows_.col(3 * n + i);
-    const MatD& W = weights_[i];
-    wphi_.noalias() = W * phi_;
-    // Bias: noise loadings of the columns on the own channel (derivative order, sign).
-    const int order[4] = {2, 1, 0, 0};
-    const double sign[4] = {1.0, -1.0, 1.0, 1.0};
-    const Traces& T = traces_[i];
-    const double own = config_.bias_compensation ? noise_variance(i) : 0.0;
-    const double left = config_.bias_compensation && i > 0 ? noise_variance(i - 1) : 0.0;
-    const double right = config_.bias_compensation && i + 1 < n ? noise_variance(i + 1) : 0.0;
-    for (int a = 0; a < cols; ++a) {
-      for (int b = 0; b < cols; ++b) {
-        double v = phi_.col(a).dot(wphi_.col(b));
-        v -= own * sign[a] * sign[b] * trace(T, order[a], order[b]);
-        if (a == 2 && b == 2) v -= left * T.t[0];
-        if (a == 3 && b == 3) v -= right * T.t[0];
-        normal_(param[a], param[b]) += v;
+  }
+
+  // The window's regressors: phi_ block i holds DOF i's equation (eq. 1 in weak form), its
+  // columns the parameters m, c, k and the right-hand side int psi'' u.
+  void fill_phi() noexcept {
+    const int n = n_, F = F_;
+    phi_.setZero();
+    for (int i = 0; i < n; ++i) {
+      auto block = phi_.middleRows(i * F, F);
+      block.col(i) = rows_.col(2 * n + i);
+      block.col(n + i) = -rows_.col(n + i);
+      block.col(2 * n + i) = rows_.col(i);  // k_i (for n = 1 with walls: k_1 + k_2)
+      if (i > 0) block.col(2 * n + i) -= rows_.col(i - 1);
+      if (right(i)) {
+        block.col(2 * n + i + 1) = rows_.col(i);
+        if (i + 1 < n) block.col(2 * n + i + 1) -= rows_.col(i + 1);
       }
-      rhs_(param[a]) += phi_.col(a).dot(wphi_.col(4));
+      block.col(params_) = rows_.col(3 * n + i);
     }
   }
 
-  static double trace(const Traces& T, int d, int e) noexcept {
-    if (d > e) std::swap(d, e);
-    if (d == e) return T.t[d];                 // 00, 11, 22
-    return T.t[d == 0 ? (e == 1 ? 3 : 4) : 5];  // 01, 02, 12
+  // <W_ij, G_de> of the weights in force (|i - j| <= 2).
+  double trace(int i, int j, int d, int e) const noexcept {
+    if (!window_weighted_) return i == j ? identity_traces_(3 * d + e) : 0.0;
+    return traces_(((i * 5) + (j - i + 2)) * 9 + 3 * d + e);
   }
 
-  // One step of the pending window: rows, then one DOF per step, then the solve.
+  // Bias of the normal matrix: the regressor noise of acceleration channel c loads the
+  // columns (DOF row block, parameter, derivative order, sign) listed here, and
+  // E[N^T W N](p, q) = sum_c s_c^2 sum a_p a_q <W_ij, G_de>.
+  void subtract_bias() noexcept {
+    const int n = n_;
+    for (int c = 0; c < n; ++c) {
+      const double s2 = noise_variance(c);
+      if (!(s2 > 0.0)) continue;
+      int blk[6], par[6], ord[6], cnt = 0;
+      double sgn[6];
+      const auto add = [&](int b, int p, int d, double a) {
+        blk[cnt] = b, par[cnt] = p, ord[cnt] = d, sgn[cnt] = a, ++cnt;
+      };
+      add(c, c, 2, 1.0);
+      add(c, n + c, 1, -1.0);
+      add(c, 2 * n + c, 0, 1.0);
+      if (right(c)) add(c, 2 * n + c + 1, 0, 1.0);
+      if (c > 0) add(c - 1, 2 * n + c, 0, -1.0);           // DOF c-1's right spring
+      if (c + 1 < n) add(c + 1, 2 * n + c + 1, 0, -1.0);  // DOF c+1's left spring
+      for (int a = 0; a < cnt; ++a)
+        for (int b = 0; b < cnt; ++b)
+          normal_(par[a], par[b]) -= s2 * sgn[a] * sgn[b] * trace(blk[a], blk[b], ord[a], ord[b]);
+    }
+  }
+
+  // One step of the pending window: rows; (P + 1) n products of a row block of the weights
+  // with a column of phi_; P + 1 rows of the normal equations; the bias and the solve.
   bool window_step() noexcept {
+    const int F = F_, n = n_, P1 = params_ + 1;
     if (step_ == 0) {
       window_weighted_ = weighted_;
       build_rows();
-      normal_.setZero();
-      rhs_.setZero();
-    } else if (step_ <= n_) {
-      add_dof(step_ - 1);
+      fill_phi();
+    } else if (step_ <= P1 * n) {
+      const int p = (step_ - 1) / n, r = (step_ - 1) % n;
+      int first, last;
+      span(p, first, last);
+      auto out = xw_.col(p).segment(r * F, F);
+      if (first > last) {
+        out.setZero();
+      } else if (window_weighted_) {
+        const int w = (last - first + 1) * F;
+        out.noalias() = weight_.block(r * F, first * F, F, w) * phi_.col(p).segment(first * F, w);
+      } else {
+        out = phi_.col(p).segment(r * F, F);
+      }
+    } else if (step_ <= P1 * n + params_) {
+      const int p = step_ - 1 - P1 * n;
+      int first, last;
+      span(p, first, last);
+      if (first > last) {
+        normal_.row(p).setZero();
+        rhs_(p) = 0.0;
+      } else {
+        const int w = (last - first + 1) * F;
+        normal_.row(p).noalias() =
+            phi_.col(p).segment(first * F, w).transpose() * xw_.block(first * F, 0, w, params_);
+        rhs_(p) = phi_.col(p).segment(first * F, w).dot(xw_.col(params_).segment(first * F, w));
+      }
     } else {
+      if (config_.bias_compensation) subtract_bias();
       solve();
       pending_ = false;
       ++results_;
@@ -483,6 +521,8 @@ class WeakFormWindows {
     const bool free_last = config_.boundary == Boundary::kFree || n_ == 1;
     // Parameters absent from every equation (k_{n+1} with a free end or n = 1): pin them.
     if (free_last) {
+      normal_.row(params_ - 1).setZero();
+      normal_.col(params_ - 1).setZero();
       normal_(params_ - 1, params_ - 1) = 1.0;
       rhs_(params_ - 1) = 0.0;
     }
@@ -511,87 +551,148 @@ class WeakFormWindows {
     }
   }
 
-  // Background refresh of the weights of one DOF at a time: stage 0 builds Sigma from the
-  // model, stages 1..F factor it column by column (left-looking Cholesky), stages F+1..2F
-  // form W = Sigma^-1 column by column and the traces <W, Gde>; then W is swapped in.
+  // Noise loading of DOF i's equation error on acceleration channel c, derivative order d:
+  // m_i (d = 2), -c_i (d = 1), the stiffness matrix entry K_ic (d = 0).
+  double loading(int i, int c, int d) const noexcept {
+    const int n = n_;
+    const double kl = model_(2 * n + i), kr = right(i) ? model_(2 * n + i + 1) : 0.0;
+    if (c == i) return d == 2 ? model_(i) : d == 1 ? -model_(n + i) : kl + kr;
+    if (d != 0) return 0.0;
+    if (c == i - 1) return -kl;
+    if (c == i + 1) return -kr;
+    return 0.0;
+  }
+
+  // Background refresh of the weights W = Sigma^-1 over all n F rows (the equation errors of
+  // neighbouring DOFs share channels: Sigma is block pentadiagonal), in steps of at most about
+  // 9 F^2 multiply-adds: stage 1 builds Sigma block by block from the model into chol_'s lower
+  // triangle, stage 2 factors it in place column by column (left-looking, within the band),
+  // stage 3 solves for W column by column, a row block per step, stage 4 forms the traces
+  // <W_ij, G_de> of the bias term, stage 5 swaps W in between windows.
   void refresh_step() noexcept {
     if (!config_.weighted) return;
-    const int i = refresh_dof_;
-    const int F = F_;
-    if (refresh_stage_ == 0) {
-      if (!build_sigma(i)) return;  // no usable model yet
-      for (double& t : next_traces_.t) t = 0.0;
-      refresh_stage_ = 1;
-      return;
-    }
-    const int per_step = std::max(1, F / 8);
-    if (refresh_stage_ <= F) {
-      for (int s = 0; s < per_step && refresh_stage_ <= F; ++s) {
-        const int j = refresh_stage_ - 1;
-        double d = sigma_(j, j) - chol_.row(j).head(j).squaredNorm();
-        if (!(d > 0.0) || !std::isfinite(d)) {  // not positive definite: keep the old weights
-          refresh_stage_ = 0;
-          refresh_dof_ = (i + 1) % n_;
-          return;
-        }
-        d = std::sqrt(d);
-        chol_(j, j) = d;
-        const int below = F - j - 1;
-        if (below > 0) {
-          auto col = chol_.col(j).tail(below);
-          col = sigma_.col(j).tail(below);
-          col.noalias() -= chol_.bottomLeftCorner(below, j) * chol_.row(j).head(j).transpose();
-          col /= d;
-        }
-        ++refresh_stage_;
-      }
-      return;
-    }
-    for (int s = 0; s < 2 && refresh_stage_ <= 2 * F; ++s) {
-      const int j = refresh_stage_ - F - 1;
-      auto w = wnext_.col(j);
-      w.setZero();
-      w(j) = 1.0;
-      chol_.template triangularView<Eigen::Lower>().solveInPlace(w);
-      chol_.template triangularView<Eigen::Lower>().transpose().solveInPlace(w);
-      for (int p = 0; p < 6; ++p) {
-        const double half = p >= 3 ? 0.5 : 1.0;  // S = G + G^T: <W, G> = <W, S> / 2
-        next_traces_.t[p] += half * w.dot(gram_[p].col(j));
-      }
-      ++refresh_stage_;
-    }
-    if (refresh_stage_ > 2 * F) {
-      weights_[i] = wnext_;
-      traces_[i] = next_traces_;
-      weighted_dofs_ = std::min(weighted_dofs_ + 1, n_);
-      if (i == n_ - 1) weighted_ = true;
-      refresh_stage_ = 0;
-      refresh_dof_ = (i + 1) % n_;
+    switch (refresh_stage_) {
+      case 0:
+        if (!usable_model()) return;
+        refresh_stage_ = 1;
+        refresh_pos_ = 0;
+        return;
+      case 1: sigma_step(); return;
+      case 2: cholesky_step(); return;
+      case 3: inverse_step(); return;
+      case 4: traces_step(); return;
+      default:
+        if (pending_) return;  // never change the weights under a window in progress
+        weight_.swap(wnext_);
+        traces_.swap(next_traces_);
+        weighted_ = true;
+        refresh_stage_ = 0;
     }
   }
 
-  // Sigma of DOF i from the model; false if the model is not usable.
-  bool build_sigma(int i) noexcept {
-    const int n = n_;
-    const double m = model_(i), c = model_(n + i), kl = model_(2 * n + i);
-    const bool right = n > 1 && (i + 1 < n || config_.boundary == Boundary::kFixed);
-    const double kr = right ? model_(2 * n + i + 1) : 0.0;
-    if (!(m > 0.0) || !std::isfinite(c) || !std::isfinite(kl) || !std::isfinite(kr)) return false;
-    const double kk = kl + kr;
-    const double own = noise_variance(i);
-    const double left = i > 0 ? noise_variance(i - 1) * kl * kl : 0.0;
-    const double rgt = i + 1 < n ? noise_variance(i + 1) * kr * kr : 0.0;
-    const double fu = noise_variance(n + i);
-    if (!(own > 0.0)) return false;  // noise-free: the weights do not matter
-    // gram_: 0 G00, 1 G11, 2 G22, 3 S01, 4 S02, 5 S12
-    sigma_.noalias() = (own * m * m + fu) * gram_[2];
-    sigma_.noalias() += (own * c * c) * gram_[1];
-    sigma_.noalias() += (own * kk * kk + left + rgt) * gram_[0];
-    sigma_.noalias() -= (own * m * c) * gram_[5];
-    sigma_.noalias() += (own * m * kk) * gram_[4];
-    sigma_.noalias() -= (own * c * kk) * gram_[3];
-    chol_.setZero();
+  bool usable_model() const noexcept {
+    for (int i = 0; i < n_; ++i) {
+      if (!(model_(i) > 0.0) || !std::isfinite(model_(i)) || !std::isfinite(model_(n_ + i))) return false;
+      if (!(noise_variance(i) > 0.0)) return false;  // noise-free: the weights do not matter
+    }
+    for (int j = 2 * n_; j < params_; ++j)
+      if (!std::isfinite(model_(j)) && (j < params_ - 1 || right(n_ - 1))) return false;
     return true;
+  }
+
+  // Block (i, j) of Sigma, i >= j >= i - 2, and the zero blocks left of the band in row i.
+  void sigma_step() noexcept {
+    const int F = F_, i = refresh_pos_ / 3, j = i - refresh_pos_ % 3;
+    if (j == i && i > 2) chol_.block(i * F, 0, F, (i - 2) * F).setZero();
+    if (j >= 0) {
+      auto block = chol_.block(i * F, j * F, F, F);
+      block.setZero();
+      for (int c = std::max(0, i - 1); c <= std::min(n_ - 1, j + 1); ++c) {
+        const double s2 = noise_variance(c);
+        for (int d = 0; d < 3; ++d)
+          for (int e = 0; e < 3; ++e) {
+            const double a = s2 * loading(i, c, d) * loading(j, c, e);
+            if (a != 0.0) block.noalias() += a * gram_[3 * d + e];
+          }
+      }
+      if (i == j) block.noalias() += noise_variance(n_ + i) * gram_[8];
+    }
+    if (++refresh_pos_ == 3 * n_) {
+      refresh_stage_ = 2;
+      refresh_pos_ = 0;
+    }
+  }
+
+  // Column j of the Cholesky factor, in place; rows and columns within the band of block
+  // pentadiagonal Sigma (fill-in stays inside it). Not positive definite: keep the old weights.
+  void cholesky_step() noexcept {
+    const int F = F_, j = refresh_pos_, b = j / F;
+    const int k0 = std::max(0, b - 2) * F, r1 = std::min(R_, (b + 3) * F);
+    auto lj = chol_.row(j).segment(k0, j - k0);
+    const double d = chol_(j, j) - lj.squaredNorm();
+    if (!(d > 0.0) || !std::isfinite(d)) {
+      refresh_stage_ = 0;
+      return;
+    }
+    const double root = std::sqrt(d);
+    chol_(j, j) = root;
+    const int below = r1 - j - 1;
+    if (below > 0) {
+      auto col = chol_.col(j).segment(j + 1, below);
+      col.noalias() -= chol_.block(j + 1, k0, below, j - k0) * lj.transpose();
+      col /= root;
+    }
+    if (++refresh_pos_ == R_) {
+      refresh_stage_ = 3;
+      refresh_pos_ = 0;
+      refresh_sub_ = 0;
+    }
+  }
+
+  // Column j of W = (L L^T)^-1, one row block per step: forward from j's block down, then
+  // backward from the last block up.
+  void inverse_step() noexcept {
+    const int F = F_, n = n_, j = refresh_pos_, bj = j / F;
+    auto w = wnext_.col(j);
+    const int forward = n - bj;
+    if (refresh_sub_ < forward) {
+      const int b = bj + refresh_sub_;
+      if (refresh_sub_ == 0) {
+        w.setZero();
+        w(j) = 1.0;
+      }
+      for (int k = std::max(j, b * F); k < (b + 1) * F; ++k) {
+        w(k) /= chol_(k, k);
+        const int end = std::min(R_, (k / F + 3) * F);
+        if (end > k + 1) w.segment(k + 1, end - k - 1).noalias() -= w(k) * chol_.col(k).segment(k + 1, end - k - 1);
+      }
+    } else {
+      const int b = n - 1 - (refresh_sub_ - forward);
+      for (int r = (b + 1) * F - 1; r >= b * F; --r) {
+        const int end = std::min(R_, (r / F + 3) * F);
+        double x = w(r);
+        if (end > r + 1) x -= chol_.col(r).segment(r + 1, end - r - 1).dot(w.segment(r + 1, end - r - 1));
+        w(r) = x / chol_(r, r);
+      }
+    }
+    if (++refresh_sub_ == forward + n) {
+      refresh_sub_ = 0;
+      if (++refresh_pos_ == R_) {
+        refresh_stage_ = 4;
+        refresh_pos_ = 0;
+      }
+    }
+  }
+
+  // <W_ij, G_de> for one block pair (i, j = i - 2 .. i + 2).
+  void traces_step() noexcept {
+    const int F = F_, i = refresh_pos_ / 5, o = refresh_pos_ % 5, j = i + o - 2;
+    for (int de = 0; de < 9; ++de) {
+      double t = 0.0;
+      if (j >= 0 && j < n_) t = wnext_.block(i * F, j * F, F, F).cwiseProduct(gram_[de]).sum();
+      next_traces_((i * 5 + o) * 9 + de) = t;
+    }
+    if (++refresh_pos_ == 5 * n_) refresh_stage_ = 5;
   }
 
   Config config_;
@@ -599,21 +700,19 @@ class WeakFormWindows {
   int params_;
   Eigen::LDLT<MatD> ldlt_;
   long L_ = 0, H_ = 0;
-  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, steps_ = 1;
+  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, R_ = 0, steps_ = 1, window_steps_ = 1;
   long phase_ = 0, in_hop_ = 0, hops_ = 0;
   VecC z_;
   MatC bins_, seg_;
-  MatD rows_, phi_, wphi_, sigma_, chol_, wnext_, normal_, inverse_;
-  MatD gram_[6];
-  Traces identity_traces_{}, next_traces_{};
-  detail::Storage<MatD, N> weights_{};
-  detail::Storage<Traces, N> traces_{};
+  MatD rows_, phi_, xw_, weight_, chol_, wnext_, normal_, inverse_;
+  MatD gram_[9];
+  VecD traces_, next_traces_, identity_traces_;
   detail::Storage<Noise, N == Dynamic ? Dynamic : 2 * N> noise_{};
   detail::Storage<History, N == Dynamic ? Dynamic : 2 * N> history_{};
   VecD rhs_, solution_, model_;
   bool pending_ = false;
   int step_ = 0;
-  int refresh_dof_ = 0, refresh_stage_ = 0, weighted_dofs_ = 0;
+  int refresh_stage_ = 0, refresh_pos_ = 0, refresh_sub_ = 0;
   bool weighted_ = false, window_weighted_ = false;
   long results_ = 0;
   Vector<Scalar, kParams> result_, variance_;
