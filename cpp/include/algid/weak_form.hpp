@@ -19,34 +19,41 @@
 /// The taper and its first three derivatives vanish at the window ends, so the sums are the
 /// integrals to O(dt^4) (window results within 1e-6 of the truth on noise-free tones in the tests).
 ///
-/// Weighting (GLS). The equation error of the rows of DOF i is linear in the measurement
-/// noise; with white noise of RMS sigma_c on channel c its covariance is
-///   Sigma_i = s_i^2 [m^2 G22 + c^2 G11 + kk^2 G00 - m c S12 + m kk S02 - c kk S01]
-///             + (s_{i-1}^2 k_i^2 + s_{i+1}^2 k_{i+1}^2) G00 + s_{u,i}^2 G22
-/// (kk = k_i + k_{i+1}, Gde = dt^2 sum psi^(d) psi^(e)^T the Gram matrices of the test functions,
-/// Sde = Gde + Ged), a known function of the parameters. W_i = Sigma_i^-1 is refreshed in the
-/// background from the owner's running estimate (set_model()); the rows of one DOF are weighted
-/// by it, the cross-DOF correlation is left out (measured: no loss on the benchmark).
+/// Weighting (GLS). The equation error of the rows is linear in the measurement noise: DOF i's
+/// rows load channel i through m_i psi'' - c_i psi' + (k_i + k_{i+1}) psi and its neighbours'
+/// channels through -k_i psi and -k_{i+1} psi. With white noise of RMS s_c on channel c the
+/// covariance of all n F rows is block pentadiagonal,
+///   Sigma_ij = sum_c s_c^2 sum_{d,e} l_icd l_jce G_de + delta_ij s_{u,i}^2 G_22,
+/// (l_icd the loadings above, G_de = dt^2 sum psi^(d) psi^(e)^T the Gram matrices of the test
+/// functions), a known function of the parameters. W = Sigma^-1 over all rows (the rows of
+/// neighbouring DOFs share channels; weighting each DOF's rows alone left 2.5x the Cramer-Rao
+/// bound on the 5-DOF springs in the numpy prototype, the full covariance 1.6x) is refreshed in
+/// the background from the owner's running estimate (set_model()).
 ///
-/// Bias compensation. The regressor noise adds E[N^T W N] to the normal matrix; it is
-/// s^2-weighted traces <W, Gde> (d, e = 0..2) and is subtracted (errors-in-variables correction).
-/// The noise RMS per channel is given (accel_noise, force_noise) or estimated from the fourth
-/// difference of the raw signal (variance 70 sigma^2 for white noise; a band-limited response
-/// at 20 Hz of 1 kHz leaks (2 pi 0.02)^4 of its amplitude into it), exponentially forgotten.
+/// Bias compensation. The regressor noise adds E[N^T W N] to the normal matrix: for every
+/// channel, s_c^2 times sums of <W_ij, G_de> over the columns it loads. It is subtracted
+/// (errors-in-variables correction). The noise RMS per channel is given (accel_noise,
+/// force_noise) or estimated from the fourth difference of the raw signal (variance 70 sigma^2
+/// for white noise; a band-limited response at 20 Hz of 1 kHz leaks (2 pi 0.02)^4 of its
+/// amplitude into it), exponentially forgotten.
 ///
-/// Window result: the per-DOF normal equations, corrected, summed into one (3n+1)^2 system
-/// (interior springs appear in two DOFs) and solved (LDLT); the diagonal of its inverse is the
-/// window's variance (with GLS weights).
+/// Window result: the normal equations Phi^T W Phi theta = Phi^T W y of all n F rows (Phi is
+/// sparse: a parameter's column has rows in one or two DOFs), corrected, solved (LDLT); the
+/// diagonal of the inverse is the window's variance (with GLS weights).
 ///
 /// Real-time contract: the constructor validates and allocates every buffer (sizes depend on
-/// window and band); update(), restart(), reset() and set_model() are noexcept and allocate
-/// nothing. The work of a window (rows, one DOF per step, the solve) and of a weight refresh
-/// (Sigma, Cholesky by columns, W by columns) is cut into steps of at most about 3 F^2 flops,
-/// one step per sample (more when n is large), so no sample pays for a whole window.
-/// Arithmetic of the windows is in double whatever Scalar (Sigma spans many decades).
+/// window, band and n); update(), restart(), reset() and set_model() are noexcept and allocate
+/// nothing. The work of a window (the rows; (3n+2) n products of an F-row block of W with a
+/// column; the normal equations row by row; the solve) is spread over three quarters of a hop,
+/// and a weight refresh (Sigma block by block, the Cholesky factor column by column within its
+/// band, W column by column a row block at a time, the traces block by block) advances one step
+/// of at most about 9 F^2 multiply-adds every sample, so no sample pays for a whole window or a
+/// whole refresh (about 2,300 samples per refresh at n = 5). Arithmetic of the windows is in
+/// double whatever Scalar (Sigma spans many decades).
 ///
-/// Storage (F = 2Q+1, J = Q+3 bins, K blocks): K (J) 2n complex bins, n F^2 weights, 6 F^2 Gram
-/// matrices, about 0.7 MB for n = 5, W = 0.5 s, band 50 Hz.
+/// Storage (F = 2Q+1, J = Q+3 bins, K blocks, R = n F rows): K J 2n complex bins, three R x R
+/// matrices (W in force, the next W, the Cholesky factor), 9 F^2 Gram matrices; about 1.8 MB
+/// for n = 5 and 6.5 MB for n = 10 at W = 0.5 s, band 50 Hz.
 
 #include "algid/detail/storage.hpp"
 #include "algid/types.hpp"
