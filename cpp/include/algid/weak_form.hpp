@@ -46,9 +46,11 @@
 /// nothing. The work of a window (the rows; (3n+2) n products of an F-row block of W with a
 /// column; the normal equations row by row; the solve) is spread over three quarters of a hop,
 /// and a weight refresh (Sigma block by block, the Cholesky factor column by column within its
-/// band, W column by column a row block at a time, the traces block by block) advances one step
-/// of at most about 9 F^2 multiply-adds every sample, so no sample pays for a whole window or a
-/// whole refresh (about 2,300 samples per refresh at n = 5). Arithmetic of the windows is in
+/// band, W column by column a row block at a time, the traces block by block) advances by steps
+/// of at most about 9 F^2 multiply-adds, about 6 F^2 per sample, so no sample pays for a whole
+/// window or a whole refresh. The first refresh after reset() weights each DOF's rows alone
+/// (the diagonal blocks: weighted windows from about 0.1 s after the first estimate); the
+/// following ones use the full covariance (about 1.3 s per refresh at n = 5). Arithmetic of the windows is in
 /// double whatever Scalar (Sigma spans many decades).
 ///
 /// Storage (F = 2Q+1, J = Q+3 bins, K blocks, R = n F rows): K J 2n complex bins, three R x R
@@ -239,7 +241,7 @@ class WeakFormWindows {
       bins_.middleCols(static_cast<int>(hops_ % K_) * 2 * n, 2 * n).setZero();  // the oldest block restarts
     }
     for (int s = 0; s < steps_ && pending_; ++s) done = window_step() || done;
-    refresh_step();
+    refresh();
     return done;
   }
 
@@ -508,8 +510,7 @@ class WeakFormWindows {
         rhs_(p) = 0.0;
       } else {
         const int w = (last - first + 1) * F;
-        normal_.row(p).noalias() =
-            phi_.col(p).segment(first * F, w).transpose() * xw_.block(first * F, 0, w, params_);
+        normal_.row(p).noalias() = phi_.col(p).segment(first * F, w).transpose() * xw_.block(first * F, 0, w, params_);
         rhs_(p) = phi_.col(p).segment(first * F, w).dot(xw_.col(params_).segment(first * F, w));
       }
     } else {
@@ -572,28 +573,43 @@ class WeakFormWindows {
 
   // Background refresh of the weights W = Sigma^-1 over all n F rows (the equation errors of
   // neighbouring DOFs share channels: Sigma is block pentadiagonal), in steps of at most about
-  // 9 F^2 multiply-adds: stage 1 builds Sigma block by block from the model into chol_'s lower
-  // triangle, stage 2 factors it in place column by column (left-looking, within the band),
-  // stage 3 solves for W column by column, a row block per step, stage 4 forms the traces
-  // <W_ij, G_de> of the bias term, stage 5 swaps W in between windows.
-  void refresh_step() noexcept {
+  // 9 F^2 multiply-adds, as many per sample as a budget of 6 F^2 allows: stage 1 builds Sigma
+  // block by block from the model into chol_'s lower triangle, stage 2 factors it in place
+  // column by column (left-looking, within the band), stage 3 solves for W column by column, a
+  // row block per step, stage 4 forms the traces <W_ij, G_de> of the bias term, stage 5 swaps
+  // W in between windows. The first refresh keeps only the diagonal blocks (band 0: each DOF's
+  // rows weighted alone, about n^2 times less work), so that weighted windows start early.
+  void refresh() noexcept {
     if (!config_.weighted) return;
+    const double budget = 6.0 * F_ * F_;
+    double spent = 0.0;
+    while (spent < budget) {
+      const double cost = refresh_step();
+      if (cost < 0.0) return;  // waiting: no model yet, or a window in progress
+      spent += cost + 1.0;
+    }
+  }
+
+  // One step; its cost in multiply-adds, or -1 if the refresh cannot advance in this sample.
+  double refresh_step() noexcept {
     switch (refresh_stage_) {
       case 0:
-        if (!usable_model()) return;
+        if (!usable_model()) return -1.0;
+        band_ = weighted_ ? 2 : 0;
         refresh_stage_ = 1;
         refresh_pos_ = 0;
-        return;
-      case 1: sigma_step(); return;
-      case 2: cholesky_step(); return;
-      case 3: inverse_step(); return;
-      case 4: traces_step(); return;
+        return 0.0;
+      case 1: return sigma_step();
+      case 2: return cholesky_step();
+      case 3: return inverse_step();
+      case 4: return traces_step();
       default:
-        if (pending_) return;  // never change the weights under a window in progress
+        if (pending_) return -1.0;  // never change the weights under a window in progress
         weight_.swap(wnext_);
         traces_.swap(next_traces_);
         weighted_ = true;
         refresh_stage_ = 0;
+        return -1.0;
     }
   }
 
@@ -607,19 +623,23 @@ class WeakFormWindows {
     return true;
   }
 
-  // Block (i, j) of Sigma, i >= j >= i - 2, and the zero blocks left of the band in row i.
-  void sigma_step() noexcept {
+  // Block (i, j) of Sigma, i >= j >= i - 2 (zero outside the band), and the zero blocks left
+  // of the band in row i.
+  double sigma_step() noexcept {
     const int F = F_, i = refresh_pos_ / 3, j = i - refresh_pos_ % 3;
+    double cost = 0.0;
     if (j == i && i > 2) chol_.block(i * F, 0, F, (i - 2) * F).setZero();
     if (j >= 0) {
       auto block = chol_.block(i * F, j * F, F, F);
       block.setZero();
-      for (int c = std::max(0, i - 1); c <= std::min(n_ - 1, j + 1); ++c) {
+      for (int c = std::max(0, i - 1); c <= std::min(n_ - 1, j + 1) && i - j <= band_; ++c) {
         const double s2 = noise_variance(c);
         for (int d = 0; d < 3; ++d)
           for (int e = 0; e < 3; ++e) {
             const double a = s2 * loading(i, c, d) * loading(j, c, e);
-            if (a != 0.0) block.noalias() += a * gram_[3 * d + e];
+            if (a == 0.0) continue;
+            block.noalias() += a * gram_[3 * d + e];
+            cost += F * F;
           }
       }
       if (i == j) block.noalias() += noise_variance(n_ + i) * gram_[8];
@@ -628,18 +648,19 @@ class WeakFormWindows {
       refresh_stage_ = 2;
       refresh_pos_ = 0;
     }
+    return cost + F * F;
   }
 
-  // Column j of the Cholesky factor, in place; rows and columns within the band of block
-  // pentadiagonal Sigma (fill-in stays inside it). Not positive definite: keep the old weights.
-  void cholesky_step() noexcept {
+  // Column j of the Cholesky factor, in place; rows and columns within the band (fill-in stays
+  // inside it). Not positive definite: keep the old weights.
+  double cholesky_step() noexcept {
     const int F = F_, j = refresh_pos_, b = j / F;
-    const int k0 = std::max(0, b - 2) * F, r1 = std::min(R_, (b + 3) * F);
+    const int k0 = std::max(0, b - band_) * F, r1 = std::min(R_, (b + band_ + 1) * F);
     auto lj = chol_.row(j).segment(k0, j - k0);
     const double d = chol_(j, j) - lj.squaredNorm();
     if (!(d > 0.0) || !std::isfinite(d)) {
       refresh_stage_ = 0;
-      return;
+      return -1.0;
     }
     const double root = std::sqrt(d);
     chol_(j, j) = root;
@@ -654,14 +675,18 @@ class WeakFormWindows {
       refresh_pos_ = 0;
       refresh_sub_ = 0;
     }
+    return static_cast<double>(below + 1) * (j - k0 + 1);
   }
 
   // Column j of W = (L L^T)^-1, one row block per step: forward from j's block down, then
-  // backward from the last block up.
-  void inverse_step() noexcept {
-    const int F = F_, n = n_, j = refresh_pos_, bj = j / F;
+  // backward from the last block up (within j's block only while the band is 0).
+  double inverse_step() noexcept {
+    const int F = F_, j = refresh_pos_, bj = j / F;
+    const int last = band_ > 0 ? n_ - 1 : bj, first = band_ > 0 ? 0 : bj;
+    const int forward = last - bj + 1, steps = forward + last - first + 1;
     auto w = wnext_.col(j);
-    const int forward = n - bj;
+    const auto reach = [&](int k) { return std::min(R_, (k / F + band_ + 1) * F); };
+    double cost = 0.0;
     if (refresh_sub_ < forward) {
       const int b = bj + refresh_sub_;
       if (refresh_sub_ == 0) {
@@ -670,36 +695,39 @@ class WeakFormWindows {
       }
       for (int k = std::max(j, b * F); k < (b + 1) * F; ++k) {
         w(k) /= chol_(k, k);
-        const int end = std::min(R_, (k / F + 3) * F);
+        const int end = reach(k);
         if (end > k + 1) w.segment(k + 1, end - k - 1).noalias() -= w(k) * chol_.col(k).segment(k + 1, end - k - 1);
+        cost += end - k;
       }
     } else {
-      const int b = n - 1 - (refresh_sub_ - forward);
+      const int b = last - (refresh_sub_ - forward);
       for (int r = (b + 1) * F - 1; r >= b * F; --r) {
-        const int end = std::min(R_, (r / F + 3) * F);
+        const int end = reach(r);
         double x = w(r);
         if (end > r + 1) x -= chol_.col(r).segment(r + 1, end - r - 1).dot(w.segment(r + 1, end - r - 1));
         w(r) = x / chol_(r, r);
+        cost += end - r;
       }
     }
-    if (++refresh_sub_ == forward + n) {
+    if (++refresh_sub_ == steps) {
       refresh_sub_ = 0;
       if (++refresh_pos_ == R_) {
         refresh_stage_ = 4;
         refresh_pos_ = 0;
       }
     }
+    return cost;
   }
 
-  // <W_ij, G_de> for one block pair (i, j = i - 2 .. i + 2).
-  void traces_step() noexcept {
+  // <W_ij, G_de> for one block pair (i, j = i - 2 .. i + 2; zero outside the band).
+  double traces_step() noexcept {
     const int F = F_, i = refresh_pos_ / 5, o = refresh_pos_ % 5, j = i + o - 2;
-    for (int de = 0; de < 9; ++de) {
-      double t = 0.0;
-      if (j >= 0 && j < n_) t = wnext_.block(i * F, j * F, F, F).cwiseProduct(gram_[de]).sum();
-      next_traces_((i * 5 + o) * 9 + de) = t;
-    }
+    const bool inside = j >= 0 && j < n_ && std::abs(i - j) <= band_;
+    for (int de = 0; de < 9; ++de)
+      next_traces_((i * 5 + o) * 9 + de) = inside ? wnext_.block(i * F, j * F, F, F).cwiseProduct(gram_[de]).sum()
+                                                  : 0.0;
     if (++refresh_pos_ == 5 * n_) refresh_stage_ = 5;
+    return inside ? 9.0 * F * F : 1.0;
   }
 
   Config config_;
@@ -719,7 +747,7 @@ class WeakFormWindows {
   VecD rhs_, solution_, model_;
   bool pending_ = false;
   int step_ = 0;
-  int refresh_stage_ = 0, refresh_pos_ = 0, refresh_sub_ = 0;
+  int refresh_stage_ = 0, refresh_pos_ = 0, refresh_sub_ = 0, band_ = 0;
   bool weighted_ = false, window_weighted_ = false;
   long results_ = 0;
   Vector<Scalar, kParams> result_, variance_;
