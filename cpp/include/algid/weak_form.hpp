@@ -50,8 +50,8 @@
 /// of at most about 9 F^2 multiply-adds, about 6 F^2 per sample, so no sample pays for a whole
 /// window or a whole refresh. The first refresh after reset() weights each DOF's rows alone
 /// (the diagonal blocks: weighted windows from about 0.1 s after the first estimate); the
-/// following ones use the full covariance (about 1.3 s per refresh at n = 5). Arithmetic of the windows is in
-/// double whatever Scalar (Sigma spans many decades).
+/// following ones use the full covariance (about 1.3 s per refresh at n = 5). Arithmetic of
+/// the windows is in double whatever Scalar (Sigma spans many decades).
 ///
 /// Storage (F = 2Q+1, J = Q+3 bins, K blocks, R = n F rows): K J 2n complex bins, three R x R
 /// matrices (W in force, the next W, the Cholesky factor), 9 F^2 Gram matrices; about 1.8 MB
@@ -64,6 +64,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -199,6 +200,7 @@ class WeakFormWindows {
   /// Drop the windows in flight (after a bad sample); weights and noise estimate are kept.
   /// @realtime no allocation, no throw
   void restart() noexcept {
+    for (int c = 0; c < 2 * n_; ++c) history_[c].count = 0;  // no differences across the gap
     bins_.setZero();
     phase_ = 0;
     in_hop_ = 0;
@@ -285,9 +287,12 @@ class WeakFormWindows {
   // sin^4(x) = 3/8 - cos(2x)/2 + cos(4x)/8: coefficients of e^{i 2 pi k t / W}, k = -2..2.
   static constexpr double kTaper[5] = {1.0 / 16, -1.0 / 4, 3.0 / 8, -1.0 / 4, 1.0 / 16};
 
+  static constexpr int kNoiseStart = 64;  // fourth differences whose median starts the estimate
   struct Noise {
     double sum = 0.0;  // forgotten sum of squared fourth differences
     double weight = 0.0;  // forgotten count
+    std::array<double, kNoiseStart> start{};  // the first squared fourth differences
+    int started = 0;
   };
   struct History {
     double x[4] = {0.0, 0.0, 0.0, 0.0};
@@ -341,14 +346,29 @@ class WeakFormWindows {
       }
   }
 
+  // The noise estimate: a forgotten mean of squared fourth differences. It starts from the
+  // median of the first 64 (one absurd sample among them does not set it) and afterwards a
+  // square beyond 1e4 times the mean counts as 1e4 times the mean; non-finite ones are skipped.
   void observe(int c, double x) noexcept {
     History& h = history_[c];
     if (h.count == 4) {
       const double d4 = x - 4 * h.x[3] + 6 * h.x[2] - 4 * h.x[1] + h.x[0];
       const double keep = 1.0 - dt() / static_cast<double>(config_.noise_horizon_s);
       Noise& s = noise_[c];
-      s.sum = keep * s.sum + d4 * d4;
-      s.weight = keep * s.weight + 1.0;
+      double q = d4 * d4;
+      if (std::isfinite(q)) {
+        if (s.started == kNoiseStart) q = std::min(q, 1e4 * s.sum / s.weight);
+        s.sum = keep * s.sum + q;
+        s.weight = keep * s.weight + 1.0;
+        if (s.started < kNoiseStart) {
+          s.start[static_cast<std::size_t>(s.started++)] = q;
+          if (s.started == kNoiseStart) {
+            auto mid = s.start.begin() + kNoiseStart / 2;
+            std::nth_element(s.start.begin(), mid, s.start.end());
+            s.sum = s.weight * *mid / 0.4549;  // median of chi^2_1 = 0.4549 of its mean
+          }
+        }
+      }
     }
     h.x[0] = h.x[1];
     h.x[1] = h.x[2];
