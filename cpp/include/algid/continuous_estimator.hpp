@@ -357,6 +357,7 @@ class ContinuousEstimator {
     if (weak_) weak_->reset();
     if (joint_) joint_->clear();
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+    weighted_tracks_ = false;
     for (int j = 0; j < params_; ++j) {
       tracks_[j] = Track{};
       const Scalar fixed = known_[j] == Known::kZero ? Scalar(0) : nan;
@@ -417,6 +418,7 @@ class ContinuousEstimator {
     if (weak_form_) {
       weak_->set_model(estimate_.data());
       if (weak_->update(a, f)) {
+        if (weak_->result_weighted() && !weighted_tracks_) restart_tracks();
         harvest(weak_->result(), weak_->variance());
         if (joint_) joint_add();
       }
@@ -660,6 +662,15 @@ class ContinuousEstimator {
     pending_var_ = variance;
     pending_next_ = 0;
     ++results_;
+  }
+
+  // The first GLS-weighted window result: the unweighted results before it (biased under
+  // heavy noise: the weights take a few seconds to build) leave the tracks, whose change tests
+  // start afresh on weighted results only.
+  void restart_tracks() noexcept {
+    finish_pending();
+    for (int j = 0; j < params_; ++j) tracks_[j] = Track{};
+    weighted_tracks_ = true;
   }
 
   // Finish the previous result first (only if the budget was too small, e.g. a bad sample
@@ -967,12 +978,22 @@ class ContinuousEstimator {
     }
   }
 
-  // Parameter j restarted (step or drift): the joint forgets all it knew of j, and j's
-  // reported estimate is the track's (which follows a step within a second) until a ring of
-  // windows has arrived since; then j is forgotten once more, except for the newest ring
-  // minus K windows (none of which straddles the change), and the joint takes over again.
+  // Parameter j restarted (step or drift): the windows of the ring (the newest, which may
+  // straddle the change and fit no single value of j) leave the joint for every parameter;
+  // the joint forgets all it knew of j, and j's reported estimate is the track's (which
+  // follows a step within a second) until a ring of windows has arrived since; then j is
+  // forgotten once more, except for the newest ring minus K windows (none of which straddles
+  // the change), and the joint takes over again.
   void joint_restart(int j) noexcept {
     if (!joint_) return;
+    Joint& J = *joint_;
+    for (int age = 0; age < J.count; ++age) {
+      const int r = J.slot(age);
+      J.normal -= J.ring_normal[r];
+      J.rhs -= J.ring_rhs[r];
+      J.ring_normal[r].setZero();
+      J.ring_rhs[r].setZero();
+    }
     joint_forget(j, 0);
     joint_->fresh[j] = 0;
     joint_->trusted[j] = false;
@@ -1013,6 +1034,7 @@ class ContinuousEstimator {
   std::unique_ptr<Joint> joint_;
   Vector<Scalar, kParams> track_, track_sigma_;
   bool weak_form_ = false;
+  bool weighted_tracks_ = false;  // the tracks hold weighted window results only
 
   int pending_next_ = 0;
   detail::Storage<Event, kParams> events_{};

@@ -19,34 +19,43 @@
 /// The taper and its first three derivatives vanish at the window ends, so the sums are the
 /// integrals to O(dt^4) (window results within 1e-6 of the truth on noise-free tones in the tests).
 ///
-/// Weighting (GLS). The equation error of the rows of DOF i is linear in the measurement
-/// noise; with white noise of RMS sigma_c on channel c its covariance is
-///   Sigma_i = s_i^2 [m^2 G22 + c^2 G11 + kk^2 G00 - m c S12 + m kk S02 - c kk S01]
-///             + (s_{i-1}^2 k_i^2 + s_{i+1}^2 k_{i+1}^2) G00 + s_{u,i}^2 G22
-/// (kk = k_i + k_{i+1}, Gde = dt^2 sum psi^(d) psi^(e)^T the Gram matrices of the test functions,
-/// Sde = Gde + Ged), a known function of the parameters. W_i = Sigma_i^-1 is refreshed in the
-/// background from the owner's running estimate (set_model()); the rows of one DOF are weighted
-/// by it, the cross-DOF correlation is left out (measured: no loss on the benchmark).
+/// Weighting (GLS). The equation error of the rows is linear in the measurement noise: DOF i's
+/// rows load channel i through m_i psi'' - c_i psi' + (k_i + k_{i+1}) psi and its neighbours'
+/// channels through -k_i psi and -k_{i+1} psi. With white noise of RMS s_c on channel c the
+/// covariance of all n F rows is block pentadiagonal,
+///   Sigma_ij = sum_c s_c^2 sum_{d,e} l_icd l_jce G_de + delta_ij s_{u,i}^2 G_22,
+/// (l_icd the loadings above, G_de = dt^2 sum psi^(d) psi^(e)^T the Gram matrices of the test
+/// functions), a known function of the parameters. W = Sigma^-1 over all rows (the rows of
+/// neighbouring DOFs share channels; weighting each DOF's rows alone left 2.5x the Cramer-Rao
+/// bound on the 5-DOF springs in the numpy prototype, the full covariance 1.6x) is refreshed in
+/// the background from the owner's running estimate (set_model()).
 ///
-/// Bias compensation. The regressor noise adds E[N^T W N] to the normal matrix; it is
-/// s^2-weighted traces <W, Gde> (d, e = 0..2) and is subtracted (errors-in-variables correction).
-/// The noise RMS per channel is given (accel_noise, force_noise) or estimated from the fourth
-/// difference of the raw signal (variance 70 sigma^2 for white noise; a band-limited response
-/// at 20 Hz of 1 kHz leaks (2 pi 0.02)^4 of its amplitude into it), exponentially forgotten.
+/// Bias compensation. The regressor noise adds E[N^T W N] to the normal matrix: for every
+/// channel, s_c^2 times sums of <W_ij, G_de> over the columns it loads. It is subtracted
+/// (errors-in-variables correction). The noise RMS per channel is given (accel_noise,
+/// force_noise) or estimated from the fourth difference of the raw signal (variance 70 sigma^2
+/// for white noise; a band-limited response at 20 Hz of 1 kHz leaks (2 pi 0.02)^4 of its
+/// amplitude into it), exponentially forgotten.
 ///
-/// Window result: the per-DOF normal equations, corrected, summed into one (3n+1)^2 system
-/// (interior springs appear in two DOFs) and solved (LDLT); the diagonal of its inverse is the
-/// window's variance (with GLS weights).
+/// Window result: the normal equations Phi^T W Phi theta = Phi^T W y of all n F rows (Phi is
+/// sparse: a parameter's column has rows in one or two DOFs), corrected, solved (LDLT); the
+/// diagonal of the inverse is the window's variance (with GLS weights).
 ///
 /// Real-time contract: the constructor validates and allocates every buffer (sizes depend on
-/// window and band); update(), restart(), reset() and set_model() are noexcept and allocate
-/// nothing. The work of a window (rows, one DOF per step, the solve) and of a weight refresh
-/// (Sigma, Cholesky by columns, W by columns) is cut into steps of at most about 3 F^2 flops,
-/// one step per sample (more when n is large), so no sample pays for a whole window.
-/// Arithmetic of the windows is in double whatever Scalar (Sigma spans many decades).
+/// window, band and n); update(), restart(), reset() and set_model() are noexcept and allocate
+/// nothing. The work of a window (the rows; (3n+2) n products of an F-row block of W with a
+/// column; the normal equations row by row; the solve) is spread over three quarters of a hop,
+/// and a weight refresh (Sigma block by block, the Cholesky factor column by column within its
+/// band, W column by column a row block at a time, the traces block by block) advances by steps
+/// of at most about 9 F^2 multiply-adds, about 6 F^2 per sample, so no sample pays for a whole
+/// window or a whole refresh. The first refresh after reset() weights each DOF's rows alone
+/// (the diagonal blocks: weighted windows from about 0.1 s after the first estimate); the
+/// following ones use the full covariance (about 1.3 s per refresh at n = 5). Arithmetic of
+/// the windows is in double whatever Scalar (Sigma spans many decades).
 ///
-/// Storage (F = 2Q+1, J = Q+3 bins, K blocks): K (J) 2n complex bins, n F^2 weights, 6 F^2 Gram
-/// matrices, about 0.7 MB for n = 5, W = 0.5 s, band 50 Hz.
+/// Storage (F = 2Q+1, J = Q+3 bins, K blocks, R = n F rows): K J 2n complex bins, three R x R
+/// matrices (W in force, the next W, the Cholesky factor), 9 F^2 Gram matrices; about 1.8 MB
+/// for n = 5 and 6.5 MB for n = 10 at W = 0.5 s, band 50 Hz.
 
 #include "algid/detail/storage.hpp"
 #include "algid/types.hpp"
@@ -55,6 +64,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -136,22 +146,25 @@ class WeakFormWindows {
     Q_ = static_cast<int>(std::floor(band_of(config_) * static_cast<double>(L_) * dt() + 1e-9));
     J_ = Q_ + 3;
     F_ = 2 * Q_ + 1;
-    // window steps (rows, n DOFs, solve) within half a hop
-    const long half = std::max(1L, H_ / 2);
-    steps_ = static_cast<int>(std::max(1L, (static_cast<long>(n_) + 2 + half - 1) / half));
+    R_ = n_ * F_;
+    // window steps: rows, (P + 1) n products of a row block of W with a column, P + 1 rows of
+    // the normal equations, the solve; spread over three quarters of a hop
+    window_steps_ = 2 + (params_ + 1) * n_ + params_;
+    const long budget = std::max(1L, 3 * H_ / 4);
+    steps_ = static_cast<int>(std::max(1L, (static_cast<long>(window_steps_) + budget - 1) / budget));
     const int C = 2 * n_;
     z_.resize(J_);
     bins_.setZero(J_, C * K_);
     seg_.setZero(J_, C);
-    rows_.setZero(F_, 3 * n_ + n_);
-    weights_.resize(n_);
-    traces_.resize(n_);
-    for (int i = 0; i < n_; ++i) weights_[i].setZero(F_, F_);
-    sigma_.setZero(F_, F_);
-    chol_.setZero(F_, F_);
-    wnext_.setZero(F_, F_);
-    phi_.setZero(F_, 5);
-    wphi_.setZero(F_, 5);
+    rows_.setZero(F_, 4 * n_);
+    phi_.setZero(R_, params_ + 1);
+    xw_.setZero(R_, params_ + 1);
+    weight_.setZero(R_, R_);
+    chol_.setZero(R_, R_);
+    wnext_.setZero(R_, R_);
+    traces_.setZero(n_ * 5 * 9);
+    next_traces_.setZero(n_ * 5 * 9);
+    identity_traces_.setZero(9);
     normal_.setZero(params_, params_);
     rhs_.setZero(params_);
     solution_.setZero(params_);
@@ -169,18 +182,16 @@ class WeakFormWindows {
   /// @realtime no allocation, no throw
   void reset() noexcept {
     restart();
-    for (int i = 0; i < n_; ++i) {
-      weights_[i].setIdentity();
-      traces_[i] = identity_traces_;
-    }
+    weight_.setIdentity();
     weighted_ = false;
     for (int c = 0; c < 2 * n_; ++c) {
       noise_[c] = Noise{};
       history_[c] = History{};
     }
     model_.setConstant(std::numeric_limits<double>::quiet_NaN());
-    refresh_dof_ = 0;
     refresh_stage_ = 0;
+    refresh_pos_ = 0;
+    refresh_sub_ = 0;
     results_ = 0;
     result_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
     variance_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
@@ -189,6 +200,7 @@ class WeakFormWindows {
   /// Drop the windows in flight (after a bad sample); weights and noise estimate are kept.
   /// @realtime no allocation, no throw
   void restart() noexcept {
+    for (int c = 0; c < 2 * n_; ++c) history_[c].count = 0;  // no differences across the gap
     bins_.setZero();
     phase_ = 0;
     in_hop_ = 0;
@@ -230,13 +242,8 @@ class WeakFormWindows {
       if (hops_ >= K_) start_window();
       bins_.middleCols(static_cast<int>(hops_ % K_) * 2 * n, 2 * n).setZero();  // the oldest block restarts
     }
-    for (int s = 0; s < steps_; ++s) {
-      if (pending_) {
-        done = window_step() || done;
-      } else {
-        refresh_step();
-      }
-    }
+    for (int s = 0; s < steps_ && pending_; ++s) done = window_step() || done;
+    refresh();
     return done;
   }
 
@@ -263,6 +270,8 @@ class WeakFormWindows {
   long window_samples() const noexcept { return L_; }
   /// Samples between two window results.
   long hop_samples() const noexcept { return H_; }
+  /// Samples from the end of a window to its result.
+  long latency_samples() const noexcept { return (window_steps_ - 1) / steps_; }
   /// Highest harmonic Q of the test functions (F = 2Q+1 rows per DOF).
   int harmonics() const noexcept { return Q_; }
   /// The configuration in force.
@@ -278,16 +287,16 @@ class WeakFormWindows {
   // sin^4(x) = 3/8 - cos(2x)/2 + cos(4x)/8: coefficients of e^{i 2 pi k t / W}, k = -2..2.
   static constexpr double kTaper[5] = {1.0 / 16, -1.0 / 4, 3.0 / 8, -1.0 / 4, 1.0 / 16};
 
+  static constexpr int kNoiseStart = 64;  // fourth differences whose median starts the estimate
   struct Noise {
     double sum = 0.0;  // forgotten sum of squared fourth differences
     double weight = 0.0;  // forgotten count
+    std::array<double, kNoiseStart> start{};  // the first squared fourth differences
+    int started = 0;
   };
   struct History {
     double x[4] = {0.0, 0.0, 0.0, 0.0};
     int count = 0;
-  };
-  struct Traces {  // <W, Gde> for (d, e) = 00, 11, 22, 01, 02, 12
-    double t[6] = {0, 0, 0, 0, 0, 0};
   };
 
   double dt() const noexcept { return static_cast<double>(config_.dt); }
@@ -330,22 +339,36 @@ class WeakFormWindows {
       }
     }
     const double d2 = dt() * dt();
-    const int pairs[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
-    for (int p = 0; p < 6; ++p) {
-      gram_[p] = d2 * psi[pairs[p][0]] * psi[pairs[p][1]].transpose();
-      if (pairs[p][0] != pairs[p][1]) gram_[p] += gram_[p].transpose().eval();  // S01, S02, S12
-      identity_traces_.t[p] = gram_[p].trace() / (pairs[p][0] != pairs[p][1] ? 2.0 : 1.0);
-    }
+    for (int d = 0; d < 3; ++d)
+      for (int e = 0; e < 3; ++e) {
+        gram_[3 * d + e] = d2 * psi[d] * psi[e].transpose();
+        identity_traces_(3 * d + e) = gram_[3 * d + e].trace();
+      }
   }
 
+  // The noise estimate: a forgotten mean of squared fourth differences. It starts from the
+  // median of the first 64 (one absurd sample among them does not set it) and afterwards a
+  // square beyond 1e4 times the mean counts as 1e4 times the mean; non-finite ones are skipped.
   void observe(int c, double x) noexcept {
     History& h = history_[c];
     if (h.count == 4) {
       const double d4 = x - 4 * h.x[3] + 6 * h.x[2] - 4 * h.x[1] + h.x[0];
       const double keep = 1.0 - dt() / static_cast<double>(config_.noise_horizon_s);
       Noise& s = noise_[c];
-      s.sum = keep * s.sum + d4 * d4;
-      s.weight = keep * s.weight + 1.0;
+      double q = d4 * d4;
+      if (std::isfinite(q)) {
+        if (s.started == kNoiseStart) q = std::min(q, 1e4 * s.sum / s.weight);
+        s.sum = keep * s.sum + q;
+        s.weight = keep * s.weight + 1.0;
+        if (s.started < kNoiseStart) {
+          s.start[static_cast<std::size_t>(s.started++)] = q;
+          if (s.started == kNoiseStart) {
+            auto mid = s.start.begin() + kNoiseStart / 2;
+            std::nth_element(s.start.begin(), mid, s.start.end());
+            s.sum = s.weight * *mid / 0.4549;  // median of chi^2_1 = 0.4549 of its mean
+          }
+        }
+      }
     }
     h.x[0] = h.x[1];
     h.x[1] = h.x[2];
@@ -407,68 +430,111 @@ class WeakFormWindows {
     }
   }
 
-  // Columns of DOF i's equation: parameter index, and the rows_ columns combined.
-  int columns(int i, int* param) const noexcept {
-    int count = 0;
-    param[count++] = i;
-    param[count++] = n_ + i;
-    param[count++] = 2 * n_ + i;  // k_i (left spring; for n = 1 with a wall it holds k_1 + k_2)
-    const bool right = n_ > 1 && (i + 1 < n_ || config_.boundary == Boundary::kFixed);
-    if (right) param[count++] = 2 * n_ + i + 1;
-    return count;
-  }
+  // True if DOF i has a spring to its right in the model (a neighbour or the right wall).
+  bool right(int i) const noexcept { return n_ > 1 && (i + 1 < n_ || config_.boundary == Boundary::kFixed); }
 
-  // One DOF's corrected normal equations into normal_ / rhs_.
-  void add_dof(int i) noexcept {
+  // Row blocks [first, last] where column p of phi_ (a parameter, or p = params_: the
+  // right-hand side) has rows; first > last if none.
+  void span(int p, int& first, int& last) const noexcept {
     const int n = n_;
-    int param[4];
-    const int cols = columns(i, param);
-    phi_.col(0) = rows_.col(2 * n + i);
-    phi_.col(1) = -rows_.col(n + i);
-    phi_.col(2) = rows_.col(i);
-    if (i > 0) phi_.col(2) -= rows_.col(i - 1);
-    if (cols == 4) {
-      phi_.col(3) = rows_.col(i);
-      if (i + 1 < n) phi_.col(3) -= rows_.col(i + 1);
+    if (p < 2 * n) {
+      first = last = p % n;
+    } else if (p < params_) {  // spring j = p - 2n joins DOF j-1 and j
+      const int j = p - 2 * n;
+      first = j > 0 && right(j - 1) ? j - 1 : j;
+      last = j < n ? j : n - 1;
+      if (j == n && !right(n - 1)) first = last + 1;
+    } else {
+      first = 0;
+      last = n - 1;
     }
-    phi_.col(4) = rows_.col(3 * n + i);
-    const MatD& W = weights_[i];
-    wphi_.noalias() = W * phi_;
-    // Bias: noise loadings of the columns on the own channel (derivative order, sign).
-    const int order[4] = {2, 1, 0, 0};
-    const double sign[4] = {1.0, -1.0, 1.0, 1.0};
-    const Traces& T = traces_[i];
-    const double own = config_.bias_compensation ? noise_variance(i) : 0.0;
-    const double left = config_.bias_compensation && i > 0 ? noise_variance(i - 1) : 0.0;
-    const double right = config_.bias_compensation && i + 1 < n ? noise_variance(i + 1) : 0.0;
-    for (int a = 0; a < cols; ++a) {
-      for (int b = 0; b < cols; ++b) {
-        double v = phi_.col(a).dot(wphi_.col(b));
-        v -= own * sign[a] * sign[b] * trace(T, order[a], order[b]);
-        if (a == 2 && b == 2) v -= left * T.t[0];
-        if (a == 3 && b == 3) v -= right * T.t[0];
-        normal_(param[a], param[b]) += v;
+  }
+
+  // The window's regressors: phi_ block i holds DOF i's equation (eq. 1 in weak form), its
+  // columns the parameters m, c, k and the right-hand side int psi'' u.
+  void fill_phi() noexcept {
+    const int n = n_, F = F_;
+    phi_.setZero();
+    for (int i = 0; i < n; ++i) {
+      auto block = phi_.middleRows(i * F, F);
+      block.col(i) = rows_.col(2 * n + i);
+      block.col(n + i) = -rows_.col(n + i);
+      block.col(2 * n + i) = rows_.col(i);  // k_i (for n = 1 with walls: k_1 + k_2)
+      if (i > 0) block.col(2 * n + i) -= rows_.col(i - 1);
+      if (right(i)) {
+        block.col(2 * n + i + 1) = rows_.col(i);
+        if (i + 1 < n) block.col(2 * n + i + 1) -= rows_.col(i + 1);
       }
-      rhs_(param[a]) += phi_.col(a).dot(wphi_.col(4));
+      block.col(params_) = rows_.col(3 * n + i);
     }
   }
 
-  static double trace(const Traces& T, int d, int e) noexcept {
-    if (d > e) std::swap(d, e);
-    if (d == e) return T.t[d];                 // 00, 11, 22
-    return T.t[d == 0 ? (e == 1 ? 3 : 4) : 5];  // 01, 02, 12
+  // <W_ij, G_de> of the weights in force (|i - j| <= 2).
+  double trace(int i, int j, int d, int e) const noexcept {
+    if (!window_weighted_) return i == j ? identity_traces_(3 * d + e) : 0.0;
+    return traces_(((i * 5) + (j - i + 2)) * 9 + 3 * d + e);
   }
 
-  // One step of the pending window: rows, then one DOF per step, then the solve.
+  // Bias of the normal matrix: the regressor noise of acceleration channel c loads the
+  // columns (DOF row block, parameter, derivative order, sign) listed here, and
+  // E[N^T W N](p, q) = sum_c s_c^2 sum a_p a_q <W_ij, G_de>.
+  void subtract_bias() noexcept {
+    const int n = n_;
+    for (int c = 0; c < n; ++c) {
+      const double s2 = noise_variance(c);
+      if (!(s2 > 0.0)) continue;
+      int blk[6], par[6], ord[6], cnt = 0;
+      double sgn[6];
+      const auto add = [&](int b, int p, int d, double a) {
+        blk[cnt] = b, par[cnt] = p, ord[cnt] = d, sgn[cnt] = a, ++cnt;
+      };
+      add(c, c, 2, 1.0);
+      add(c, n + c, 1, -1.0);
+      add(c, 2 * n + c, 0, 1.0);
+      if (right(c)) add(c, 2 * n + c + 1, 0, 1.0);
+      if (c > 0) add(c - 1, 2 * n + c, 0, -1.0);           // DOF c-1's right spring
+      if (c + 1 < n) add(c + 1, 2 * n + c + 1, 0, -1.0);  // DOF c+1's left spring
+      for (int a = 0; a < cnt; ++a)
+        for (int b = 0; b < cnt; ++b)
+          normal_(par[a], par[b]) -= s2 * sgn[a] * sgn[b] * trace(blk[a], blk[b], ord[a], ord[b]);
+    }
+  }
+
+  // One step of the pending window: rows; (P + 1) n products of a row block of the weights
+  // with a column of phi_; P + 1 rows of the normal equations; the bias and the solve.
   bool window_step() noexcept {
+    const int F = F_, n = n_, P1 = params_ + 1;
     if (step_ == 0) {
       window_weighted_ = weighted_;
       build_rows();
-      normal_.setZero();
-      rhs_.setZero();
-    } else if (step_ <= n_) {
-      add_dof(step_ - 1);
+      fill_phi();
+    } else if (step_ <= P1 * n) {
+      const int p = (step_ - 1) / n, r = (step_ - 1) % n;
+      int first, last;
+      span(p, first, last);
+      auto out = xw_.col(p).segment(r * F, F);
+      if (first > last) {
+        out.setZero();
+      } else if (window_weighted_) {
+        const int w = (last - first + 1) * F;
+        out.noalias() = weight_.block(r * F, first * F, F, w) * phi_.col(p).segment(first * F, w);
+      } else {
+        out = phi_.col(p).segment(r * F, F);
+      }
+    } else if (step_ <= P1 * n + params_) {
+      const int p = step_ - 1 - P1 * n;
+      int first, last;
+      span(p, first, last);
+      if (first > last) {
+        normal_.row(p).setZero();
+        rhs_(p) = 0.0;
+      } else {
+        const int w = (last - first + 1) * F;
+        normal_.row(p).noalias() = phi_.col(p).segment(first * F, w).transpose() * xw_.block(first * F, 0, w, params_);
+        rhs_(p) = phi_.col(p).segment(first * F, w).dot(xw_.col(params_).segment(first * F, w));
+      }
     } else {
+      if (config_.bias_compensation) subtract_bias();
       solve();
       pending_ = false;
       ++results_;
@@ -483,6 +549,8 @@ class WeakFormWindows {
     const bool free_last = config_.boundary == Boundary::kFree || n_ == 1;
     // Parameters absent from every equation (k_{n+1} with a free end or n = 1): pin them.
     if (free_last) {
+      normal_.row(params_ - 1).setZero();
+      normal_.col(params_ - 1).setZero();
       normal_(params_ - 1, params_ - 1) = 1.0;
       rhs_(params_ - 1) = 0.0;
     }
@@ -511,87 +579,175 @@ class WeakFormWindows {
     }
   }
 
-  // Background refresh of the weights of one DOF at a time: stage 0 builds Sigma from the
-  // model, stages 1..F factor it column by column (left-looking Cholesky), stages F+1..2F
-  // form W = Sigma^-1 column by column and the traces <W, Gde>; then W is swapped in.
-  void refresh_step() noexcept {
+  // Noise loading of DOF i's equation error on acceleration channel c, derivative order d:
+  // m_i (d = 2), -c_i (d = 1), the stiffness matrix entry K_ic (d = 0).
+  double loading(int i, int c, int d) const noexcept {
+    const int n = n_;
+    const double kl = model_(2 * n + i), kr = right(i) ? model_(2 * n + i + 1) : 0.0;
+    if (c == i) return d == 2 ? model_(i) : d == 1 ? -model_(n + i) : kl + kr;
+    if (d != 0) return 0.0;
+    if (c == i - 1) return -kl;
+    if (c == i + 1) return -kr;
+    return 0.0;
+  }
+
+  // Background refresh of the weights W = Sigma^-1 over all n F rows (the equation errors of
+  // neighbouring DOFs share channels: Sigma is block pentadiagonal), in steps of at most about
+  // 9 F^2 multiply-adds, as many per sample as a budget of 6 F^2 allows: stage 1 builds Sigma
+  // block by block from the model into chol_'s lower triangle, stage 2 factors it in place
+  // column by column (left-looking, within the band), stage 3 solves for W column by column, a
+  // row block per step, stage 4 forms the traces <W_ij, G_de> of the bias term, stage 5 swaps
+  // W in between windows. The first refresh keeps only the diagonal blocks (band 0: each DOF's
+  // rows weighted alone, about n^2 times less work), so that weighted windows start early.
+  void refresh() noexcept {
     if (!config_.weighted) return;
-    const int i = refresh_dof_;
-    const int F = F_;
-    if (refresh_stage_ == 0) {
-      if (!build_sigma(i)) return;  // no usable model yet
-      for (double& t : next_traces_.t) t = 0.0;
-      refresh_stage_ = 1;
-      return;
-    }
-    const int per_step = std::max(1, F / 8);
-    if (refresh_stage_ <= F) {
-      for (int s = 0; s < per_step && refresh_stage_ <= F; ++s) {
-        const int j = refresh_stage_ - 1;
-        double d = sigma_(j, j) - chol_.row(j).head(j).squaredNorm();
-        if (!(d > 0.0) || !std::isfinite(d)) {  // not positive definite: keep the old weights
-          refresh_stage_ = 0;
-          refresh_dof_ = (i + 1) % n_;
-          return;
-        }
-        d = std::sqrt(d);
-        chol_(j, j) = d;
-        const int below = F - j - 1;
-        if (below > 0) {
-          auto col = chol_.col(j).tail(below);
-          col = sigma_.col(j).tail(below);
-          col.noalias() -= chol_.bottomLeftCorner(below, j) * chol_.row(j).head(j).transpose();
-          col /= d;
-        }
-        ++refresh_stage_;
-      }
-      return;
-    }
-    for (int s = 0; s < 2 && refresh_stage_ <= 2 * F; ++s) {
-      const int j = refresh_stage_ - F - 1;
-      auto w = wnext_.col(j);
-      w.setZero();
-      w(j) = 1.0;
-      chol_.template triangularView<Eigen::Lower>().solveInPlace(w);
-      chol_.template triangularView<Eigen::Lower>().transpose().solveInPlace(w);
-      for (int p = 0; p < 6; ++p) {
-        const double half = p >= 3 ? 0.5 : 1.0;  // S = G + G^T: <W, G> = <W, S> / 2
-        next_traces_.t[p] += half * w.dot(gram_[p].col(j));
-      }
-      ++refresh_stage_;
-    }
-    if (refresh_stage_ > 2 * F) {
-      weights_[i] = wnext_;
-      traces_[i] = next_traces_;
-      weighted_dofs_ = std::min(weighted_dofs_ + 1, n_);
-      if (i == n_ - 1) weighted_ = true;
-      refresh_stage_ = 0;
-      refresh_dof_ = (i + 1) % n_;
+    const double budget = 6.0 * F_ * F_;
+    double spent = 0.0;
+    while (spent < budget) {
+      const double cost = refresh_step();
+      if (cost < 0.0) return;  // waiting: no model yet, or a window in progress
+      spent += cost + 1.0;
     }
   }
 
-  // Sigma of DOF i from the model; false if the model is not usable.
-  bool build_sigma(int i) noexcept {
-    const int n = n_;
-    const double m = model_(i), c = model_(n + i), kl = model_(2 * n + i);
-    const bool right = n > 1 && (i + 1 < n || config_.boundary == Boundary::kFixed);
-    const double kr = right ? model_(2 * n + i + 1) : 0.0;
-    if (!(m > 0.0) || !std::isfinite(c) || !std::isfinite(kl) || !std::isfinite(kr)) return false;
-    const double kk = kl + kr;
-    const double own = noise_variance(i);
-    const double left = i > 0 ? noise_variance(i - 1) * kl * kl : 0.0;
-    const double rgt = i + 1 < n ? noise_variance(i + 1) * kr * kr : 0.0;
-    const double fu = noise_variance(n + i);
-    if (!(own > 0.0)) return false;  // noise-free: the weights do not matter
-    // gram_: 0 G00, 1 G11, 2 G22, 3 S01, 4 S02, 5 S12
-    sigma_.noalias() = (own * m * m + fu) * gram_[2];
-    sigma_.noalias() += (own * c * c) * gram_[1];
-    sigma_.noalias() += (own * kk * kk + left + rgt) * gram_[0];
-    sigma_.noalias() -= (own * m * c) * gram_[5];
-    sigma_.noalias() += (own * m * kk) * gram_[4];
-    sigma_.noalias() -= (own * c * kk) * gram_[3];
-    chol_.setZero();
+  // One step; its cost in multiply-adds, or -1 if the refresh cannot advance in this sample.
+  double refresh_step() noexcept {
+    switch (refresh_stage_) {
+      case 0:
+        if (!usable_model()) return -1.0;
+        band_ = weighted_ ? 2 : 0;
+        refresh_stage_ = 1;
+        refresh_pos_ = 0;
+        return 0.0;
+      case 1: return sigma_step();
+      case 2: return cholesky_step();
+      case 3: return inverse_step();
+      case 4: return traces_step();
+      default:
+        if (pending_) return -1.0;  // never change the weights under a window in progress
+        weight_.swap(wnext_);
+        traces_.swap(next_traces_);
+        weighted_ = true;
+        refresh_stage_ = 0;
+        return -1.0;
+    }
+  }
+
+  bool usable_model() const noexcept {
+    for (int i = 0; i < n_; ++i) {
+      if (!(model_(i) > 0.0) || !std::isfinite(model_(i)) || !std::isfinite(model_(n_ + i))) return false;
+      if (!(noise_variance(i) > 0.0)) return false;  // noise-free: the weights do not matter
+    }
+    for (int j = 2 * n_; j < params_; ++j)
+      if (!std::isfinite(model_(j)) && (j < params_ - 1 || right(n_ - 1))) return false;
     return true;
+  }
+
+  // Block (i, j) of Sigma, i >= j >= i - 2 (zero outside the band), and the zero blocks left
+  // of the band in row i.
+  double sigma_step() noexcept {
+    const int F = F_, i = refresh_pos_ / 3, j = i - refresh_pos_ % 3;
+    double cost = 0.0;
+    if (j == i && i > 2) chol_.block(i * F, 0, F, (i - 2) * F).setZero();
+    if (j >= 0) {
+      auto block = chol_.block(i * F, j * F, F, F);
+      block.setZero();
+      for (int c = std::max(0, i - 1); c <= std::min(n_ - 1, j + 1) && i - j <= band_; ++c) {
+        const double s2 = noise_variance(c);
+        for (int d = 0; d < 3; ++d)
+          for (int e = 0; e < 3; ++e) {
+            const double a = s2 * loading(i, c, d) * loading(j, c, e);
+            if (a == 0.0) continue;
+            block.noalias() += a * gram_[3 * d + e];
+            cost += F * F;
+          }
+      }
+      if (i == j) block.noalias() += noise_variance(n_ + i) * gram_[8];
+    }
+    if (++refresh_pos_ == 3 * n_) {
+      refresh_stage_ = 2;
+      refresh_pos_ = 0;
+    }
+    return cost + F * F;
+  }
+
+  // Column j of the Cholesky factor, in place; rows and columns within the band (fill-in stays
+  // inside it). Not positive definite: keep the old weights.
+  double cholesky_step() noexcept {
+    const int F = F_, j = refresh_pos_, b = j / F;
+    const int k0 = std::max(0, b - band_) * F, r1 = std::min(R_, (b + band_ + 1) * F);
+    auto lj = chol_.row(j).segment(k0, j - k0);
+    const double d = chol_(j, j) - lj.squaredNorm();
+    if (!(d > 0.0) || !std::isfinite(d)) {
+      refresh_stage_ = 0;
+      return -1.0;
+    }
+    const double root = std::sqrt(d);
+    chol_(j, j) = root;
+    const int below = r1 - j - 1;
+    if (below > 0) {
+      auto col = chol_.col(j).segment(j + 1, below);
+      col.noalias() -= chol_.block(j + 1, k0, below, j - k0) * lj.transpose();
+      col /= root;
+    }
+    if (++refresh_pos_ == R_) {
+      refresh_stage_ = 3;
+      refresh_pos_ = 0;
+      refresh_sub_ = 0;
+    }
+    return static_cast<double>(below + 1) * (j - k0 + 1);
+  }
+
+  // Column j of W = (L L^T)^-1, one row block per step: forward from j's block down, then
+  // backward from the last block up (within j's block only while the band is 0).
+  double inverse_step() noexcept {
+    const int F = F_, j = refresh_pos_, bj = j / F;
+    const int last = band_ > 0 ? n_ - 1 : bj, first = band_ > 0 ? 0 : bj;
+    const int forward = last - bj + 1, steps = forward + last - first + 1;
+    auto w = wnext_.col(j);
+    const auto reach = [&](int k) { return std::min(R_, (k / F + band_ + 1) * F); };
+    double cost = 0.0;
+    if (refresh_sub_ < forward) {
+      const int b = bj + refresh_sub_;
+      if (refresh_sub_ == 0) {
+        w.setZero();
+        w(j) = 1.0;
+      }
+      for (int k = std::max(j, b * F); k < (b + 1) * F; ++k) {
+        w(k) /= chol_(k, k);
+        const int end = reach(k);
+        if (end > k + 1) w.segment(k + 1, end - k - 1).noalias() -= w(k) * chol_.col(k).segment(k + 1, end - k - 1);
+        cost += end - k;
+      }
+    } else {
+      const int b = last - (refresh_sub_ - forward);
+      for (int r = (b + 1) * F - 1; r >= b * F; --r) {
+        const int end = reach(r);
+        double x = w(r);
+        if (end > r + 1) x -= chol_.col(r).segment(r + 1, end - r - 1).dot(w.segment(r + 1, end - r - 1));
+        w(r) = x / chol_(r, r);
+        cost += end - r;
+      }
+    }
+    if (++refresh_sub_ == steps) {
+      refresh_sub_ = 0;
+      if (++refresh_pos_ == R_) {
+        refresh_stage_ = 4;
+        refresh_pos_ = 0;
+      }
+    }
+    return cost;
+  }
+
+  // <W_ij, G_de> for one block pair (i, j = i - 2 .. i + 2; zero outside the band).
+  double traces_step() noexcept {
+    const int F = F_, i = refresh_pos_ / 5, o = refresh_pos_ % 5, j = i + o - 2;
+    const bool inside = j >= 0 && j < n_ && std::abs(i - j) <= band_;
+    for (int de = 0; de < 9; ++de)
+      next_traces_((i * 5 + o) * 9 + de) = inside ? wnext_.block(i * F, j * F, F, F).cwiseProduct(gram_[de]).sum()
+                                                  : 0.0;
+    if (++refresh_pos_ == 5 * n_) refresh_stage_ = 5;
+    return inside ? 9.0 * F * F : 1.0;
   }
 
   Config config_;
@@ -599,21 +755,19 @@ class WeakFormWindows {
   int params_;
   Eigen::LDLT<MatD> ldlt_;
   long L_ = 0, H_ = 0;
-  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, steps_ = 1;
+  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, R_ = 0, steps_ = 1, window_steps_ = 1;
   long phase_ = 0, in_hop_ = 0, hops_ = 0;
   VecC z_;
   MatC bins_, seg_;
-  MatD rows_, phi_, wphi_, sigma_, chol_, wnext_, normal_, inverse_;
-  MatD gram_[6];
-  Traces identity_traces_{}, next_traces_{};
-  detail::Storage<MatD, N> weights_{};
-  detail::Storage<Traces, N> traces_{};
+  MatD rows_, phi_, xw_, weight_, chol_, wnext_, normal_, inverse_;
+  MatD gram_[9];
+  VecD traces_, next_traces_, identity_traces_;
   detail::Storage<Noise, N == Dynamic ? Dynamic : 2 * N> noise_{};
   detail::Storage<History, N == Dynamic ? Dynamic : 2 * N> history_{};
   VecD rhs_, solution_, model_;
   bool pending_ = false;
   int step_ = 0;
-  int refresh_dof_ = 0, refresh_stage_ = 0, weighted_dofs_ = 0;
+  int refresh_stage_ = 0, refresh_pos_ = 0, refresh_sub_ = 0, band_ = 0;
   bool weighted_ = false, window_weighted_ = false;
   long results_ = 0;
   Vector<Scalar, kParams> result_, variance_;
