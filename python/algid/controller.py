@@ -17,6 +17,24 @@ commanded force's integral exceeds the applied one's by ``tau w``, a velocity er
 law, 5 ms lag: tracking peak 3.7 % of the stroke on the commanded force, 0.15 % on the
 measured one).
 
+**Position feedback in eq. 10 (the rig variant, ``velocity_pole``).** Eq. 10 rebuilds the
+velocity from the forces without feedback, so a parameter error integrates into it: with a
+spring off by ``dk``, ``xd_i`` drifts at ``dk x / m_i`` while a mass holds at ``x``, and the
+loop's integral action turns that ramp into a tracking error ``beta_2 dk x / (m_i beta_0)``
+(1 % on a wall spring of Table 1: about 4 % of the stroke). A rig measures the positions, so
+in sampled mode the law can pull the integral of its velocity estimate onto them::
+
+    xd_i <- xd_i - 2 p (P_i - x_i) - p^2 Q_i,    P_i = int_0^t xd_i,   Q_i = int_0^t (P_i - x_i)   (10c)
+
+The error ``r = P - x`` then obeys ``r'' + 2 p r' + p^2 r = delta'`` for a velocity error
+``delta`` of eq. 10, so a drifting ``delta`` (a ramp) leaves no velocity error in the steady
+state. At the first substitution ``P`` restarts at ``x`` and ``Q`` at 0: the correction made
+up for the nominal model's error, which the new parameters do not have, and carried over it
+disturbs the loop (and with it the estimates) for about ``1 / p``. ``velocity_pole=None``
+(the default, and continuous mode always) is the paper's eq. 10. Table 1 on the rig at
+40 dB (three seeds, 0, 2 and 5 ms lag), ``p = 40 rad/s``: the tracking peak after 1 s is
+1.06-1.12 % of the stroke with (10c), 1.5-3.3 % without (``bench/demo_report.py --rig-only``).
+
 **Eq. 10 with moving estimates.** By default (``eq10="integrated"``) the stiffness
 estimates sit *inside* the integrals, ``int_0^t k_i(s) (x_i - x_{i-1})(s) ds``: identical to
 the paper's form for constant estimates, but when the estimates move, the paper's product
@@ -268,6 +286,9 @@ class TrackingController:
         A known probing force added to the commanded force of eq. 8 (see
         :class:`~algid.trajectories.Multisine`); it is part of ``u`` in eq. 10 and in what
         the estimator sees.
+    velocity_pole : float or None
+        Sampled mode: the double pole ``p`` [rad/s] of the position feedback (10c) in eq. 10
+        (see the module docstring); None (default) is the paper's eq. 10.
     actuator_lag_s : float, "estimate" or None
         Sampled mode on a rig: the time constant [s] of the first-order actuator behind the
         held command (0: none), or ``"estimate"``: identify it on line from the commands and
@@ -302,7 +323,11 @@ class TrackingController:
         hold: bool = False,
         excitation: Callable[[float], np.ndarray] | None = None,
         actuator_lag_s: float | str | None = None,
+        velocity_pole: float | None = None,
     ) -> None:
+        if velocity_pole is not None and not velocity_pole > 0:
+            raise ValueError(f"velocity_pole must be > 0 rad/s or None, got {velocity_pole}")
+        self.velocity_pole = None if velocity_pole is None else float(velocity_pole)
         if actuator_lag_s is not None and actuator_lag_s != "estimate" and not actuator_lag_s >= 0:
             raise ValueError("actuator_lag_s must be >= 0, 'estimate' or None")
         self.actuator_lag_s = actuator_lag_s
@@ -343,8 +368,16 @@ class TrackingController:
         self.n, self.dt, self.boundary, self.mode = n, float(dt), boundary, mode
         self.k_switch = int(round(self.switch_time_s / self.dt))
         self.estimator = self.estimator_factory(n, self.dt, boundary)
+        if self.velocity_pole is not None and mode != "sampled":
+            raise ValueError("velocity_pole (position feedback in eq. 10) is for sampled mode only")
         self.law = ControlLaw(
-            self.reference, (self.beta0, self.beta1, self.beta2), self.eq10, self.excitation, n, self.dt
+            self.reference,
+            (self.beta0, self.beta1, self.beta2),
+            self.eq10,
+            self.excitation,
+            n,
+            self.dt,
+            velocity_pole=self.velocity_pole,
         )
         self.gate = EstimateGate(
             n, boundary, self.dt, self.accept, self.settle_window_s, self.settle_tol, self.hold, self.nominal_mass_kg
@@ -383,11 +416,14 @@ class TrackingController:
         else:
             p = self.gate.parameters()
             used_acc = self.gate.accepted.copy()
-        if self.eq10 == "integrated" and np.any(used_acc & ~self._used_accepted):
+        first = np.any(used_acc & ~self._used_accepted)
+        if self.eq10 == "integrated" and first:
             # a first substitution: the new stiffnesses model the whole past (as in the
             # paper's product form); later changes enter the integral as they come
             X = z[self.n : 2 * self.n] if z is not None else self.law.X
             self.law.rebase(p.K, self._p_prev.K, X)
+        if first:
+            self.law.restart_velocity_feedback()
         self._used_accepted |= used_acc
         self._p_prev = p
         self.history.used(k, p)

@@ -92,6 +92,9 @@ DRIFT_TIMES_S = (0.1, 0.5, 1.0, 5.0)
 #: Default probe amplitude per multisine line [N] when the accelerometers are noisy.
 DEFAULT_EXCITATION_N = 0.05
 
+#: Position feedback of eq. 10 on the rig [rad/s] (``TrackingController(velocity_pole=...)``).
+RIG_VELOCITY_POLE = 40.0
+
 
 def demo_chain(n: int) -> Chain:
     """Table 1 for ``n = 3``; Table 1's values cycled to ``n`` DOF otherwise."""
@@ -238,24 +241,39 @@ def summarize(res: Any, wall_s: float = float("nan"), noise_db: float | None = N
     }
 
 
-def substitution_disturbance(res: Any, span_s: float = 0.1) -> float:
-    """How far the substitution of the estimates into the law disturbs the estimates: the
-    largest growth of an estimate's relative error [-] over ``span_s`` [s] from the first
-    interval that uses them, against its error on the sample before (0 if none grows;
-    NaN if nothing was substituted)."""
-    log, t, chain = res.controller_log, res.t, res.chain
+def _relative_errors(res: Any) -> np.ndarray:
+    """(T, q) relative error [-] of every identified nonzero estimate the loop logged."""
+    E, true = res.estimates, res.chain.identifiable()
+    keep = np.isfinite(true) & (true != 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.abs(np.concatenate([E["mass"], E["damping"], E["stiffness"]], axis=1)[:, keep] / true[keep] - 1)
+    return np.where(np.isfinite(rel), rel, np.inf)
+
+
+def substitution_disturbance(res: Any, reference: Any = None, span_s: float = 0.1) -> float:
+    """How far the substitution of the estimates into the law disturbs the estimates [-],
+    over ``span_s`` [s] from the first interval that uses them (NaN if nothing was
+    substituted).
+
+    With ``reference``, the same loop (same noise) whose law never took the estimates: the
+    largest excess of an estimate's relative error over the reference's at the same sample
+    (both runs are identical up to the substitution, so the excess is what the substitution
+    caused). Without: the largest growth of an estimate's relative error against its error
+    on the sample before, which also counts the estimator's own early drift."""
+    log, t = res.controller_log, res.t
     if log.get("first_accepted_s") is None:
         return float("nan")
     k_sub = max(int(log["k_switch"]), int(round(log["first_accepted_s"] * res.fs_hz)) + 1)
     if not 1 <= k_sub < len(t):
         return float("nan")
-    E = res.estimates
-    true = chain.identifiable()
-    keep = np.isfinite(true) & (true != 0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.abs(np.concatenate([E["mass"], E["damping"], E["stiffness"]], axis=1)[:, keep] / true[keep] - 1)
-    win = rel[k_sub : k_sub + int(round(span_s * res.fs_hz)) + 1]
-    growth = np.where(np.isfinite(win), win, np.inf) - np.where(np.isfinite(rel[k_sub - 1]), rel[k_sub - 1], 0.0)
+    rel = _relative_errors(res)
+    span = slice(k_sub, k_sub + int(round(span_s * res.fs_hz)) + 1)
+    if reference is None:
+        base = np.where(np.isfinite(rel[k_sub - 1]), rel[k_sub - 1], 0.0)
+    else:
+        base = _relative_errors(reference)[span]
+    with np.errstate(invalid="ignore"):
+        growth = np.nan_to_num(rel[span] - base, nan=0.0, posinf=np.inf)
     return float(max(0.0, np.max(growth)))
 
 
@@ -273,6 +291,16 @@ def _continuous_factory(n: int, dt: float, boundary: str) -> Any:
     from .controller import ContinuousAdapter
 
     return ContinuousAdapter(n, dt, boundary)
+
+
+#: The rig's running estimate: weak-form windows of 0.3 s (see the module docstring).
+RIG_ESTIMATOR_OPTIONS: dict[str, Any] = {"method": "weak_form", "window_s": 0.3}
+
+
+def _rig_factory(n: int, dt: float, boundary: str) -> Any:
+    from .controller import ContinuousAdapter
+
+    return ContinuousAdapter(n, dt, boundary, **RIG_ESTIMATOR_OPTIONS)
 
 
 def _actual_snr_noise(noise_db: float, seed: int | None, scale: np.ndarray) -> Any:
@@ -350,12 +378,18 @@ def run_scenario(
     drift: bool = True,
     actuator_lag_s: float = 0.0,
     controller_lag_s: float | str = "estimate",
+    velocity_pole: float | None | str = "auto",
+    disturbance_reference: bool = False,
 ) -> tuple[Any, dict[str, Any]]:
     """Simulate the demo's closed loop and summarise it; returns ``(result, summary)``.
 
     ``estimator``: ``single``, ``continuous`` or ``auto``; ``excitation_n``: probe amplitude
     per multisine line [N] (None: 0.05 N with noise, none without); ``drift``: also run both
-    estimators open loop on the recorded samples (the drift table)."""
+    estimators open loop on the recorded samples (the drift table); ``velocity_pole``: the
+    position feedback of eq. 10 [rad/s] (``"auto"``: :data:`RIG_VELOCITY_POLE` in sampled
+    mode, none in continuous mode); ``disturbance_reference``: also run the same loop
+    (same noise) with the estimates never substituted, for
+    :func:`substitution_disturbance` against it (``estimate_disturbance_vs_reference``)."""
     from .controller import TrackingController
     from .simulator import simulate
     from .trajectories import BezierReference, Multisine
@@ -367,10 +401,14 @@ def run_scenario(
     t_out, t_back = (0.0, 0.4 * duration_s), (0.5 * duration_s, 0.9 * duration_s)
     ref = BezierReference.paper(n, t_out=t_out, t_back=t_back)
 
-    def controller() -> Any:
-        kw: dict[str, Any] = dict(reference=ref, eq10=eq10)
+    if velocity_pole == "auto":
+        velocity_pole = RIG_VELOCITY_POLE if mode == "sampled" else None
+
+    def controller(use_estimates: bool = True) -> Any:
+        kw: dict[str, Any] = dict(reference=ref, eq10=eq10, use_estimates=use_estimates, velocity_pole=velocity_pole)
         if kind == "continuous":
-            kw.update(estimator_factory=_continuous_factory, accept="sigma")
+            factory = _rig_factory if mode == "sampled" else _continuous_factory
+            kw.update(estimator_factory=factory, accept="sigma")
         if excitation_n > 0:
             kw["excitation"] = Multisine(n, excitation_n)
         if mode == "sampled":
@@ -387,18 +425,24 @@ def run_scenario(
         cal = simulate(chain, None, duration_s, 1000.0, controller=ctrl0, mode=mode, actuator_lag_s=actuator_lag_s)
         planned = nominal_closed_loop_rms(chain, ctrl0, cal.t)["accel"]
         noise = _actual_snr_noise(noise_db, seed, np.sqrt(np.mean(cal.a_true**2, axis=0)) / planned)
-    res = simulate(
-        chain,
-        None,
-        duration_s,
-        1000.0,
-        controller=controller(),
-        mode=mode,
-        noise=noise,
-        progress=progress,
-        actuator_lag_s=actuator_lag_s,
-    )
+
+    def loop(use_estimates: bool = True, report: Callable[[float], None] | None = None) -> Any:
+        return simulate(
+            chain,
+            None,
+            duration_s,
+            1000.0,
+            controller=controller(use_estimates),
+            mode=mode,
+            noise=noise,
+            progress=report,
+            actuator_lag_s=actuator_lag_s,
+        )
+
+    res = loop(report=progress)
     s = summarize(res, time.perf_counter() - t0, noise_db)
+    if disturbance_reference:
+        s["substitution"]["estimate_disturbance_vs_reference"] = substitution_disturbance(res, loop(False))
     s["estimator"] = kind
     s["excitation_n"] = float(excitation_n)
     s["actuator_lag_s"] = float(actuator_lag_s)
@@ -523,7 +567,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         type=float,
         default=0.0,
         help="time constant of a first-order actuator behind the command [ms] (default 0); "
-        "in sampled mode the controller knows it (a rig)",
+        "in sampled mode the controller identifies it from its commands and the measured forces",
     )
     p.add_argument("--n", type=int, default=3, help="number of DOF (default 3, Table 1)")
     p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
