@@ -20,9 +20,10 @@ measured one).
 **Position feedback in eq. 10 (the rig variant, ``velocity_pole``).** Eq. 10 rebuilds the
 velocity from the forces without feedback, so a parameter error integrates into it: with a
 spring off by ``dk``, ``xd_i`` drifts at ``dk x / m_i`` while a mass holds at ``x``, and the
-loop's integral action turns that ramp into a tracking error ``beta_2 dk x / (m_i beta_0)``
-(1 % on a wall spring of Table 1: about 4 % of the stroke). A rig measures the positions, so
-in sampled mode the law can pull the integral of its velocity estimate onto them::
+loop's integral action turns that ramp into a steady tracking error
+``(beta_2 - c_i / m_i) dk x / (m_i beta_0)`` (1 % on ``k_1`` of Table 1: 3.6 % of the
+stroke). A rig measures the positions, so in sampled mode the law can pull the integral of
+its velocity estimate onto them::
 
     xd_i <- xd_i - 2 p (P_i - x_i) - p^2 Q_i,    P_i = int_0^t xd_i,   Q_i = int_0^t (P_i - x_i)   (10c)
 
