@@ -76,8 +76,8 @@ class ControlLaw:
         excitation: Callable[[float], np.ndarray] | None,
         n: int,
         dt: float,
-        force_source: str = "measured",
         velocity_pole: float | None = None,
+        force_source: str = "measured",
     ) -> None:
         if force_source not in ("measured", "commanded"):
             raise ValueError(f"force_source must be 'measured' or 'commanded', got {force_source!r}")
