@@ -34,7 +34,7 @@ up for the nominal model's error, which the new parameters do not have, and carr
 disturbs the loop (and with it the estimates) for about ``1 / p``. ``velocity_pole=None``
 (the default, and continuous mode always) is the paper's eq. 10. Table 1 on the rig at
 40 dB (three seeds, 0, 2 and 5 ms lag), ``p = 40 rad/s``: the tracking peak after 1 s is
-1.06-1.12 % of the stroke with (10c), 1.2-2.8 % without (5 of 9 runs above 2 %;
+1.06-1.12 % of the stroke with (10c), 1.2-2.2 % without (1 of 9 runs above 2 %;
 ``bench/demo_report.py --rig-only`` and ``run_scenario(..., velocity_pole=None)``).
 
 **Eq. 10 with moving estimates.** By default (``eq10="integrated"``) the stiffness
