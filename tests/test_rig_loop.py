@@ -129,8 +129,8 @@ def test_position_feedback_is_for_sampled_mode_only():
         simulate(TABLE1, None, 0.2, 1000.0, controller=ctrl)
 
 
-def _rig(lag_s: float, noise_db: float | None) -> tuple:
-    return run_scenario(3, "sampled", noise_db, 0, 2.0, drift=False, actuator_lag_s=lag_s)
+def _rig(lag_s: float, noise_db: float | None, **kw) -> tuple:
+    return run_scenario(3, "sampled", noise_db, 0, 2.0, drift=False, actuator_lag_s=lag_s, **kw)
 
 
 def _worst_after(res, t_s: float) -> float:
@@ -141,7 +141,8 @@ def _worst_after(res, t_s: float) -> float:
 def test_noise_free_rig_loop_estimates_and_tracks(lag_s):
     res, s = _rig(lag_s, None)
     assert s["estimator"] == "continuous" and s["excitation_n"] > 0  # the demo's rig defaults
-    assert s["all_stay_within_1pct_s"] <= 0.5  # 0.16-0.22 s (the raw samples: never)
+    assert s["all_stay_within_1pct_s"] <= 0.5  # 0.16-0.18 s (the raw samples: never)
+    assert s["estimates_substituted_s"] == pytest.approx(0.1)  # the growing window's, at the switch
     assert _worst_after(res, 0.5) < 0.002  # 0.04 %
     assert s["tracking"]["peak_after_1s_pct_stroke"] < 2.0  # about 1 %, the probe's motion
 
@@ -150,9 +151,13 @@ def test_noise_free_rig_loop_estimates_and_tracks(lag_s):
 def test_noisy_rig_loop_estimates_and_tracks(lag_s):
     """40 dB on the accelerations: with (10c) the loop tracks within 2 % of the stroke after
     1 s (0.9-1.1 %; without it the 5 s runs reach up to 2.2 %), the estimates within a
-    few percent (0.24-1.1 % after 1 s: the dampings' information limit, not the loop)."""
-    res, s = _rig(lag_s, 40.0)
-    assert s["estimates_substituted_s"] is not None
+    few percent (0.24-1.1 % after 1 s: the dampings' information limit, not the loop). The
+    growing window never steadies within 1 % under this noise, so the law waits for the
+    running estimate, and the substitution disturbs the estimates by well under 1 % (0.1-0.2 %
+    above the same loop's, same noise, that never takes them)."""
+    res, s = _rig(lag_s, 40.0, disturbance_reference=True)
+    assert s["estimates_substituted_s"] >= s["continuous_running_from_s"]
+    assert s["substitution"]["estimate_disturbance_vs_reference"] < 0.01
     assert s["tracking"]["peak_after_1s_pct_stroke"] < 2.0
     assert _worst_after(res, 1.0) < 0.04
 
