@@ -83,7 +83,7 @@ law keeps the nominal parameters: the loop stays stable but does not track.
 physically admissible; the first substitution waits until all DOFs pass, afterwards each
 DOF follows the estimates while they pass and keeps its last accepted values otherwise.
 With 40 dB on the accelerations and a 0.05 N-per-line probe multisine
-(:class:`~algid.trajectories.Multisine`) the demo substitutes at about 0.2 s and the peak
+(:class:`~algid.trajectories.Multisine`) the continuous-mode demo substitutes at about 0.2 s and the peak
 tracking error after 1 s is 1.8-2.8 % of the stroke over three seeds (the single window in
 the same loop: 12.6 %; ``bench/demo_report.py``).
 
