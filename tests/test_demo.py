@@ -86,6 +86,9 @@ def test_cli_writes_table_figures_and_json(tmp_path, capsys):
     assert len(summary["parameters"]) == 7
     bad = parser.parse_args(["demo", "--n", "0", "--out", str(tmp_path)])
     assert bad.func(bad) == 2
+    bad = parser.parse_args(["demo", "--velocity-pole", "40", "--out", str(tmp_path)])  # continuous mode
+    assert bad.func(bad) == 2
+    assert "needs --mode sampled" in capsys.readouterr().err
 
 
 def test_resolve_estimator():

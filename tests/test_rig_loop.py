@@ -3,14 +3,17 @@ the measured force, and the estimator fed the smooth-equivalent samples (issue 1
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.integrate import quad
 
 import algid
 from algid.chain import TABLE1
+from algid.control_law import pole_placement_gains
 from algid.controller import BezierReference, TrackingController
-from algid.demo import _continuous_factory, run_scenario
+from algid.demo import _continuous_factory, _relative_errors, run_scenario, substitution_disturbance
 from algid.estimate_gate import EstimateGate
 from algid.held_input import HeldLaggedInput, LagEstimator
 from algid.simulator import simulate
@@ -91,26 +94,87 @@ def test_eq10_on_the_measured_force_tracks_behind_a_lag():
     assert peaks[1] > 3 * peaks[0]
 
 
-def _rig(lag_s: float, noise_db: float | None) -> dict:
-    return run_scenario(3, "sampled", noise_db, 0, 2.0, drift=False, actuator_lag_s=lag_s)[1]
+class _SpringOff(_Truth):
+    """The true parameters but ``k_1`` 1 % high."""
+
+    def __init__(self, n, dt, boundary):
+        super().__init__(n, dt, boundary)
+        self.stiffness[0] *= 1.01
+
+
+@pytest.mark.parametrize("lag_s", [0.0, 5e-3])
+def test_position_feedback_removes_the_velocity_drift_of_a_spring_error(lag_s):
+    """k_1 1 % off in the law: eq. 10's velocity drifts at dk x1 / m1 while DOF 1 holds at
+    x1 = 5 mm, and the loop settles at e1 = (beta_2 - c1/m1) dk x1 / (m1 beta_0) (3.6 % of the
+    stroke, the closed form); (10c) pulls int xd onto the measured positions and removes it."""
+    ref = BezierReference.paper(3, t_out=(0.0, 0.8), t_back=(1.0, 1.8))
+    peak, hold = {}, {}
+    for pole in (None, 40.0):
+        ctrl = TrackingController(reference=ref, estimator_factory=_SpringOff, velocity_pole=pole, actuator_lag_s=lag_s)
+        res = simulate(TABLE1, None, 2.0, 1000.0, controller=ctrl, mode="sampled", actuator_lag_s=lag_s)
+        err = np.abs(res.x - res.x_ref)
+        peak[pole] = np.max(err[res.t >= 0.5]) / 0.005
+        hold[pole] = err[(res.t >= 0.95) & (res.t < 1.0), 0].mean()
+    m1, c1, dk = TABLE1.mass[0], TABLE1.damping[0], 0.01 * TABLE1.stiffness[0]
+    beta0, beta1, beta2 = pole_placement_gains()
+    assert hold[None] == pytest.approx((beta2 - c1 / m1) * dk * 0.005 / (m1 * beta0), rel=0.1)
+    assert peak[None] > 0.03
+    assert peak[40.0] < 0.01  # 0.24 % (no lag), 0.64 % (5 ms)
+    assert hold[40.0] < 0.1 * hold[None]
+
+
+def test_position_feedback_is_for_sampled_mode_only():
+    ctrl = TrackingController(estimator_factory=_Truth, velocity_pole=40.0)
+    with pytest.raises(ValueError, match="sampled mode only"):
+        simulate(TABLE1, None, 0.2, 1000.0, controller=ctrl)
+
+
+def _rig(lag_s: float, noise_db: float | None, **kw) -> tuple:
+    return run_scenario(3, "sampled", noise_db, 0, 2.0, drift=False, actuator_lag_s=lag_s, **kw)
+
+
+def _worst_after(res, t_s: float) -> float:
+    return float(np.max(_relative_errors(res)[res.t >= t_s]))
 
 
 @pytest.mark.parametrize("lag_s", [2e-3, 5e-3])
 def test_noise_free_rig_loop_estimates_and_tracks(lag_s):
-    s = _rig(lag_s, None)
+    res, s = _rig(lag_s, None)
     assert s["estimator"] == "continuous" and s["excitation_n"] > 0  # the demo's rig defaults
-    assert s["all_stay_within_1pct_s"] <= 0.5  # 0.19-0.3 s (the raw samples: never)
-    assert s["max_rel_err_after_1s"] < 0.002
+    assert s["all_stay_within_1pct_s"] <= 0.5  # 0.16-0.18 s (the raw samples: never)
+    assert s["estimates_substituted_s"] == pytest.approx(0.1)  # the growing window's, at the switch
+    assert _worst_after(res, 0.5) < 0.002  # 0.04 %
     assert s["tracking"]["peak_after_1s_pct_stroke"] < 2.0  # about 1 %, the probe's motion
 
 
-def test_noisy_rig_loop_tracks():
-    """40 dB on the accelerations, 2 ms lag: the loop tracks within 5 % of the stroke after
-    1 s (3.2 % measured; the single window with the raw samples: 68 % noise-free)."""
-    s = _rig(2e-3, 40.0)
-    assert s["estimates_substituted_s"] is not None
-    assert s["tracking"]["peak_after_1s_pct_stroke"] < 5.0
-    assert s["max_rel_err_at_end"] < 0.1
+@pytest.mark.parametrize("lag_s", [2e-3, 5e-3])
+def test_noisy_rig_loop_estimates_and_tracks(lag_s):
+    """40 dB on the accelerations: with (10c) the loop tracks within 2 % of the stroke after
+    1 s (0.9-1.1 %; without it the 5 s runs reach up to 2.2 %), the estimates within a
+    few percent (0.24-1.1 % after 1 s: the dampings' information limit, not the loop). The
+    growing window never steadies within 1 % under this noise, so the law waits for the
+    running estimate, and the substitution disturbs the estimates by well under 1 % (0.1-0.2 %
+    above the same loop's, same noise, that never takes them)."""
+    res, s = _rig(lag_s, 40.0, disturbance_reference=True)
+    assert s["estimates_substituted_s"] >= s["continuous_running_from_s"]
+    assert s["substitution"]["estimate_disturbance_vs_reference"] < 0.01
+    assert s["tracking"]["peak_after_1s_pct_stroke"] < 2.0
+    assert _worst_after(res, 1.0) < 0.04
+
+
+def test_substitution_disturbance_against_a_reference_run():
+    """Against itself the disturbance is 0; an estimate bumped by 2 % within 0.1 s of the
+    substitution reads as a 2 % disturbance; after the window it does not count."""
+    res, _ = _rig(2e-3, None)
+    assert substitution_disturbance(res, res) == 0.0
+    log = res.controller_log
+    k_sub = max(log["k_switch"], int(round(log["first_accepted_s"] * 1000)) + 1)  # the first interval using them
+    for k, expected in ((k_sub + 50, 0.02), (k_sub + 150, 0.0)):
+        bumped = {key: np.array(v, copy=True) for key, v in res.estimates.items()}
+        m_err = abs(res.estimates["mass"][k, 0] / TABLE1.mass[0] - 1)
+        bumped["mass"][k, 0] = TABLE1.mass[0] * (1 + m_err + 0.02)  # its error 2 % larger
+        run = dataclasses.replace(res, estimates=bumped)
+        assert substitution_disturbance(run, res) == pytest.approx(expected, abs=1e-12)
 
 
 @pytest.mark.parametrize("tau", [0.0, 2e-3, 5e-3])

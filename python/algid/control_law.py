@@ -64,7 +64,8 @@ class ControlLaw:
     ``"measured"`` (a rig's eq. 10: the force sensor's samples, trapezoidal up to the
     latest one, :meth:`measured`, plus the command held since) or ``"commanded"`` (the
     held commands, exact; wrong by ``tau w`` behind an actuator lag ``tau``, see
-    :mod:`algid.controller`).
+    :mod:`algid.controller`). ``velocity_pole`` [rad/s] adds the position feedback (10c) of
+    :mod:`algid.controller` to eq. 10 in sampled mode (None: the paper's eq. 10).
     """
 
     def __init__(
@@ -75,10 +76,14 @@ class ControlLaw:
         excitation: Callable[[float], np.ndarray] | None,
         n: int,
         dt: float,
+        velocity_pole: float | None = None,
         force_source: str = "measured",
     ) -> None:
         if force_source not in ("measured", "commanded"):
             raise ValueError(f"force_source must be 'measured' or 'commanded', got {force_source!r}")
+        if velocity_pole is not None and not velocity_pole > 0:
+            raise ValueError(f"velocity_pole must be > 0 rad/s or None, got {velocity_pole}")
+        self.velocity_pole = velocity_pole
         self.force_source = force_source
         self.reference = reference
         self.beta0, self.beta1, self.beta2 = gains
@@ -93,6 +98,9 @@ class ControlLaw:
         self._u_prev = np.zeros(n)
         self.U_meas = np.zeros(n)  # int_0^{t_j} u_meas up to the latest force sample t_j [N s]
         self._f_prev: np.ndarray | None = None
+        # (10c): P = int xd [m], Q = int (P - x) [m s], the correction [m/s] xd gets
+        self.P, self.Q, self.correction = np.zeros(n), np.zeros(n), np.zeros(n)
+        self._restart_feedback = False
 
     def force(
         self, t: float, x: np.ndarray, E: np.ndarray, X: np.ndarray, S: np.ndarray, U: np.ndarray, p: LawParameters
@@ -103,7 +111,7 @@ class ControlLaw:
         xs, xsd, xsdd = self.reference.evaluate(t)
         # eq. 10: K int x = k_i int(x_i - x_{i-1}) + k_{i+1} int(x_i - x_{i+1})
         KX = S + self.R if self.eq10 == "integrated" else K @ X
-        xd = (U - c * x - KX) / m
+        xd = (U - c * x - KX) / m + self.correction
         v = xsdd - self.beta2 * (xd - xsd) - self.beta1 * (x - xs) - self.beta0 * E  # eq. 9
         u = m * v + c * xd + K @ x  # eq. 8
         if self.excitation is not None:
@@ -133,7 +141,16 @@ class ControlLaw:
                 self.U = self.U_meas + self.dt * self._u_prev
             else:
                 self.U = self.U + self.dt * self._u_prev
+        if self.velocity_pole is not None:
+            # (10c): the measured positions pull int xd back onto x (a double pole at -p)
+            if self._restart_feedback:
+                self.P, self.Q, self._restart_feedback = x_meas.copy(), np.zeros_like(x_meas), False
+            pole = self.velocity_pole
+            self.correction = -2.0 * pole * (self.P - x_meas) - pole**2 * self.Q
         u, xd, _ = self.force(t, x_meas, self.E, self.X, self.S, self.U, p)
+        if self.velocity_pole is not None:
+            self.Q = self.Q + self.dt * (self.P - x_meas)
+            self.P = self.P + self.dt * xd
         self._x_prev, self._kx_prev, self._e_prev, self._u_prev = x_meas.copy(), kx, e, u
         return u, xd
 
@@ -147,3 +164,9 @@ class ControlLaw:
         """A first substitution in the integrated form: the new stiffnesses model the whole
         past, ``int K x <- int K x + (K_new - K_old) int x`` (``X = int x`` [m s])."""
         self.R = self.R + (K_new - K_old) @ X
+
+    def restart_velocity_feedback(self) -> None:
+        """Restart (10c) at the next sample (``P = x``, ``Q = 0``): its correction made up
+        for the nominal model's velocity error, which the substituted parameters' eq. 10
+        does not have."""
+        self._restart_feedback = True
