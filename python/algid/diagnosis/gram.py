@@ -4,6 +4,7 @@ built on them (a fit on any set of windows is a sum of Grams and a small solve).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -61,6 +62,15 @@ class WindowStats:
     @property
     def per_eq(self) -> np.ndarray:
         return self.per_sub.sum(axis=1)
+
+    def slim(self) -> WindowStats:
+        """The layout (``slices``, ``shared``, ``eqs``) without the Grams, for a model whose
+        cross-validation is done (the Grams are ``(nw, S, E, P+1, P+1)`` each, a few times
+        the record's own size)."""
+        empty = np.zeros((0,))
+        return WindowStats(
+            G=empty, slices=self.slices, shared=self.shared, eqs=self.eqs, per_sub=empty, per_sub_band=empty
+        )
 
 
 def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
@@ -200,47 +210,67 @@ def cross_validate(P: Prepared, st: WindowStats) -> CVResult:
     )
 
 
-def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray) -> CVResult:
-    """Cross-validation of a model with one nonlinear parameter known on ``grid``.
+def _first_min(new: float, old: float) -> bool:
+    """``new`` takes the place of ``old`` as the running minimum, as ``np.argmin`` would
+    choose: the first NaN wins, else the first strictly smaller value."""
+    if np.isnan(old):
+        return False
+    return bool(np.isnan(new) or new < old)
+
+
+def cross_validate_grid(P: Prepared, stats_of: Callable[[float], WindowStats], grid: np.ndarray) -> CVResult:
+    """Cross-validation of a model with one nonlinear parameter known on ``grid``;
+    ``stats_of(g)`` gives the model's :class:`WindowStats` at grid value ``g``.
 
     For every fold the grid value is chosen by the (full-band) error on the training
     windows, as the fit itself (refined
     by a parabola through the three best neighbours, reported in ``extra["g_folds"]``),
     and the withheld windows are scored at the chosen grid point. The all-window fit is
     reported at the best grid point (``extra["g"]`` refined, ``extra["g_index"]``).
+
+    The grid is walked once and only the statistics of the grid points some fold (or the
+    all-window fit) currently chooses are kept: memory of at most ``K + 1`` models' Grams,
+    whatever the grid's size.
     """
     K = P.nfolds
-    G = np.stack([s.G for s in stats])  # (ng, nw, P+1, P+1)
-    Gsum = G.sum(axis=1)
     ng = len(grid)
-    thetas_all = solve_gram(Gsum)
-    fit_all = np.array([sse(Gsum[g], thetas_all[g]) for g in range(ng)])
-    best = int(np.argmin(fit_all))
-    res = cross_validate(P, stats[best])
-    test = np.zeros(stats[best].per_sub.shape[:3])
+    masks = [P.folds == k for k in range(K)]
+    fit_all = np.zeros(ng)
+    tr = np.zeros((K, ng))
+    pick = [-1] * (K + 1)  # the running choice of every fold, then of the all-window fit
+    picked_theta: list = [None] * K
+    kept: dict[int, WindowStats] = {}
+    for g in range(ng):
+        st = stats_of(grid[g])
+        Gsum = st.G.sum(axis=0)
+        fit_all[g] = sse(Gsum, solve_gram(Gsum))
+        for k in range(K):
+            Gtr = Gsum - st.G[masks[k]].sum(axis=0)
+            th = solve_gram(Gtr)
+            tr[k, g] = sse(Gtr, th)
+            if pick[k] < 0 or _first_min(tr[k, g], tr[k, pick[k]]):
+                pick[k], picked_theta[k] = g, th
+        if pick[K] < 0 or _first_min(fit_all[g], fit_all[pick[K]]):
+            pick[K] = g
+        kept = {i: kept.get(i, st) for i in set(pick)}
+    best = pick[K]
+    res = cross_validate(P, kept[best])
+    test = np.zeros(kept[best].per_sub.shape[:3])
     full = np.zeros_like(test)
-    thetas = np.zeros((K, thetas_all.shape[1]))
     g_folds = np.zeros(K)
-    gb_folds = np.zeros(K, dtype=int)
     for k in range(K):
-        mask = P.folds == k
-        Gtr = Gsum - G[:, mask].sum(axis=1)
-        ths = solve_gram(Gtr)
-        tr = np.array([sse(Gtr[g], ths[g]) for g in range(ng)])
-        gb = int(np.argmin(tr))
-        gb_folds[k] = gb
-        thetas[k] = ths[gb]
-        g_folds[k] = refine_min(grid, tr, gb)
-        test[mask] = sse(stats[gb].per_sub_band[mask], ths[gb])
-        full[mask] = sse(stats[gb].per_sub[mask], ths[gb])
-    res.theta_folds = thetas
+        gb = pick[k]
+        g_folds[k] = refine_min(grid, tr[k], gb)
+        test[masks[k]] = sse(kept[gb].per_sub_band[masks[k]], picked_theta[k])
+        full[masks[k]] = sse(kept[gb].per_sub[masks[k]], picked_theta[k])
+    res.theta_folds = np.array(picked_theta)
     res.test_sub = test
     res.test_sub_full = full
     res.extra = {
         "g": refine_min(grid, fit_all, best),
         "g_index": best,
         "g_folds": g_folds,
-        "g_index_folds": gb_folds,
+        "g_index_folds": np.array(pick[:K], dtype=int),
         "grid_sse": fit_all,
     }
     return res

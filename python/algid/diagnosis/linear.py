@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..chain import equation_parameter_names, spring_columns
-from .equations import base_design, force_form, target, to_physical
+from .equations import force_form, linear_design, target, to_physical
 from .gram import CVResult, EqSpec, cross_validate, solve_gram, window_stats
 from .windows import Prepared, detrend, window_lines
 
@@ -68,7 +68,7 @@ class LinearFit:
 
 def linear_specs(P: Prepared) -> list[EqSpec]:
     """One :class:`EqSpec` per DOF: the acceleration equation on the raw integrals."""
-    return [EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=None, key=("base", e)) for e in range(P.n)]
+    return [EqSpec(e=e, X=linear_design(P, e), y=target(P, e), E=None, key=("base", e)) for e in range(P.n)]
 
 
 def stiffness_rows(P: Prepared, theta_a: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

@@ -127,8 +127,10 @@ def force_response(P: Prepared, f_hi: float) -> dict:
     q, T = forced.size, u.shape[0]
     nper = int(2 ** np.floor(np.log2(max(T // (20 * q), 32))))  # K >= about 40 q averages
     X = np.column_stack([u, a])
-    # Welch cross-spectral matrices, every pair of channels at once: S[f, i, j] = E[conj(X_i) X_j]
-    f, S = csd(X[:, :, None], X[:, None, :], fs=1.0 / P.dt, nperseg=nper, axis=0)
+    # Welch cross-spectral matrices S[f, i, j] = E[conj(X_i) X_j], a row of channel pairs at a
+    # time (all pairs at once would hold (2n)^2 copies of the record)
+    rows = [csd(X[:, [i]], X, fs=1.0 / P.dt, nperseg=nper, axis=0) for i in range(X.shape[1])]
+    f, S = rows[0][0], np.stack([r[1] for r in rows], axis=1)
     band = (f > 0) & (f <= f_hi)
     Sb = S[band]
     Suu, Sua, Saa = Sb[:, :q, :q], Sb[:, :q, q:], np.einsum("fii->fi", Sb[:, q:, q:]).real
