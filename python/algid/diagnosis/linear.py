@@ -150,10 +150,11 @@ def force_scale(P: Prepared, theta: list[np.ndarray]) -> np.ndarray:
 
 def per_window_fits(P: Prepared, fit: LinearFit) -> list[np.ndarray]:
     """Physical linear parameters fitted on every window alone: list over DOF of (nw, p_e)."""
-    G = fit.cv.stats.per_eq  # (nw, n, P+1, P+1)
+    st = fit.cv.stats
     out = []
-    for k, sl in enumerate(fit.cv.stats.slices):
-        idx = np.r_[np.arange(sl.start, sl.stop), G.shape[-1] - 1]
-        th = solve_gram(G[:, k][:, idx[:, None], idx[None, :]])
+    for k, sl in enumerate(st.slices):
+        G = st.eq_gram(k)  # (nw, m, m) over the equation's parameters, the shared ones and the target
+        idx = np.r_[np.arange(sl.stop - sl.start), G.shape[-1] - 1]
+        th = solve_gram(G[:, idx[:, None], idx[None, :]])
         out.append(np.array([to_physical(P, k, t) for t in th]))
     return out
