@@ -93,13 +93,46 @@ def run_case(label: str, chain: Chain, duration_s: float, steps, folder: Path, b
     return row
 
 
+def marginal(rows: list[dict]) -> list[dict]:
+    """Growth between consecutive Table 1 records: peak memory per MB of float64 data and of
+    CSV, and seconds per second of record (the constant costs of imports and start-up cancel)."""
+    table1 = [r for r in rows if r["n"] == 3]
+    out = []
+    for lo, hi in zip(table1[:-1], table1[1:]):
+        row = {"from_s": lo["duration_s"], "to_s": hi["duration_s"]}
+        for step in STEPS:
+            if step in lo and step in hi:
+                dm = hi[step]["peak_mb"] - lo[step]["peak_mb"]
+                row[step] = {
+                    "mb_per_data_mb": dm / (hi["data_mb"] - lo["data_mb"]),
+                    "mb_per_csv_mb": dm / (hi["csv_mb"] - lo["csv_mb"]),
+                    "s_per_record_s": (hi[step]["wall_s"] - lo[step]["wall_s"]) / (hi["duration_s"] - lo["duration_s"]),
+                }
+        out.append(row)
+        for step in STEPS:
+            if step in row:
+                m = row[step]
+                print(
+                    f"{lo['duration_s']:g} -> {hi['duration_s']:g} s {step:>8}: {m['mb_per_data_mb']:6.2f} MB per MB of "
+                    f"data ({m['mb_per_csv_mb']:5.2f} per MB of CSV), {m['s_per_record_s']:.3f} s per s of record",
+                    flush=True,
+                )
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--durations", type=float, nargs="+", default=[10.0, 100.0, 1000.0])
     ap.add_argument("--steps", nargs="+", choices=STEPS, default=list(STEPS))
     ap.add_argument("--no-large-n", action="store_true", help="skip the 20-DOF, 2 s record")
     ap.add_argument("--json", type=Path)
+    ap.add_argument("--summarize", type=Path, help="only print (and add) the growth figures of this JSON")
     args = ap.parse_args(argv)
+    if args.summarize:
+        doc = json.loads(args.summarize.read_text())
+        doc["marginal"] = marginal(doc["rows"])
+        args.summarize.write_text(json.dumps(doc, indent=2) + "\n")
+        return 0
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         base = measure("baseline", folder / "none.csv", folder / "out.json")
@@ -110,7 +143,8 @@ def main(argv=None) -> int:
         if not args.no_large_n:
             chain = Chain.random(20, np.random.default_rng(20))
             rows.append(run_case("random n=20, 2 s", chain, 2.0, args.steps, folder, base["peak_mb"]))
-    doc = {"fs_hz": FS, "snr_db": SNR_DB, "baseline": base, "rows": rows, "command": " ".join(sys.argv)}
+    doc = {"fs_hz": FS, "snr_db": SNR_DB, "baseline": base, "rows": rows, "marginal": marginal(rows)}
+    doc["command"] = "python bench/diagnose_cost.py " + " ".join(sys.argv[1:] if argv is None else argv)
     if args.json:
         args.json.write_text(json.dumps(doc, indent=2) + "\n")
     return 0

@@ -98,6 +98,6 @@ def _peak_mb(duration_s: float) -> tuple[float, float]:
 def test_diagnose_memory_grows_with_the_record_not_faster():
     (p1, d1), (p2, d2) = _peak_mb(8.0), _peak_mb(24.0)
     per_mb = (p2 - p1) / (d2 - d1)
-    # about 20 MB per MB of float64 data traced (numpy arrays); about 150 before the
+    # about 17 MB per MB of float64 data traced (numpy arrays); about 150 before the
     # grid search, the candidates' Grams and columns and the stacked matrices were cut
     assert per_mb < 30, (p1, p2, per_mb)

@@ -469,6 +469,7 @@ def fit_bias(ctx: Context, i: int, iterations: int = 4) -> CandidateFit:
     bias = 0.0
     fit = None
     for _ in range(iterations):
+        fit = a = A1 = A2 = None  # the previous pass's columns and signals go before the next are built
         a, A1, A2 = P.a.copy(), P.A1.copy(), P.A2.copy()
         a[:, i] -= bias
         A1[:, i] -= bias * t
