@@ -101,3 +101,11 @@ def test_diagnose_memory_grows_with_the_record_not_faster():
     # about 17 MB per MB of float64 data traced (numpy arrays); about 150 before the
     # grid search, the candidates' Grams and columns and the stacked matrices were cut
     assert per_mb < 30, (p1, p2, per_mb)
+
+
+def test_an_empty_grid_is_refused_like_before():
+    """A candidate whose grid is empty (an all-zero record's deformation quantiles) is skipped
+    by the candidate loop, which catches ValueError."""
+    P, specs = _stacked_model(4, None)
+    with pytest.raises(ValueError, match="empty grid"):
+        cross_validate_grid(P, lambda g: window_stats(P, specs(g)), np.array([]))

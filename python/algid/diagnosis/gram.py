@@ -248,6 +248,8 @@ def cross_validate_grid(P: Prepared, stats_of: Callable[[float], WindowStats], g
     """
     K = P.nfolds
     ng = len(grid)
+    if ng == 0:  # e.g. the quantiles of a deformation that is zero throughout
+        raise ValueError("cross_validate_grid: empty grid")
     masks = [P.folds == k for k in range(K)]
     fit_all = np.zeros(ng)
     tr = np.zeros((K, ng))
