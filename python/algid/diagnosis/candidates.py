@@ -47,14 +47,15 @@ parameter either way:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.signal import lfilter, lfilter_zi
 
 from ..chain import spring_columns, spring_deformation, spring_sides, springs
-from .equations import base_design, effect_column, target, to_physical
+from .equations import base_design, effect_column, linear_design, target, to_physical
 from .gram import CVResult, EqSpec, cross_validate, cross_validate_grid, jackknife_std, window_stats
 from .linear import LinearFit
 from .windows import Prepared
@@ -151,6 +152,21 @@ class CandidateFit:
     params_std: dict[str, float]
     thetas: list[np.ndarray]  # acceleration-form parameters of the candidate's equations
     specs: list[EqSpec] = field(repr=False, default_factory=list)
+    #: fits the candidate again, exactly as it was fitted (its equations are rebuilt from it
+    #: after :meth:`release`)
+    remake: Callable[[], CandidateFit] | None = field(repr=False, default=None)
+
+    def equations(self) -> list[EqSpec]:
+        """The candidate's equations (:class:`EqSpec`), rebuilt if they were released."""
+        if not self.specs and self.remake is not None:
+            self.specs = self.remake().specs
+        return self.specs
+
+    def release(self) -> None:
+        """Drop the equations' columns (a few columns of the record's length each, for
+        every one of dozens of candidates) when they can be rebuilt."""
+        if self.remake is not None:
+            self.specs = []
 
 
 def coupled(P: Prepared, i: int) -> list[tuple[int, int]]:
@@ -216,7 +232,7 @@ def _fit_linear_effect(
     for e, g in eq_forces:
         col = effect_column(P, e, g, ctx.mass)
         if signals is None:
-            specs.append(EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=col[:, None], key=("base", e)))
+            specs.append(EqSpec(e=e, X=linear_design(P, e), y=target(P, e), E=col[:, None], key=("base", e)))
         else:
             a, A1, A2 = signals
             specs.append(EqSpec(e=e, X=base_design(P, e, A1, A2, a=a[:, e]), y=target(P, e, a=a[:, e]), E=col[:, None]))
@@ -266,7 +282,7 @@ def fit_coulomb(ctx: Context, i: int) -> CandidateFit:
 
     def build(lg):
         col = effect_column(P, i, np.tanh(v / np.exp(lg)), ctx.mass)
-        return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2), y=target(P, i), E=col[:, None], key=("base", i))]
+        return [EqSpec(e=i, X=linear_design(P, i), y=target(P, i), E=col[:, None], key=("base", i))]
 
     fit = _fit_grid(ctx, "coulomb_friction", {"dof": i + 1}, build, grid, np.exp, ["v_scale"], ["force"])
     ctx.shared[("v_scale", i)] = fit.params["v_scale"]
@@ -292,7 +308,7 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
         cols = np.stack(
             [effect_column(P, i, sgn, ctx.mass), effect_column(P, i, np.exp(-((v / vs) ** 2)) * sgn, ctx.mass)], axis=1
         )
-        return [EqSpec(e=i, X=base_design(P, i, P.A1, P.A2), y=target(P, i), E=cols, key=("base", i))]
+        return [EqSpec(e=i, X=linear_design(P, i), y=target(P, i), E=cols, key=("base", i))]
 
     fit = _fit_grid(ctx, "stribeck_friction", {"dof": i + 1}, build, grid, np.exp, ["v_stribeck"], ["force", "excess"])
     p, sd = fit.params, fit.params_std
@@ -368,7 +384,7 @@ def _fit_grid(
     P = ctx.P
 
     def run(gr):
-        return cross_validate_grid(P, [window_stats(P, build(g)) for g in gr], gr)
+        return cross_validate_grid(P, lambda g: window_stats(P, build(g)), gr)
 
     cv = run(grid)
     idx = np.r_[cv.extra["g_index_folds"], cv.extra["g_index"]]
@@ -411,7 +427,7 @@ def fit_clearance(ctx: Context, j: int) -> CandidateFit:
     grid = np.quantile(ad, np.linspace(0.05, 0.95, N_GRID))
     grid = np.unique(grid[grid > 0])
     sides = spring_sides(P.n, j)
-    base = {e: base_design(P, e, P.A1, P.A2) for e, _ in sides}
+    base = {e: linear_design(P, e) for e, _ in sides}
 
     def build(g):
         f = np.sign(d) * np.maximum(ad - g, 0.0)
@@ -453,6 +469,7 @@ def fit_bias(ctx: Context, i: int, iterations: int = 4) -> CandidateFit:
     bias = 0.0
     fit = None
     for _ in range(iterations):
+        fit = a = A1 = A2 = None  # the previous pass's columns and signals go before the next are built
         a, A1, A2 = P.a.copy(), P.A1.copy(), P.A2.copy()
         a[:, i] -= bias
         A1[:, i] -= bias * t
@@ -538,7 +555,10 @@ def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
     }
     if effect not in fits:
         raise ValueError(f"unknown effect {effect!r}")
-    return fits[effect](ctx, loc)
+    before = dict(ctx.shared)  # what the fit reads of the others (a remake must read the same)
+    fit = fits[effect](ctx, loc)
+    fit.remake = lambda: fits[effect](replace(ctx, shared=dict(before)), loc)
+    return fit
 
 
 #: Effects that only add a force column to the linear equations (their fits combine).
@@ -560,17 +580,15 @@ def fit_combination(ctx: Context, fits: list[CandidateFit]) -> CandidateFit:
     part's (``params`` as ``{effect: {...}}``)."""
     P = ctx.P
     eqs = sorted({e for f in fits for e in f.eqs})
-    widths = [f.specs[0].E.shape[1] for f in fits]
+    widths = [f.equations()[0].E.shape[1] for f in fits]
     specs = []
     for e in eqs:
         cols = []
         for f, wdt in zip(fits, widths):
-            spec = next((sp for sp in f.specs if sp.e == e), None)
+            spec = next((sp for sp in f.equations() if sp.e == e), None)
             cols.append(spec.E if spec is not None else np.zeros((P.y.shape[0], wdt)))
         specs.append(
-            EqSpec(
-                e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=np.concatenate(cols, axis=1), key=("base", e)
-            )
+            EqSpec(e=e, X=linear_design(P, e), y=target(P, e), E=np.concatenate(cols, axis=1), key=("base", e))
         )
     cv = cross_validate(P, window_stats(P, specs))
     gam, sd = cv.theta[cv.stats.shared], jackknife_std(cv.theta_folds[:, cv.stats.shared])
@@ -594,6 +612,7 @@ def fit_combination(ctx: Context, fits: list[CandidateFit]) -> CandidateFit:
         params_std=stds,
         thetas=[cv.theta[sl] for sl in cv.stats.slices],
         specs=specs,
+        remake=lambda: fit_combination(ctx, fits),
     )
 
 
@@ -609,10 +628,10 @@ def raw_residual(ctx: Context, fit: CandidateFit) -> np.ndarray:
     equations replaced by the candidate's, in each equation's target units (for state
     reconstruction and plots)."""
     P = ctx.P
-    out = np.stack([target(P, e) - base_design(P, e, P.A1, P.A2) @ th for e, th in enumerate(ctx.lin.theta_a)], axis=1)
+    out = np.stack([target(P, e) - linear_design(P, e) @ th for e, th in enumerate(ctx.lin.theta_a)], axis=1)
     q = fit.cv.stats.shared
     gam = fit.cv.theta[q]
-    for s, th in zip(fit.specs, fit.thetas):
+    for s, th in zip(fit.equations(), fit.thetas):
         r = s.y - s.X @ th
         if s.E is not None and s.E.shape[1]:
             r = r - s.E @ gam

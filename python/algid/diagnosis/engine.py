@@ -43,7 +43,7 @@ from .candidates import (
     raw_residual,
 )
 from .core import METRIC
-from .equations import base_design, force_form, target
+from .equations import force_form, linear_design, target
 from .integrals import integrals
 from .linear import LinearFit, fit_linear, force_scale, reconstruct_states
 from .locate import locate, noise_floor
@@ -196,7 +196,9 @@ def score(P: Prepared, lin: LinearFit, fit: CandidateFit, denom: float) -> Score
 
 
 def _assess(P: Prepared, lin: LinearFit, fit: CandidateFit, denom: float, floor: np.ndarray) -> Scored:
-    """Score a candidate and test it against noise."""
+    """Score a candidate and test it against noise; its Grams and equations are dropped
+    (the scores and fold parameters keep what the ranking needs; the equations are rebuilt
+    for the few candidates that need them again)."""
     s = score(P, lin, fit, denom)
     s.physical = physical(fit)
     if s.rel_reduction >= MIN_REL_REDUCTION:
@@ -204,6 +206,8 @@ def _assess(P: Prepared, lin: LinearFit, fit: CandidateFit, denom: float, floor:
     if fit.effect == "sensor_bias":
         i = fit.location["dof"] - 1
         s.noise_param_ok = bool(abs(fit.params["bias"]) >= BIAS_NOISE_FACTOR * floor[i] / np.sqrt(P.y.shape[0]))
+    fit.cv.stats = fit.cv.stats.slim()
+    fit.release()
     return s
 
 
@@ -229,13 +233,13 @@ def noise_z(P: Prepared, lin: LinearFit, fit: CandidateFit) -> float:
     st = fit.cv.stats
     total_d = 0.0
     var = 0.0
-    for _k_eq, (spec, sl) in enumerate(zip(fit.specs, st.slices)):
+    for _k_eq, (spec, sl) in enumerate(zip(fit.equations(), st.slices)):
         e = spec.e
         cols = [spec.X] + ([spec.E] if spec.E is not None and spec.E.shape[1] else [])
         Zc = detrend(P, np.concatenate(cols, axis=1))  # (nw, L, p+q)
         yd = detrend(P, spec.y[:, None])[..., 0]  # (nw, L)
         yl = detrend(P, target(P, e)[:, None])[..., 0]  # the linear model's target (a delay moves a force target)
-        Zl = detrend(P, base_design(P, e, P.A1, P.A2))
+        Zl = detrend(P, linear_design(P, e))
         rc = np.empty_like(yd)
         rl = np.empty_like(yd)
         lsl = lin.cv.stats.slices[e]

@@ -12,7 +12,15 @@ from ..chain import spring_columns
 if TYPE_CHECKING:
     from .windows import Prepared
 
-__all__ = ["base_design", "effect_column", "force_form", "target", "to_acceleration_form", "to_physical"]
+__all__ = [
+    "base_design",
+    "effect_column",
+    "force_form",
+    "linear_design",
+    "target",
+    "to_acceleration_form",
+    "to_physical",
+]
 
 
 def force_form(P: Prepared, e: int) -> bool:
@@ -48,6 +56,19 @@ def base_design(
     for _j, other in spring_columns(P.n, P.boundary)[e]:
         cols.append(sign * (x[:, e] - (x[:, other] if other >= 0 else 0.0)))
     return np.stack(cols, axis=1)
+
+
+def linear_design(P: Prepared, e: int) -> np.ndarray:
+    """:func:`base_design` of equation ``e`` on the recorded states (``P.A1``, ``P.A2``),
+    computed once per :class:`Prepared` and shared, read-only, by every model that uses it
+    (dozens of candidates would otherwise hold a copy each)."""
+    key = ("linear_design", e)
+    X = P._cache.get(key)
+    if X is None:
+        X = base_design(P, e, P.A1, P.A2)
+        X.flags.writeable = False
+        P._cache[key] = X
+    return X
 
 
 def effect_column(P: Prepared, e: int, g: np.ndarray, mass: np.ndarray) -> np.ndarray:

@@ -4,6 +4,7 @@ built on them (a fit on any set of windows is a sum of Grams and a small solve).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -45,22 +46,44 @@ class WindowStats:
 
     G : (nw, P+1, P+1); the last row/column is the target. ``slices[k]`` are the
     parameter indices of equation k; ``shared`` those of the shared effect parameters.
-    ``per_sub`` : (nw, S, E, P+1, P+1) contribution of each sub-block and equation;
-    ``per_eq`` : (nw, E, P+1, P+1) its sum over sub-blocks; ``per_sub_band`` : the same
-    for the band-projected columns (:func:`band_filter`; the scoring Grams; ``per_sub``
-    itself when the band is the whole spectrum).
+    ``blocks[k]`` : (nw, S, m_k, m_k) contribution of equation k on each sub-block, over its
+    own parameters, the shared ones and the target (``index[k]``: their places in
+    ``0..P``; m_k = p_k + q + 1: an equation's Gram is zero elsewhere, so the blocks take
+    ``E m^2`` numbers a sub-block where the stacked matrices would take ``E (P+1)^2``);
+    ``blocks_band`` : the same for the band-projected columns (:func:`band_filter`; the
+    scoring Grams; ``blocks`` itself when the band is the whole spectrum).
     """
 
     G: np.ndarray
     slices: list[slice]
     shared: slice
     eqs: list[int]
-    per_sub: np.ndarray
-    per_sub_band: np.ndarray
+    blocks: list[np.ndarray]
+    blocks_band: list[np.ndarray]
+    index: list[np.ndarray]
+
+    def eq_gram(self, k: int) -> np.ndarray:
+        """(nw, m_k, m_k) Gram of equation ``k`` on every window (over ``index[k]``)."""
+        return self.blocks[k].sum(axis=1)
+
+    def sub_sse(self, rows: np.ndarray, theta: np.ndarray, band: bool) -> np.ndarray:
+        """(len(rows), S, E) squared error of ``theta`` (P,) on every sub-block and
+        equation of the windows ``rows`` (mask or indices), in band or over the whole band."""
+        th = np.append(theta, -1.0)
+        blocks = self.blocks_band if band else self.blocks
+        return np.stack([sse(b[rows], th[ix], extended=True) for b, ix in zip(blocks, self.index)], axis=-1)
 
     @property
-    def per_eq(self) -> np.ndarray:
-        return self.per_sub.sum(axis=1)
+    def sub_shape(self) -> tuple[int, int, int]:
+        """(nw, S, E)."""
+        return (self.G.shape[0], N_SUB, len(self.eqs))
+
+    def slim(self) -> WindowStats:
+        """The layout (``slices``, ``shared``, ``eqs``) without the Grams, for a model whose
+        cross-validation is done."""
+        return WindowStats(
+            G=np.zeros((0,)), slices=self.slices, shared=self.shared, eqs=self.eqs, blocks=[], blocks_band=[], index=[]
+        )
 
 
 def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
@@ -75,18 +98,20 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
     shared = slice(off, off + q)
     S = N_SUB
     band = not P.full_band
-    per_sub = np.zeros((P.nw, S, len(specs), Ptot + 1, Ptot + 1))
-    per_sub_band = np.zeros_like(per_sub) if band else per_sub
 
     def sub(Z):  # (nw, L, c) -> (nw, S, L/S, c)
         return Z.reshape(P.nw, S, P.L // S, Z.shape[-1])
 
-    def fill(blk, ix, ir, gxx, gxr, grr):
-        blk[:, :, ix[:, None], ix[None, :]] = gxx
-        blk[:, :, ix[:, None], ir[None, :]] = gxr
-        blk[:, :, ir[:, None], ix[None, :]] = gxr.swapaxes(-1, -2)
-        blk[:, :, ir[:, None], ir[None, :]] = grr
+    def block(p, gxx, gxr, grr):  # own | shared and target
+        blk = np.empty((P.nw, S, p + q + 1, p + q + 1))
+        blk[:, :, :p, :p] = gxx
+        blk[:, :, :p, p:] = gxr
+        blk[:, :, p:, :p] = gxr.swapaxes(-1, -2)
+        blk[:, :, p:, p:] = grr
+        return blk
 
+    blocks, blocks_band, index = [], [], []
+    G = np.zeros((P.nw, Ptot + 1, Ptot + 1))
     for k, s in enumerate(specs):
         rest = np.concatenate(([s.E] if q else []) + [s.y[:, None]], axis=1) * s.w
         Zr_w = detrend(P, rest)  # (nw, L, q+1)
@@ -105,26 +130,24 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
             if s.key is not None:
                 P._cache[(s.key, s.w)] = cached
         Zx, gxx, Zxb, gxxb = cached
-        ix = np.arange(slices[k].start, slices[k].stop)
-        ir = np.r_[np.arange(shared.start, shared.stop), Ptot]
-        fill(per_sub[:, :, k], ix, ir, gxx, np.matmul(Zx.swapaxes(-1, -2), Zr), np.matmul(Zr.swapaxes(-1, -2), Zr))
+        p = sizes[k]
+        ix = np.r_[np.arange(slices[k].start, slices[k].stop), np.arange(shared.start, shared.stop), Ptot]
+        blocks.append(block(p, gxx, np.matmul(Zx.swapaxes(-1, -2), Zr), np.matmul(Zr.swapaxes(-1, -2), Zr)))
         if band:
             Zrb = sub(band_filter(P, Zr_w))
-            fill(
-                per_sub_band[:, :, k],
-                ix,
-                ir,
-                gxxb,
-                np.matmul(Zxb.swapaxes(-1, -2), Zrb),
-                np.matmul(Zrb.swapaxes(-1, -2), Zrb),
+            blocks_band.append(
+                block(p, gxxb, np.matmul(Zxb.swapaxes(-1, -2), Zrb), np.matmul(Zrb.swapaxes(-1, -2), Zrb))
             )
+        index.append(ix)
+        G[:, ix[:, None], ix[None, :]] += (blocks_band[-1] if band and P.fit_band else blocks[-1]).sum(axis=1)
     return WindowStats(
-        G=(per_sub_band if P.fit_band else per_sub).sum(axis=(1, 2)),
+        G=G,
         slices=slices,
         shared=shared,
         eqs=[s.e for s in specs],
-        per_sub=per_sub,
-        per_sub_band=per_sub_band,
+        blocks=blocks,
+        blocks_band=blocks_band if band else blocks,
+        index=index,
     )
 
 
@@ -140,9 +163,10 @@ def solve_gram(G: np.ndarray) -> np.ndarray:
     return z / d
 
 
-def sse(G: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Squared error of ``theta`` under Gram(s) ``G`` (..., P+1, P+1) -> (...)."""
-    th = np.append(theta, -1.0)
+def sse(G: np.ndarray, theta: np.ndarray, extended: bool = False) -> np.ndarray:
+    """Squared error of ``theta`` under Gram(s) ``G`` (..., P+1, P+1) -> (...);
+    ``extended``: ``theta`` already ends with the target's -1."""
+    th = theta if extended else np.append(theta, -1.0)
     return np.einsum("...i,i->...", np.einsum("...ij,j->...i", G, th), th)
 
 
@@ -187,60 +211,82 @@ def cross_validate(P: Prepared, st: WindowStats) -> CVResult:
     Gsum = st.G.sum(axis=0)
     theta = solve_gram(Gsum)
     thetas = np.zeros((K, theta.size))
-    test = np.zeros(st.per_sub.shape[:3])
+    test = np.zeros(st.sub_shape)
     full = np.zeros_like(test)
     for k in range(K):
         mask = P.folds == k
         th = solve_gram(Gsum - st.G[mask].sum(axis=0))
         thetas[k] = th
-        full[mask] = sse(st.per_sub[mask], th)
-        test[mask] = full[mask] if st.per_sub_band is st.per_sub else sse(st.per_sub_band[mask], th)
+        full[mask] = st.sub_sse(mask, th, band=False)
+        test[mask] = full[mask] if st.blocks_band is st.blocks else st.sub_sse(mask, th, band=True)
     return CVResult(
         theta=theta, theta_folds=thetas, test_sub=test, fit_sse=sse(st.G, theta), stats=st, test_sub_full=full
     )
 
 
-def cross_validate_grid(P: Prepared, stats: list[WindowStats], grid: np.ndarray) -> CVResult:
-    """Cross-validation of a model with one nonlinear parameter known on ``grid``.
+def _first_min(new: float, old: float) -> bool:
+    """``new`` takes the place of ``old`` as the running minimum, as ``np.argmin`` would
+    choose: the first NaN wins, else the first strictly smaller value."""
+    if np.isnan(old):
+        return False
+    return bool(np.isnan(new) or new < old)
+
+
+def cross_validate_grid(P: Prepared, stats_of: Callable[[float], WindowStats], grid: np.ndarray) -> CVResult:
+    """Cross-validation of a model with one nonlinear parameter known on ``grid``;
+    ``stats_of(g)`` gives the model's :class:`WindowStats` at grid value ``g``.
 
     For every fold the grid value is chosen by the (full-band) error on the training
     windows, as the fit itself (refined
     by a parabola through the three best neighbours, reported in ``extra["g_folds"]``),
     and the withheld windows are scored at the chosen grid point. The all-window fit is
     reported at the best grid point (``extra["g"]`` refined, ``extra["g_index"]``).
+
+    The grid is walked once and only the statistics of the grid points some fold (or the
+    all-window fit) currently chooses are kept: memory of at most ``K + 1`` models' Grams,
+    whatever the grid's size.
     """
     K = P.nfolds
-    G = np.stack([s.G for s in stats])  # (ng, nw, P+1, P+1)
-    Gsum = G.sum(axis=1)
     ng = len(grid)
-    thetas_all = solve_gram(Gsum)
-    fit_all = np.array([sse(Gsum[g], thetas_all[g]) for g in range(ng)])
-    best = int(np.argmin(fit_all))
-    res = cross_validate(P, stats[best])
-    test = np.zeros(stats[best].per_sub.shape[:3])
+    if ng == 0:  # e.g. the quantiles of a deformation that is zero throughout
+        raise ValueError("cross_validate_grid: empty grid")
+    masks = [P.folds == k for k in range(K)]
+    fit_all = np.zeros(ng)
+    tr = np.zeros((K, ng))
+    pick = [-1] * (K + 1)  # the running choice of every fold, then of the all-window fit
+    picked_theta: list = [None] * K
+    kept: dict[int, WindowStats] = {}
+    for g in range(ng):
+        st = stats_of(grid[g])
+        Gsum = st.G.sum(axis=0)
+        fit_all[g] = sse(Gsum, solve_gram(Gsum))
+        Gtr = np.stack([Gsum - st.G[masks[k]].sum(axis=0) for k in range(K)])
+        ths = solve_gram(Gtr)  # every fold's training fit in one call
+        for k in range(K):
+            tr[k, g] = sse(Gtr[k], ths[k])
+            if pick[k] < 0 or _first_min(tr[k, g], tr[k, pick[k]]):
+                pick[k], picked_theta[k] = g, ths[k]
+        if pick[K] < 0 or _first_min(fit_all[g], fit_all[pick[K]]):
+            pick[K] = g
+        kept = {i: kept.get(i, st) for i in set(pick)}
+    best = pick[K]
+    res = cross_validate(P, kept[best])
+    test = np.zeros(kept[best].sub_shape)
     full = np.zeros_like(test)
-    thetas = np.zeros((K, thetas_all.shape[1]))
     g_folds = np.zeros(K)
-    gb_folds = np.zeros(K, dtype=int)
     for k in range(K):
-        mask = P.folds == k
-        Gtr = Gsum - G[:, mask].sum(axis=1)
-        ths = solve_gram(Gtr)
-        tr = np.array([sse(Gtr[g], ths[g]) for g in range(ng)])
-        gb = int(np.argmin(tr))
-        gb_folds[k] = gb
-        thetas[k] = ths[gb]
-        g_folds[k] = refine_min(grid, tr, gb)
-        test[mask] = sse(stats[gb].per_sub_band[mask], ths[gb])
-        full[mask] = sse(stats[gb].per_sub[mask], ths[gb])
-    res.theta_folds = thetas
+        gb = pick[k]
+        g_folds[k] = refine_min(grid, tr[k], gb)
+        test[masks[k]] = kept[gb].sub_sse(masks[k], picked_theta[k], band=True)
+        full[masks[k]] = kept[gb].sub_sse(masks[k], picked_theta[k], band=False)
+    res.theta_folds = np.array(picked_theta)
     res.test_sub = test
     res.test_sub_full = full
     res.extra = {
         "g": refine_min(grid, fit_all, best),
         "g_index": best,
         "g_folds": g_folds,
-        "g_index_folds": gb_folds,
+        "g_index_folds": np.array(pick[:K], dtype=int),
         "grid_sse": fit_all,
     }
     return res

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..chain import equation_parameter_names, spring_columns
-from .equations import base_design, force_form, target, to_physical
+from .equations import force_form, linear_design, target, to_physical
 from .gram import CVResult, EqSpec, cross_validate, solve_gram, window_stats
 from .windows import Prepared, detrend, window_lines
 
@@ -68,7 +68,7 @@ class LinearFit:
 
 def linear_specs(P: Prepared) -> list[EqSpec]:
     """One :class:`EqSpec` per DOF: the acceleration equation on the raw integrals."""
-    return [EqSpec(e=e, X=base_design(P, e, P.A1, P.A2), y=target(P, e), E=None, key=("base", e)) for e in range(P.n)]
+    return [EqSpec(e=e, X=linear_design(P, e), y=target(P, e), E=None, key=("base", e)) for e in range(P.n)]
 
 
 def stiffness_rows(P: Prepared, theta_a: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -150,10 +150,11 @@ def force_scale(P: Prepared, theta: list[np.ndarray]) -> np.ndarray:
 
 def per_window_fits(P: Prepared, fit: LinearFit) -> list[np.ndarray]:
     """Physical linear parameters fitted on every window alone: list over DOF of (nw, p_e)."""
-    G = fit.cv.stats.per_eq  # (nw, n, P+1, P+1)
+    st = fit.cv.stats
     out = []
-    for k, sl in enumerate(fit.cv.stats.slices):
-        idx = np.r_[np.arange(sl.start, sl.stop), G.shape[-1] - 1]
-        th = solve_gram(G[:, k][:, idx[:, None], idx[None, :]])
+    for k, sl in enumerate(st.slices):
+        G = st.eq_gram(k)  # (nw, m, m) over the equation's parameters, the shared ones and the target
+        idx = np.r_[np.arange(sl.stop - sl.start), G.shape[-1] - 1]
+        th = solve_gram(G[:, idx[:, None], idx[None, :]])
         out.append(np.array([to_physical(P, k, t) for t in th]))
     return out

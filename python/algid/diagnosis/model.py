@@ -115,11 +115,31 @@ def inertia(P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float) -> d
     return out
 
 
+def cross_spectra(X: np.ndarray, dt: float, nper: int, chunk: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """Welch cross-spectral matrices of the columns of ``X`` (T, c): frequencies [Hz] and
+    ``S[f, i, j] = E[conj(X_i) X_j]`` (one-sided density, Hann windows of ``nper`` samples
+    overlapping by half, each segment's mean removed: :func:`scipy.signal.csd` of every
+    pair). Every channel's segment spectra are taken once and multiplied pairwise,
+    ``chunk`` segments at a time: memory of a chunk, time of ``c`` transforms and ``c^2``
+    products per segment (``csd`` of all pairs transforms every channel ``2 c`` times)."""
+    from scipy.signal import get_window
+
+    T, c = X.shape
+    win = get_window("hann", nper)
+    starts = np.arange(0, T - nper + 1, nper - nper // 2)
+    S = np.zeros((nper // 2 + 1, c, c), dtype=complex)
+    for lo in range(0, starts.size, chunk):
+        seg = X[starts[lo : lo + chunk, None] + np.arange(nper)]  # (s, nper, c)
+        F = np.fft.rfft((seg - seg.mean(axis=1, keepdims=True)) * win[None, :, None], axis=1)
+        S += np.einsum("sfi,sfj->fij", F.conj(), F)
+    S *= 1.0 / (np.sum(win**2) / dt * starts.size)
+    S[1 : -1 if nper % 2 == 0 else None] *= 2.0
+    return np.fft.rfftfreq(nper, dt), S
+
+
 def force_response(P: Prepared, f_hi: float) -> dict:
     """Question 0: the band-mean multiple coherence of every forced DOF's acceleration with
     all the forces (the share of its power the forces explain linearly, per bin)."""
-    from scipy.signal import csd
-
     forced = np.nonzero(P.forced)[0]
     u, a = P.u_full[:, forced], P.a_full
     if forced.size == 0 or not np.any(band_rms(u, P.dt, f_hi) > 0) or not np.any(band_rms(a, P.dt, f_hi) > 0):
@@ -127,8 +147,7 @@ def force_response(P: Prepared, f_hi: float) -> dict:
     q, T = forced.size, u.shape[0]
     nper = int(2 ** np.floor(np.log2(max(T // (20 * q), 32))))  # K >= about 40 q averages
     X = np.column_stack([u, a])
-    # Welch cross-spectral matrices, every pair of channels at once: S[f, i, j] = E[conj(X_i) X_j]
-    f, S = csd(X[:, :, None], X[:, None, :], fs=1.0 / P.dt, nperseg=nper, axis=0)
+    f, S = cross_spectra(X, P.dt, nper)
     band = (f > 0) & (f <= f_hi)
     Sb = S[band]
     Suu, Sua, Saa = Sb[:, :q, :q], Sb[:, :q, q:], np.einsum("fii->fi", Sb[:, q:, q:]).real

@@ -120,7 +120,7 @@ def run(args) -> int:
     except OSError as err:
         print(error_line("identify", err), file=sys.stderr)
         return 2
-    for line in result.reasons:
+    for line in ([result.screened.line()] if result.screened.count else []) + result.reasons:
         print(f"algid identify: {line}", file=sys.stderr)
     to_stdout = args.json is not None and str(args.json) == "-"
     if to_stdout:

@@ -1,6 +1,8 @@
 """``algid.identify(recording)``: the whole-record identification with uncertainty and
 verdicts.
 
+0. Screen: finite samples far outside their channel's robust range are taken out and
+   treated as missing (:mod:`.screen`).
 1. Signals: mains hum notched out of every channel alike (:func:`algid.noise.without_hum`);
    the measured accelerations, or the derivatives of the velocities or displacements
    (:func:`algid.recording.accelerations`); the forces.
@@ -37,6 +39,7 @@ from ..recording import motion as recording_motion
 from .plan import Plan, make_plan, natural_frequencies_hz, window_candidates, window_limits
 from .result import Identification
 from .runner import Run, run_plan
+from .screen import screen
 from .surrogate import REPLICATES, bootstrap
 from .verdicts import judge, scales
 
@@ -65,14 +68,25 @@ def _surrogate_band(nm: NoiseModel, theta: np.ndarray, n: int, boundary: str) ->
 
 
 def _select_window(
-    a, u, motion, nm: NoiseModel, plan: Plan, boundary: str, forced, duration: float, seed: int, progress: ProgressFn
+    a,
+    u,
+    motion,
+    nm: NoiseModel,
+    plan: Plan,
+    boundary: str,
+    forced,
+    duration: float,
+    seed: int,
+    progress: ProgressFn,
+    missing: np.ndarray,
 ) -> tuple[Plan, Run]:
-    """Try the window candidates of ``plan``; keep the one with the lowest bootstrap error."""
+    """Try the window candidates of ``plan``; keep the one with the lowest bootstrap error
+    (``missing``: the screened instants, :mod:`.screen`)."""
     n = u.shape[1]
     cands = window_candidates(plan, nm, duration)
 
     def score(cand: Plan) -> tuple[float, Run]:
-        run = run_plan(a, u, nm.dt, boundary, cand)
+        run = run_plan(a, u, nm.dt, boundary, cand, missing=missing)
         boot = bootstrap(
             run.theta,
             motion,
@@ -84,6 +98,7 @@ def _select_window(
             SELECT_REPLICATES,
             seed,
             history=False,
+            missing=missing,
         )
         with np.errstate(invalid="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: parameters not estimated
@@ -153,6 +168,8 @@ def identify(
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     if int(replicates) < 2:
         raise ValueError(f"replicates must be >= 2, got {replicates}")
+    rec, screened = screen(rec, reach=0 if rec.a is not None else DEFAULT_DIFF_POINTS // 2)
+    missing = screened.rows
     rec, hum = without_hum(rec)
     n, dt = rec.n, float(rec.dt)
     a = accelerations(rec, DEFAULT_DIFF_POINTS)
@@ -162,11 +179,11 @@ def identify(
     forced = np.any(rec.u != 0.0, axis=0)
     plan = make_plan(nm, duration, estimator)
     _progress(progress, "first estimate", 0.0)
-    run = run_plan(a, rec.u, dt, boundary, plan, history=False)
+    run = run_plan(a, rec.u, dt, boundary, plan, history=False, missing=missing)
     _progress(progress, "first estimate", 1.0)
     if plan.estimator == "continuous":
         plan = make_plan(nm, duration, estimator, natural_frequencies_hz(run.theta, n, boundary))
-        plan, run = _select_window(a, rec.u, motion, nm, plan, boundary, forced, duration, seed, progress)
+        plan, run = _select_window(a, rec.u, motion, nm, plan, boundary, forced, duration, seed, progress, missing)
     boot = bootstrap(
         run.theta,
         motion,
@@ -179,6 +196,7 @@ def identify(
         seed,
         DEFAULT_DIFF_POINTS,
         progress=lambda f: _progress(progress, "uncertainty", f),
+        missing=missing,
     )
     stderr_bias = boot.sigma / np.sqrt(replicates)
     correct = np.isfinite(boot.bias) & (np.abs(boot.bias) > BIAS_Z * stderr_bias)
@@ -217,4 +235,5 @@ def identify(
         hum_hz=tuple(hum),
         units=parameter_units(rec),
         recording_notes=tuple(rec.notes),
+        screened=screened,
     )

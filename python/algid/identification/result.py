@@ -13,6 +13,7 @@ from ..continuous import PackedParameters, unpack
 from ..display import Displayed, number, parameter_rows
 from ..noise import NoiseModel
 from .plan import Plan
+from .screen import Screened
 from .verdicts import Verdict, dof_validity
 
 
@@ -63,6 +64,8 @@ class Identification(PackedParameters):
     #: unit labels of m, c, k (:func:`algid.recording.parameter_units`: V/V where the data are volts)
     units: dict = field(default_factory=lambda: {"m": "kg", "c": "N s/m", "k": "N/m"})
     recording_notes: tuple = ()  #: what the reader did (columns ignored, units converted)
+    #: samples taken out as far outside their channel's range (:mod:`.screen`)
+    screened: Screened = field(default_factory=Screened)
 
     # ---- views -------------------------------------------------------------------------
     @property
@@ -189,6 +192,7 @@ class Identification(PackedParameters):
             "mains_hum_removed_hz": list(self.hum_hz),
             "units": dict(self.units),
             "recording_notes": list(self.recording_notes),
+            "screened": self.screened.to_json(),
         }
         modal, why = self.modes()
         doc["modes"] = modal.to_json() if modal is not None else None
@@ -242,6 +246,8 @@ class Identification(PackedParameters):
                 + (f"{self.plan.prefilter_hz:.3g} Hz" if self.plan.prefilter_hz > 0 else "off")
                 + f", {self.windows} window results"
             )
+        if self.screened.count:
+            lines.append(f"  {self.screened.line()}")
         units = self.units
         for p, v in enumerate(self.verdicts):
             val, sg = self.theta[p], self.sigma[p]

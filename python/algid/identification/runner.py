@@ -151,9 +151,16 @@ def _band(plan: Plan, dt: float) -> dict:
     return {"band_hz": min((Q + 0.5) / (L * dt), 0.449 / dt)}
 
 
-def run_plan(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan, history: bool = True) -> Run:
+def run_plan(
+    a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan: Plan, history: bool = True, missing=None
+) -> Run:
     """Run ``plan`` on accelerations ``a`` [m/s^2] and forces ``u`` [N], both (T, n); without
-    ``history`` a continuous run keeps only its final row."""
+    ``history`` a continuous run keeps only its final row. ``missing``: (T,) bool or None,
+    instants the estimators see as not a number in every channel (screened samples,
+    :mod:`.screen`): the single window reseeds there, the continuous one drops its windows
+    in flight."""
+    if missing is not None and np.any(missing):
+        a, u = np.where(missing[:, None], np.nan, a), np.where(missing[:, None], np.nan, u)
     if plan.estimator == "window":
         return run_window(a, u, dt, boundary)
     return run_continuous(a, u, dt, boundary, plan, history)

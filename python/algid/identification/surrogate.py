@@ -197,12 +197,14 @@ def bootstrap(
     diff_points: int = 5,
     progress: Callable[[float], None] | None = None,
     history: bool = True,
+    missing: np.ndarray | None = None,
 ) -> Bootstrap:
     """Run ``plan`` on ``replicates`` surrogates of the chain ``theta`` (module docstring).
 
     ``motion_rec``: the recorded motion (T, n) of kind ``nm.motion``; ``f_cut``: band edge of
     the surrogate motion [Hz]; ``forced``: (n,) DOF that carry a force (the others keep a
-    zero force, as recorded); ``history``: also the spread of the estimate histories.
+    zero force, as recorded); ``history``: also the spread of the estimate histories;
+    ``missing``: (T,) instants every run sees as not a number, as the recording's did.
     """
     n = motion_rec.shape[1]
     mo = band_limited_motion(motion_rec, nm.motion, nm.dt, f_cut)
@@ -216,9 +218,9 @@ def bootstrap(
 
     def one(b: int):
         if b < 0:
-            return run_plan(a0, u_s, nm.dt, boundary, plan, history=False)
+            return run_plan(a0, u_s, nm.dt, boundary, plan, history=False, missing=missing)
         a_b, u_b = replicate_signals(mo, u_s, nm, np.random.default_rng(seeds[b]), diff_points)
-        return run_plan(a_b, u_b, nm.dt, boundary, plan, history)
+        return run_plan(a_b, u_b, nm.dt, boundary, plan, history, missing)
 
     runs = parallel_map(
         one, list(range(-1, replicates)), None if progress is None else (lambda k: progress(k / (replicates + 1)))
