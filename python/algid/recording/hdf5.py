@@ -24,26 +24,34 @@ def _unit(attrs) -> str | None:
     return None
 
 
+def _datasets(h5py, fh, source: str, columns, dt, group):
+    """The layout of ``group``'s datasets and the (T, columns used) data they hold."""
+    if group not in (None, "", "/") and not isinstance(fh.get(group), h5py.Group):
+        raise RecordingError(f"{source}: no group {quote(group)} (groups: {', '.join(fh)})")
+    node = fh[group] if group not in (None, "") else fh
+    names = list(node)
+    declared = [_unit(node[name].attrs) if isinstance(node[name], h5py.Dataset) else None for name in names]
+    layout = resolve(names, source, columns, need_time=dt is None, declared=declared)
+    used = [names[p] for p in layout.positions()]
+    for name in used:
+        if not isinstance(node[name], h5py.Dataset):
+            raise RecordingError(f"{source}: {quote(name)} is a group, not a dataset")
+    T = check_columns(source, {name: (node[name].shape, node[name].dtype) for name in used})
+    data = np.empty((T, len(used)))
+    for col, name in enumerate(used):
+        data[:, col] = node[name][()]
+    return layout, data
+
+
 def read_hdf5(path: Path, columns=None, units=None, dt=None, group: str | None = None):
     """Read and validate an HDF5 recording (datasets of ``group``, default the root)."""
     h5py = require("h5py", "hdf5", "HDF5 recordings")
     try:
-        fh = h5py.File(path, "r")
-    except OSError:
-        raise RecordingError(f"{path.name}: not a readable HDF5 file") from None
-    with fh:
-        if group not in (None, "", "/") and not isinstance(fh.get(group), h5py.Group):
-            raise RecordingError(f"{path.name}: no group {quote(group)} (groups: {', '.join(fh)})")
-        node = fh[group] if group not in (None, "") else fh
-        names = list(node)
-        declared = [_unit(node[name].attrs) if isinstance(node[name], h5py.Dataset) else None for name in names]
-        layout = resolve(names, path.name, columns, need_time=dt is None, declared=declared)
-        used = [names[p] for p in layout.positions()]
-        for name in used:
-            if not isinstance(node[name], h5py.Dataset):
-                raise RecordingError(f"{path.name}: {quote(name)} is a group, not a dataset")
-        T = check_columns(path.name, {name: (node[name].shape, node[name].dtype) for name in used})
-        data = np.empty((T, len(used)))
-        for col, name in enumerate(used):
-            data[:, col] = node[name][()]
+        with h5py.File(path, "r") as fh:
+            layout, data = _datasets(h5py, fh, path.name, columns, dt, group)
+    except RecordingError:
+        raise
+    except (OSError, KeyError, ValueError, TypeError, RuntimeError) as err:
+        # a damaged file fails inside the HDF5 library as any of these, at any object
+        raise RecordingError(f"{path.name}: not a readable HDF5 file ({type(err).__name__})") from None
     return assemble(path, path.name, data, layout, None, dt=dt, units=units)

@@ -91,7 +91,8 @@ class _Chunks:
         return text.split() if self.sep is None else text.split(self.sep)
 
     def add(self, texts: list[str], linenos: list[int]) -> None:
-        if not self.chunks and self.sep not in (None, ",") and _DECIMAL_COMMA.search(texts[0]):
+        # The first line may hold only integers (t = 0, a signal at rest): any line decides.
+        if self.decimal == "." and self.sep not in (None, ",") and any(_DECIMAL_COMMA.search(t) for t in texts):
             self.decimal = ","
         width = len(self.names)
         counts = [len(t.split()) for t in texts] if self.sep is None else [t.count(self.sep) + 1 for t in texts]
