@@ -78,7 +78,9 @@ def file_of(data: bytes, folder: Path) -> tuple[Path, float | None]:
     suffix, wrap = KINDS[kind]
     content = data[2:]
     path = folder / f"rec{suffix}"
-    path.write_bytes(wrap(content) if wrap else content)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # zipfile warns of a member named twice: the reader's case
+        path.write_bytes(wrap(content) if wrap else content)
     return path, (1e-3 if flags & 1 else None)
 
 

@@ -5,6 +5,7 @@ Shapes and types are checked before any dataset is read."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,17 @@ def _unit(attrs) -> str | None:
     return None
 
 
+def _check_stored(ds, source: str) -> None:
+    """Refuse a contiguous dataset whose header declares more bytes than the file holds for it
+    (a damaged size would otherwise be allocated before the read fails)."""
+    declared = math.prod(ds.shape) * ds.dtype.itemsize
+    stored = ds.id.get_storage_size()
+    if ds.chunks is None and declared > stored:
+        raise RecordingError(
+            f"{source}: dataset {quote(ds.name)} declares {declared} bytes but holds {stored} (truncated or corrupt)"
+        )
+
+
 def _datasets(h5py, fh, source: str, columns, dt, group):
     """The layout of ``group``'s datasets and the (T, columns used) data they hold."""
     if group not in (None, "", "/") and not isinstance(fh.get(group), h5py.Group):
@@ -37,6 +49,8 @@ def _datasets(h5py, fh, source: str, columns, dt, group):
         if not isinstance(node[name], h5py.Dataset):
             raise RecordingError(f"{source}: {quote(name)} is a group, not a dataset")
     T = check_columns(source, {name: (node[name].shape, node[name].dtype) for name in used})
+    for name in used:
+        _check_stored(node[name], source)
     data = np.empty((T, len(used)))
     for col, name in enumerate(used):
         data[:, col] = node[name][()]

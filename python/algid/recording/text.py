@@ -18,6 +18,7 @@ import io
 import lzma
 import re
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -159,9 +160,10 @@ def read_text(path: Path, compression: str | None, columns=None, units=None, dt=
                 chunks.add(texts, linenos)
     except UnicodeDecodeError:
         raise RecordingError(f"{source}: not a text file (cannot decode as UTF-8)") from None
-    except (OSError, EOFError, lzma.LZMAError, zipfile.BadZipFile) as err:
+    except (OSError, EOFError, lzma.LZMAError, zipfile.BadZipFile, zlib.error) as err:
         if compression is None:
             raise
-        raise RecordingError(f"{source}: not a readable {compression} file ({type(err).__name__})") from None
+        why = "damaged deflate data" if isinstance(err, zlib.error) else type(err).__name__
+        raise RecordingError(f"{source}: not a readable {compression} file ({why})") from None
     data, line_numbers = chunks.table(header_line)
     return assemble(path, source, data, layout, line_numbers, dt=dt, units=units)
