@@ -232,6 +232,7 @@ def fuzz(name: str, one_input) -> None:
     import atheris
 
     argv = list(sys.argv)
+    argv[0] = f"{sys.executable} {Path(argv[0]).resolve()}"  # what -fork=N runs its jobs with
     out = Path(__file__).resolve().parents[2] / "build" / "fuzz"
     if not any(not a.startswith("-") for a in argv[1:]):
         argv.append(str(write_corpus(out / name)))
