@@ -14,11 +14,13 @@
   estimator started there; ``ContinuousEstimator`` is back within 1 % of the truth after a
   burst of garbage followed by clean samples.
 
-Deterministic (derandomized, no example database), a few seconds each.
+Deterministic (derandomized, no example database), a few seconds each; a longer randomized
+search: ``ALGID_PROPERTY_EXAMPLES=2000 pytest tests/test_properties.py``.
 """
 
 from __future__ import annotations
 
+import os
 from functools import cache
 
 import numpy as np
@@ -30,10 +32,12 @@ from algid.chain import TABLE1
 from algid.recording import load_recording
 from signals import multisine, simulate_chain
 
+#: ALGID_PROPERTY_EXAMPLES=2000 runs a longer, randomized search (the suite's run is fixed).
+LONG_RUN = os.environ.get("ALGID_PROPERTY_EXAMPLES")
 PROPERTY = settings(
-    max_examples=50,
+    max_examples=int(LONG_RUN or 50),
     deadline=None,
-    derandomize=True,
+    derandomize=LONG_RUN is None,
     database=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
