@@ -248,18 +248,24 @@ def test_reset_after_garbage_is_a_clean_start(k, burst, wait):
 
 
 @PROPERTY
-@given(burst=st.lists(st.tuples(st.integers(0, 2 * N - 1), GARBAGE), min_size=1, max_size=200))
-def test_continuous_estimator_recovers_from_a_burst(burst):
-    """Garbage at 1 s, then 7 s of clean samples: finite estimates within 1 % of the truth, no
-    state left NaN or frozen."""
+@given(
+    burst=st.lists(st.tuples(st.integers(0, 2 * N - 1), GARBAGE), min_size=1, max_size=200),
+    rejected=st.booleans(),
+)
+def test_continuous_estimator_recovers_from_a_burst(burst, rejected):
+    """Garbage at 1 s, then 7 s of clean samples: no state left NaN or frozen (finite running
+    estimates, windows still harvested); after values the estimator rejects (not finite, or
+    beyond ``outlier_ratio`` times the RMS) the estimates are back within 1 % of the truth.
+    (A finite outlier it accepts biases them for good: docs/reliability.md.)"""
     t, a, u = record(8.0)
     bad_a, bad_u = a.copy(), u.copy()
     for i, (channel, value) in enumerate(burst):
+        value = np.copysign(1e150, value) if rejected and np.isfinite(value) else value
         (bad_a if channel < N else bad_u)[1000 + i, channel % N] = value
     est = algid.ContinuousEstimator(N, DT)
     out = est.run(bad_a, bad_u, stride=50)
-    truth = TABLE1.identifiable()
     assert np.isfinite(est.estimate).all() and est.ready
-    assert np.abs(est.estimate / truth - 1).max() < 0.01
     assert (out["status"][-1000:] != BAD).all()
     assert out["window_sample"][-1] > a.shape[0] - 1000  # still harvesting windows
+    if rejected:
+        assert np.abs(est.estimate / TABLE1.identifiable() - 1).max() < 0.01

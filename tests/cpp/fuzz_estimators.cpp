@@ -18,8 +18,10 @@
 //   - after the program, good samples resume: the chain estimator, reseeded, returns to the
 //     truth (mass error < 1e-5 after 600 samples; finite garbage contaminates its growing window
 //     until a reseed by design); the continuous estimator, not reset, keeps harvesting windows
-//     and is ready with finite running estimates, the masses within 2 % of the truth after 1.5 s
-//     (a clean run: 0.5 %, with the 0.1 s windows used here).
+//     and is ready with finite running estimates; unless it took in a finite tampered sample
+//     (not BadInput, not a dropout: such a sample biases it for good, docs/reliability.md), its
+//     masses are within 2 % of the truth after 1.5 s (a clean run: 0.5 %, with the 0.1 s
+//     windows used here).
 #include <algid/algid.hpp>
 
 #include "closed_form.hpp"
@@ -100,6 +102,7 @@ const Truth& truth_of(int n) {
 // A sample of the record with the values an op asks for: 2n floats a then u.
 struct Sample {
   std::vector<double> a, u;
+  bool tampered = false;  // some value is not the record's
   explicit Sample(int n) : a(static_cast<std::size_t>(n)), u(a) {}
   bool finite() const {
     for (std::size_t i = 0; i < a.size(); ++i)
@@ -107,6 +110,7 @@ struct Sample {
     return true;
   }
   void clean(const algid_test::Samples& rec, long s) {
+    tampered = false;
     for (std::size_t i = 0; i < a.size(); ++i) {
       a[i] = rec.a(s)[i];
       u[i] = rec.u(s)[i];
@@ -117,6 +121,7 @@ struct Sample {
       for (auto& x : *v) {
         const int pick = in.byte() % kSpecials;
         x = pick == 14 ? x * 1e6 : pick == 15 ? x : kSpecial[pick];
+        tampered |= pick != 15;
       }
   }
 };
@@ -127,9 +132,14 @@ struct Driver {
   int n;
   const algid_test::Samples& rec;
   long pos = 0;
+  bool accepted_garbage = false;  // a finite tampered sample the estimator took in
 
-  void check(const Sample& s, algid::Status status) const {
-    if (!s.finite() && status != algid::Status::kBadInput) fail("a non-finite sample was not BadInput", n);
+  void note(bool finite, bool tampered, algid::Status status) {
+    if (!finite && status != algid::Status::kBadInput) fail("a non-finite sample was not BadInput", n);
+    accepted_garbage |= tampered && status != algid::Status::kBadInput && status != algid::Status::kDropout;
+  }
+  void check(const Sample& s, algid::Status status) {
+    note(s.finite(), s.tampered, status);
     if constexpr (!std::is_same_v<Est, algid::ContinuousEstimator<Dynamic>>) {
       for (int i = 0; i < n; ++i)
         if (est.valid()(i) && !(std::isfinite(est.mass()(i)) && std::isfinite(est.damping()(i))))
@@ -147,19 +157,19 @@ void run_chunk(Driver<Est>& d, Input& in, Sample& s) {
   const long k = 1 + in.byte();
   const std::uint8_t mask = in.byte();
   std::vector<double> a(static_cast<std::size_t>(k * d.n)), u(a);
-  std::vector<char> finite(static_cast<std::size_t>(k));
+  std::vector<char> finite(static_cast<std::size_t>(k)), tampered(finite);
   for (long t = 0; t < k; ++t) {
     s.clean(d.rec, d.next());
     if ((mask >> (t % 8)) & 1) s.special(in);
     finite[static_cast<std::size_t>(t)] = s.finite();
+    tampered[static_cast<std::size_t>(t)] = s.tampered;
     std::copy(s.a.begin(), s.a.end(), a.begin() + t * d.n);
     std::copy(s.u.begin(), s.u.end(), u.begin() + t * d.n);
   }
   if constexpr (std::is_same_v<Est, algid::ContinuousEstimator<Dynamic>>) {
     for (long t = 0; t < k; ++t) {
-      const algid::Status st = d.est.update(a.data() + t * d.n, u.data() + t * d.n);
-      if (!finite[static_cast<std::size_t>(t)] && st != algid::Status::kBadInput)
-        fail("a non-finite sample was not BadInput", d.n);
+      const auto i = static_cast<std::size_t>(t);
+      d.note(finite[i], tampered[i], d.est.update(a.data() + t * d.n, u.data() + t * d.n));
     }
   } else {
     std::vector<std::int8_t> status(static_cast<std::size_t>(k));
@@ -168,15 +178,16 @@ void run_chunk(Driver<Est>& d, Input& in, Sample& s) {
     std::unique_ptr<bool[]> valid(new bool[static_cast<std::size_t>(k * d.n)]);
     d.est.record(a.data(), u.data(), k, {status.data(), mass.data(), damping.data(), spring.data(), valid.get()});
     for (long t = 0; t < k; ++t) {
-      if (!finite[static_cast<std::size_t>(t)] && status[static_cast<std::size_t>(t)] != 2)
-        fail("record(): a non-finite sample was not BadInput", d.n);
+      const auto i = static_cast<std::size_t>(t);
+      d.note(finite[i], tampered[i], static_cast<algid::Status>(status[i]));
       for (int i = 0; i < d.n; ++i)
         if (valid[static_cast<std::size_t>(t * d.n + i)] && !std::isfinite(mass[static_cast<std::size_t>(t * d.n + i)]))
           fail("record(): valid flags a mass that is not a number", d.n);
     }
-    long bad = 0;
-    d.est.run(a.data(), u.data(), k, [&](long, algid::Status st) { bad += st == algid::Status::kBadInput; });
-    (void)bad;
+    // the same samples again through run(), the estimator's state carried on
+    d.est.run(a.data(), u.data(), k, [&](long t, algid::Status st) {
+      d.note(finite[static_cast<std::size_t>(t)], tampered[static_cast<std::size_t>(t)], st);
+    });
   }
 }
 
@@ -194,6 +205,7 @@ void program(Driver<Est>& d, Input& in) {
     } else if (op == 1) {
       for (auto* v : {&s.a, &s.u})
         for (auto& x : *v) x = in.raw();
+      s.tampered = true;
       d.feed(s);
     } else if (op == 2) {
       const int k = 1 + in.byte();
@@ -257,7 +269,7 @@ void continuous(int n, Input& in) {
       fail("a running estimate stayed non-finite after good samples resumed", n);
   if (!est->ready()) fail("the continuous estimator is not ready after good samples resumed", n);
   const double error = worst_mass_error(est->estimate().head(n), truth_of(n).chain);
-  if (error > kResumeError) {
+  if (!d.accepted_garbage && error > kResumeError) {
     std::fprintf(stderr, "running estimate's worst mass error %.3g; %ld windows before, %ld after\n", error, before,
                  est->window_results());
     fail("the running masses are not back near the truth", n);
