@@ -13,10 +13,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
-from signals import multisine, simulate_chain  # noqa: E402
-
 import algid  # noqa: E402
 from algid.chain import TABLE1  # noqa: E402
+from signals import multisine, simulate_chain  # noqa: E402
 
 t, a, u, _ = simulate_chain(TABLE1, multisine(3, seed=4), 30.0, 1000.0)
 truth = TABLE1.identifiable()
