@@ -17,6 +17,7 @@ import contextlib
 import gzip
 import io
 import lzma
+import os
 import sys
 import tempfile
 import warnings
@@ -71,6 +72,12 @@ KINDS = (
 )
 
 
+def skipped(data: bytes) -> bool:
+    """Whether the input is an HDF5 file and ``ALGID_FUZZ_HDF5=0``: libhdf5's own allocation and
+    loop on damaged attributes (docs/reliability.md, finding 8) would end every short run."""
+    return os.environ.get("ALGID_FUZZ_HDF5") == "0" and KINDS[data[0] % len(KINDS) if data else 0][0] == ".h5"
+
+
 def file_of(data: bytes, folder: Path) -> tuple[Path, float | None]:
     """The file an input describes, written into ``folder``, and the ``dt`` to pass."""
     kind = data[0] % len(KINDS) if data else 0
@@ -102,6 +109,8 @@ def check_message(err: BaseException) -> None:
 
 def reader(data: bytes, folder: Path) -> Recording | None:
     """The reader's property on one input; any other exception escapes."""
+    if skipped(data):
+        return None
     path, dt = file_of(data, folder)
     try:
         with warnings.catch_warnings():
@@ -120,6 +129,8 @@ def command(data: bytes, folder: Path, name: str) -> int:
     would hide it behind its catch-all, so the subcommand is called directly)."""
     from algid.cli import build_parser
 
+    if skipped(data):
+        return 0
     path, dt = file_of(data, folder)
     argv = [name, str(path), "--quiet"] + (["--dt", "0.001"] if dt else [])
     args = build_parser().parse_args(argv)
