@@ -43,6 +43,7 @@ namespace {
 using algid::Dynamic;
 constexpr double kDt = 1e-3;
 constexpr long kRecord = 8192;
+constexpr long kProgramSamples = 4096;  // a program ends once it has fed this many (speed)
 // The continuous estimator's window [s] and the good samples after the program: short windows
 // keep an execution near 0.1 s under the sanitizers.
 constexpr double kWindowS = 0.1;
@@ -133,6 +134,7 @@ struct Driver {
   const algid_test::Samples& rec;
   long pos = 0;
   bool accepted_garbage = false;  // a finite tampered sample the estimator took in
+  long fed = 0;                   // samples so far
 
   void note(bool finite, bool tampered, algid::Status status) {
     if (!finite && status != algid::Status::kBadInput) fail("a non-finite sample was not BadInput", n);
@@ -146,7 +148,10 @@ struct Driver {
           fail("valid flags an estimate that is not a number", n);
     }
   }
-  void feed(const Sample& s) { check(s, est.update(s.a.data(), s.u.data())); }
+  void feed(const Sample& s) {
+    check(s, est.update(s.a.data(), s.u.data()));
+    ++fed;
+  }
   long next() { return pos = (pos + 1) % kRecord; }
 };
 
@@ -166,6 +171,7 @@ void run_chunk(Driver<Est>& d, Input& in, Sample& s) {
     std::copy(s.a.begin(), s.a.end(), a.begin() + t * d.n);
     std::copy(s.u.begin(), s.u.end(), u.begin() + t * d.n);
   }
+  d.fed += k;
   if constexpr (std::is_same_v<Est, algid::ContinuousEstimator<Dynamic>>) {
     for (long t = 0; t < k; ++t) {
       const auto i = static_cast<std::size_t>(t);
@@ -194,7 +200,7 @@ void run_chunk(Driver<Est>& d, Input& in, Sample& s) {
 template <class Est>
 void program(Driver<Est>& d, Input& in) {
   Sample s(d.n);
-  for (int ops = 0; !in.empty() && ops < 64; ++ops) {
+  for (int ops = 0; !in.empty() && ops < 64 && d.fed < kProgramSamples; ++ops) {
     const int op = in.byte() % 5;
     if (op == 0) {
       const int k = 1 + 4 * in.byte();
