@@ -14,7 +14,9 @@ MAX_QUOTE = 80  # [characters] of the offending input quoted in it
 def quote(text: object, limit: int = MAX_QUOTE) -> str:
     """``repr`` of a piece of offending input, shortened to about ``limit`` characters."""
     s = str(text)
-    return repr(s if len(s) <= limit else s[: limit - 3] + "...")
+    r = repr(s if len(s) <= limit else s[: limit - 3] + "...")
+    # repr spells a control character or a lone surrogate in 4-6 characters (NUL: \\x00)
+    return r if len(r) <= limit + 2 else r[: limit - 2] + "..." + r[-1]
 
 
 def quote_path(path: object, limit: int = MAX_QUOTE) -> str:

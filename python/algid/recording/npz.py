@@ -5,6 +5,7 @@ any is decompressed."""
 from __future__ import annotations
 
 import math
+import tokenize
 import zipfile
 from pathlib import Path
 
@@ -14,6 +15,10 @@ from ..messages import quote
 from .columns import resolve
 from .core import RecordingError
 from .table import assemble
+
+#: What a damaged archive or ``.npy`` header raises inside zipfile and numpy (a header that
+#: ends inside its dict fails in numpy's tokenizer).
+_DAMAGED = (zipfile.BadZipFile, ValueError, OSError, EOFError, NotImplementedError, tokenize.TokenError, SyntaxError)
 
 
 def _members(path: Path) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
@@ -41,7 +46,7 @@ def _members(path: Path) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
                 members[info.filename[: -len(".npy")]] = (shape, dtype)
     except RecordingError:
         raise
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError, NotImplementedError) as err:
+    except _DAMAGED as err:
         raise RecordingError(f"{path.name}: not a readable .npz file ({type(err).__name__})") from None
     return members
 
@@ -79,6 +84,6 @@ def read_npz(path: Path, columns=None, units=None, dt=None):
         with np.load(path, allow_pickle=False) as z:
             for col, name in enumerate(used):
                 data[:, col] = z[name]
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError) as err:
+    except _DAMAGED as err:
         raise RecordingError(f"{path.name}: not a readable .npz file ({type(err).__name__})") from None
     return assemble(path, path.name, data, layout, None, dt=dt, units=units)

@@ -7,17 +7,21 @@ the one of tab, ``;``, ``,`` and ``|`` it holds most of (none: blanks). With a d
 other than the comma, a data line with a digit, a comma and a digit means a decimal comma.
 The file is read in chunks of :data:`CSV_CHUNK_LINES` lines: the memory beyond the data
 array (8 bytes a value, only the columns used) is one chunk of text. A line with the wrong
-number of fields or a field that is not a number is named by its line number.
+number of fields or a field that is not a number is named by its line number. No line may be
+longer than :data:`MAX_LINE_CHARS` nor the header name more than :data:`MAX_COLUMNS` columns
+(counted before it is split): a few bytes of ``.bz2`` expand to a line of gigabytes.
 """
 
 from __future__ import annotations
 
 import bz2
+import functools
 import gzip
 import io
 import lzma
 import re
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +33,9 @@ from .table import assemble
 
 #: Lines of a text file parsed at a time (the reader's memory beyond the data is about this).
 CSV_CHUNK_LINES = 8192
+#: Longest line of a text file [characters] and most columns of its header.
+MAX_LINE_CHARS = 1 << 26
+MAX_COLUMNS = 100_000
 TEXT_SUFFIXES = (".csv", ".tsv", ".txt")
 COMPRESSIONS = (".gz", ".bz2", ".xz", ".zip")
 _DELIMITERS = ("\t", ";", ",", "|")
@@ -54,19 +61,25 @@ def open_text(path: Path, compression: str | None):
     return opener(path, "rt", encoding="utf-8-sig")
 
 
-def _data_lines(fh, first_lineno: int):
-    """(line number, text) of the lines from ``first_lineno`` on: blank lines and ``#``
-    comments skipped, the file read line by line."""
-    for lineno, line in enumerate(fh, start=first_lineno):
+def _data_lines(fh, source: str):
+    """(line number, text) of the lines: blank lines and ``#`` comments skipped, the file read
+    line by line, none longer than :data:`MAX_LINE_CHARS`."""
+    for lineno, line in enumerate(iter(functools.partial(fh.readline, MAX_LINE_CHARS + 1), ""), start=1):
+        if len(line) > MAX_LINE_CHARS:
+            raise RecordingError(f"{source}: line {lineno} is longer than {MAX_LINE_CHARS} characters")
         s = line.strip()
         if s and not s.startswith("#"):
             yield lineno, s
 
 
-def split_header(line: str) -> tuple[list[str], str | None]:
-    """The header's names (quotes dropped) and its delimiter (None: blanks)."""
+def split_header(line: str, source: str = "header") -> tuple[list[str], str | None]:
+    """The header's names (quotes dropped) and its delimiter (None: blanks); at most
+    :data:`MAX_COLUMNS` of them, counted before the line is split."""
     counts = {d: line.count(d) for d in _DELIMITERS}
     sep = max(counts, key=counts.get)
+    width = counts[sep] + 1 if counts[sep] else line.count(" ") + 1  # blanks: at most this many
+    if width > MAX_COLUMNS:
+        raise RecordingError(f"{source}: the header has {width} columns, more than {MAX_COLUMNS}")
     if counts[sep]:
         return [name.strip().strip('"').strip() for name in line.split(sep)], sep
     names: list[str] = []
@@ -91,7 +104,8 @@ class _Chunks:
         return text.split() if self.sep is None else text.split(self.sep)
 
     def add(self, texts: list[str], linenos: list[int]) -> None:
-        if not self.chunks and self.sep not in (None, ",") and _DECIMAL_COMMA.search(texts[0]):
+        # The first line may hold only integers (t = 0, a signal at rest): any line decides.
+        if self.decimal == "." and self.sep not in (None, ",") and any(_DECIMAL_COMMA.search(t) for t in texts):
             self.decimal = ","
         width = len(self.names)
         counts = [len(t.split()) for t in texts] if self.sep is None else [t.count(self.sep) + 1 for t in texts]
@@ -138,12 +152,12 @@ def read_text(path: Path, compression: str | None, columns=None, units=None, dt=
     source = path.name
     try:
         with open_text(path, compression) as fh:
-            lines = _data_lines(fh, 1)
+            lines = _data_lines(fh, source)
             first = next(lines, None)
             if first is None:
                 raise RecordingError(f"{source}: empty file")
             header_line, header = first
-            names, sep = split_header(header)
+            names, sep = split_header(header, source)
             layout = resolve(names, source, columns, need_time=dt is None)
             chunks = _Chunks(source, names, sep, layout)
             texts: list[str] = []
@@ -158,9 +172,10 @@ def read_text(path: Path, compression: str | None, columns=None, units=None, dt=
                 chunks.add(texts, linenos)
     except UnicodeDecodeError:
         raise RecordingError(f"{source}: not a text file (cannot decode as UTF-8)") from None
-    except (OSError, EOFError, lzma.LZMAError, zipfile.BadZipFile) as err:
+    except (OSError, EOFError, lzma.LZMAError, zipfile.BadZipFile, zlib.error) as err:
         if compression is None:
             raise
-        raise RecordingError(f"{source}: not a readable {compression} file ({type(err).__name__})") from None
+        why = "damaged deflate data" if isinstance(err, zlib.error) else type(err).__name__
+        raise RecordingError(f"{source}: not a readable {compression} file ({why})") from None
     data, line_numbers = chunks.table(header_line)
     return assemble(path, source, data, layout, line_numbers, dt=dt, units=units)

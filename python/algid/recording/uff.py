@@ -46,6 +46,11 @@ def _time_responses(path: Path) -> list[dict]:
             raise RecordingError(f"{path.name}: record {quote(s['id1'])} is not on the time grid of the first record")
         if np.iscomplexobj(s["data"]):
             raise RecordingError(f"{path.name}: record {quote(s['id1'])} is complex, not a time response")
+        if np.size(s["data"]) != s["num_pts"]:
+            raise RecordingError(
+                f"{path.name}: record {quote(s['id1'])} holds {np.size(s['data'])} values "
+                f"but declares {s['num_pts']} (truncated or corrupt)"
+            )
     return series
 
 
