@@ -139,7 +139,9 @@ class ContinuousAdapter(PackedParameters):
     window of a plain ChainEstimator fed the same samples, the paper's estimator, so the
     noise-free loop still has its estimates within 0.1 s; its relative uncertainty is taken
     as the largest relative change of each estimate over the last ``bootstrap_window_s``
-    (a steadiness proxy, as the controller's ``accept="settled"`` rule). From the first
+    (a steadiness proxy, as the controller's ``accept="settled"`` rule), and only until the
+    running estimate's first window is due (``window_s``): under noise the growing window
+    wanders off later, however steady it looks over 20 ms. From the first
     sample at which the running estimate is :attr:`~algid.ContinuousEstimator.ready` on
     (``phase == "running"``) the adapter serves the running estimate and its ``sigma``.
 
@@ -235,7 +237,9 @@ class ContinuousAdapter(PackedParameters):
                     np.asarray(self.bootstrap.stiffness, float),
                 ]
             )
-            ok_b = np.asarray(self.bootstrap.valid, bool)
+            # the growing window is served until the running estimate's first window is
+            # due; after that only the running estimate may be accepted
+            ok_b = np.asarray(self.bootstrap.valid, bool) & (self._k < self.continuous.window_samples)
             self._hist[self._k % self._W] = est
             with np.errstate(invalid="ignore"):
                 spread = (

@@ -357,7 +357,6 @@ class ContinuousEstimator {
     if (weak_) weak_->reset();
     if (joint_) joint_->clear();
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    weighted_tracks_ = false;
     for (int j = 0; j < params_; ++j) {
       tracks_[j] = Track{};
       const Scalar fixed = known_[j] == Known::kZero ? Scalar(0) : nan;
@@ -418,7 +417,6 @@ class ContinuousEstimator {
     if (weak_form_) {
       weak_->set_model(estimate_.data());
       if (weak_->update(a, f)) {
-        if (weak_->result_weighted() && !weighted_tracks_) restart_tracks();
         harvest(weak_->result(), weak_->variance());
         if (joint_) joint_add();
       }
@@ -662,15 +660,6 @@ class ContinuousEstimator {
     pending_var_ = variance;
     pending_next_ = 0;
     ++results_;
-  }
-
-  // The first GLS-weighted window result: the unweighted results before it (biased under
-  // heavy noise: the weights take a few seconds to build) leave the tracks, whose change tests
-  // start afresh on weighted results only.
-  void restart_tracks() noexcept {
-    finish_pending();
-    for (int j = 0; j < params_; ++j) tracks_[j] = Track{};
-    weighted_tracks_ = true;
   }
 
   // Finish the previous result first (only if the budget was too small, e.g. a bad sample
@@ -1034,7 +1023,6 @@ class ContinuousEstimator {
   std::unique_ptr<Joint> joint_;
   Vector<Scalar, kParams> track_, track_sigma_;
   bool weak_form_ = false;
-  bool weighted_tracks_ = false;  // the tracks hold weighted window results only
 
   int pending_next_ = 0;
   detail::Storage<Event, kParams> events_{};
