@@ -347,8 +347,9 @@ class WeakFormWindows {
   }
 
   // The noise estimate: a forgotten mean of squared fourth differences. It starts from the
-  // median of the first 64 (one absurd sample among them does not set it) and afterwards a
-  // square beyond 1e4 times the mean counts as 1e4 times the mean; non-finite ones are skipped.
+  // median of the first 64 (one absurd sample among them does not set it); non-finite ones
+  // are skipped. Later garbage inflates it (its windows then fail their solve and stay out of
+  // the joint sum) until it is forgotten.
   void observe(int c, double x) noexcept {
     History& h = history_[c];
     if (h.count == 4) {
@@ -357,7 +358,6 @@ class WeakFormWindows {
       Noise& s = noise_[c];
       double q = d4 * d4;
       if (std::isfinite(q)) {
-        if (s.started == kNoiseStart) q = std::min(q, 1e4 * s.sum / s.weight);
         s.sum = keep * s.sum + q;
         s.weight = keep * s.weight + 1.0;
         if (s.started < kNoiseStart) {

@@ -127,7 +127,9 @@ def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan:
     spread = 1.4826 * _column_median(np.abs(W - _column_median(W)))
     if weak:
         theta = np.asarray(est.estimate, float)
-        rows = np.any(np.isfinite(out["estimate"]), axis=1) if history else np.zeros(0, bool)
+        # rows where every parameter finite at the end is (they join one by one)
+        final = np.isfinite(theta)
+        rows = np.all(np.isfinite(out["estimate"][:, final]), axis=1) if history else np.zeros(0, bool)
         if not rows.any():
             return Run(
                 theta=theta, time_s=np.array([T * dt]), history=theta[None, :], windows=int(W.shape[0]), spread=spread
