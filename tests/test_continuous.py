@@ -227,6 +227,9 @@ def test_arguments_are_checked():
         algid.ContinuousEstimator(3, DT, band_hz=1.0)
     with pytest.raises(ValueError, match="noise"):
         algid.ContinuousEstimator(3, DT, accel_noise=-3.0)
+    for bad in (0.5, float("inf"), float("nan")):
+        with pytest.raises(ValueError, match="misfit_ratio"):
+            algid.ContinuousEstimator(3, DT, misfit_ratio=bad)
     est = algid.ContinuousEstimator(3, DT)
     with pytest.raises(ValueError, match=r"\(T, 3\)"):
         est.run(np.zeros((10, 2)), np.zeros((10, 2)))

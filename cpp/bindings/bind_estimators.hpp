@@ -298,6 +298,8 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
       .def_property_readonly("dropout_runs", [](const Est& e) { return idle(e).dropout_runs(); })
       .def_property_readonly("last_dropout", [](const Est& e) { return idle(e).last_dropout(); })
       .def_property_readonly("dropout_channel", [](const Est& e) { return idle(e).dropout_channel(); })
+      .def_property_readonly("screened_windows", [](const Est& e) { return idle(e).screened_windows(); })
+      .def_property_readonly("last_misfit", [](const Est& e) { return idle(e).last_misfit(); })
       .def_property_readonly("window_samples", &Est::window_samples)
       .def_property_readonly("confirm", &Est::confirm)
       .def_property_readonly("budget", &Est::budget)
@@ -335,6 +337,7 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
             std::vector<typename Est::Event> events;
             std::vector<double> windows;
             std::vector<std::int64_t> window_sample;
+            std::vector<double> misfits, variances;
             const double* a = accel.data();
             const double* f = force.data();
             auto* st = status.mutable_data();
@@ -352,7 +355,9 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
                 for (int i = 0; i < e.events(); ++i) events.push_back(e.event(i));
                 if (e.window_results() != results) {
                   windows.insert(windows.end(), e.last_window().data(), e.last_window().data() + P);
+                  variances.insert(variances.end(), e.last_variance().data(), e.last_variance().data() + P);
                   window_sample.push_back(first + t);
+                  misfits.push_back(e.last_misfit());
                 }
                 if (t % stride == 0) {
                   std::copy(e.estimate().data(), e.estimate().data() + P, pe + row * P);
@@ -389,6 +394,12 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
             out["event_after"] = ev_after;
             out["windows"] = win;
             out["window_sample"] = win_sample;
+            Array win_var({R, static_cast<py::ssize_t>(P)});
+            std::copy(variances.begin(), variances.end(), win_var.mutable_data());
+            out["window_variance"] = win_var;
+            Array misfit(R);
+            std::copy(misfits.begin(), misfits.end(), misfit.mutable_data());
+            out["window_misfit"] = misfit;
             return out;
           },
           py::arg("accel"), py::arg("force"), py::arg("stride") = 1,

@@ -109,6 +109,9 @@ void bind_config_classes(py::module_& m) {
       .def_readwrite("amortize", &Cont::amortize, "spread the per-parameter work over the samples")
       .def_readwrite("outlier_ratio", &Cont::outlier_ratio,
                      "a sample beyond this many times its channel's running RMS is bad input; 0: off")
+      .def_readwrite("misfit_ratio", &Cont::misfit_ratio,
+                     "weak form: a window whose misfit exceeds this many times the median of the 16 before "
+                     "(or 1) stays out of the joint estimate; 0: off")
       .def_readwrite("stuck_samples", &Cont::stuck_samples,
                      "an acceleration repeating one value this many samples is a dropout; 0: off")
       .def_readwrite("clip_samples", &Cont::clip_samples,

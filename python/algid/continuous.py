@@ -306,6 +306,11 @@ class ContinuousEstimator(Displayed, _ScheduleView, PackedParameters):
         """Window results aggregated into parameter ``param`` since its last restart."""
         return int(self._impl.since_restart(int(param)))
 
+    @property
+    def screened_windows(self) -> int:
+        """Window results kept out of the joint estimate by ``misfit_ratio`` so far (weak form)."""
+        return int(self._impl.screened_windows)
+
     def window_spread(self, param: int) -> float:
         """Per-window spread (1.4826 MAD) of parameter ``param`` [its units]."""
         return float(self._impl.window_spread(int(param)))
@@ -330,8 +335,11 @@ class ContinuousEstimator(Displayed, _ScheduleView, PackedParameters):
             ``mass``, ``damping`` (R, n), ``stiffness`` (R, n+1) views of ``estimate``;
             ``events``: list of :class:`ChangeEvent`; ``event_sample``, ``event_param``,
             ``event_kind`` (1 step, 2 drift), ``event_before``, ``event_after`` as arrays;
-            ``windows`` (W, 3n+1) every window result and ``window_sample`` (W,) the sample
-            at which it was harvested; ``names``.
+            ``windows`` (W, 3n+1) every window result, ``window_variance`` (W, 3n+1) its
+            variance (weak form with GLS weights, else NaN), ``window_sample`` (W,) the sample
+            at which it was harvested and ``window_misfit`` (W,) its weighted residual per
+            degree of freedom (weak form; about 1 where the chain describes the window, NaN
+            for an unweighted window); ``names``.
         """
         a, u = as_record(accel, force, self.n)
         stride = operator.index(stride)

@@ -37,13 +37,15 @@
 ///      spread only: the bias that noise on the regressors causes (after the prefilter about
 ///      -1 % on masses and springs at 20 dB SNR, -5 % without it) is not in it.
 ///   4. Change detection, per parameter, against the running estimate:
-///      - step test: robust z = (result - estimate) / max(spread, `min_relative_spread` |estimate|)
-///        of each window result; an alarm when the median z of the last `confirm` results
+///      - step test: robust z = (result - estimate) / max(spread, `min_relative_spread` |estimate|,
+///        the window's own sigma where the weak form's GLS gives one: a window in a lull of
+///        the excitation is uncertain) of each window result; an alarm when the median z of the last `confirm` results
 ///        (2K+1 by default: more than the K windows that straddle a change, so a transient
 ///        in the straddling windows cannot raise it) exceeds `step_threshold`. The
 ///        aggregation restarts from the results of that run that agree with the new level.
 ///      - drift test: a two-sided CUSUM of the block medians (standardised by the spread of
-///        a block median, clipped at `cusum_clip`, reference `cusum_reference`, alarm at
+///        a block median, from the larger of the floored spread and the block's median window
+///        sigma, clipped at `cusum_clip`, reference `cusum_reference`, alarm at
 ///        `cusum_threshold`); the aggregation restarts from the last block.
 ///      Each alarm is a ChangeEvent (sample, parameter, kind, estimate before and after).
 ///
@@ -55,8 +57,8 @@
 /// parameters; the estimates therefore lag the window end by at most M/K samples.
 ///
 /// Storage: MaxStagger ChainEstimator<N>, the prefilter (8 states per channel), and per
-/// parameter two rings of Capacity scalars (window results and their z-scores):
-/// 2 (3n+1) Capacity scalars: about 50 KiB for n = 3, 0.85 MiB for n = 64 (defaults). Inside the
+/// parameter three arrays of Capacity scalars (window results, their z-scores, the block's
+/// window sigmas): 3 (3n+1) Capacity scalars: about 75 KiB for n = 3, 1.3 MiB for n = 64 (defaults). Inside the
 /// object for a fixed N; allocated by the constructor for N = Dynamic (n given at run time).
 /// The weak-form windows (WindowMethod::kWeakForm, the default) and their joint system add
 /// buffers sized by the window and the band (about 0.3 MB for n = 5), allocated by the
@@ -139,6 +141,12 @@ struct ContinuousConfig {
   /// A finite sample beyond this many times its channel's running RMS (time constant one
   /// window, measured once a window of samples has passed) is treated as bad input; 0: off.
   Scalar outlier_ratio = Scalar(1e8);
+  /// Weak form: a window whose misfit (WeakFormWindows::misfit(), the weighted residual per
+  /// degree of freedom) exceeds this many times the larger of 1 and the median misfit of the
+  /// 16 windows before it stays out of the joint normal equations (finite garbage, a transient
+  /// the chain does not describe, a window straddling a change); the block medians and the
+  /// change detector still see it. 0: off.
+  Scalar misfit_ratio = Scalar(30);
   /// An acceleration that has moved and then repeats one value exactly for this many samples in
   /// a row is a dead sensor (detail/dropout.hpp): its samples are discarded like bad input and
   /// update() returns kDropout; 0: off. Short, because the windows harvested before a run is
@@ -167,6 +175,7 @@ enum class ContinuousConfigError {
   kBadHorizon,
   kBadPrefilter,
   kBadOutlierRatio,
+  kBadMisfitRatio,
   kBadDropout,
   kBadDofs,
   kBadBand,
@@ -195,6 +204,7 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
     case ContinuousConfigError::kBadPrefilter:
       return "prefilter_hz must be -1 (0.05/dt), 0 (off) or in [1e-6/dt, 0.45/dt) [Hz], prefilter_order 2 or 4";
     case ContinuousConfigError::kBadOutlierRatio: return "outlier_ratio must be 0 (off) or finite and > 1";
+    case ContinuousConfigError::kBadMisfitRatio: return "misfit_ratio must be 0 (off) or finite and > 1";
     case ContinuousConfigError::kBadDropout: return "stuck_samples and clip_samples must be 0 (off) or >= 2";
     case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
     case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
@@ -286,6 +296,8 @@ class ContinuousEstimator {
     }
     if (!std::isfinite(c.outlier_ratio) || (c.outlier_ratio != Scalar(0) && !(c.outlier_ratio > Scalar(1))))
       return ContinuousConfigError::kBadOutlierRatio;
+    if (!std::isfinite(c.misfit_ratio) || (c.misfit_ratio != Scalar(0) && !(c.misfit_ratio > Scalar(1))))
+      return ContinuousConfigError::kBadMisfitRatio;
     if (c.stuck_samples < 0 || c.stuck_samples == 1 || c.clip_samples < 0 || c.clip_samples == 1)
       return ContinuousConfigError::kBadDropout;
     return ContinuousConfigError::kNone;
@@ -378,6 +390,8 @@ class ContinuousEstimator {
     dropout_runs_ = 0;
     last_dropout_ = Dropout::kNone;
     dropout_channel_ = -1;
+    misfit_head_ = misfit_count_ = 0;
+    screened_ = 0;
     samples_ = 0;
     results_ = 0;
     event_count_ = 0;
@@ -417,8 +431,9 @@ class ContinuousEstimator {
     if (weak_form_) {
       weak_->set_model(estimate_.data());
       if (weak_->update(a, f)) {
+        const bool in_joint = fits(weak_->misfit());
         harvest(weak_->result(), weak_->variance());
-        if (joint_) joint_add();
+        if (joint_ && in_joint) joint_add();
       }
       work();
       return ready() ? Status::kOk : Status::kWarmup;
@@ -491,6 +506,10 @@ class ContinuousEstimator {
   /// Kind of the latest dropout run (kNone: none yet) and its acceleration channel (0-based, -1: none).
   Dropout last_dropout() const noexcept { return last_dropout_; }
   int dropout_channel() const noexcept { return dropout_channel_; }
+  /// Weak form: windows kept out of the joint by `misfit_ratio` since construction or reset().
+  long screened_windows() const noexcept { return screened_; }
+  /// Weak form: misfit of the latest window (WeakFormWindows::misfit(); NaN before a weighted one).
+  double last_misfit() const noexcept { return weak_ ? weak_->misfit() : std::numeric_limits<double>::quiet_NaN(); }
   /// Window results harvested since construction or reset().
   long window_results() const noexcept { return results_; }
   /// Window results aggregated into parameter j's estimate since its last restart.
@@ -535,6 +554,7 @@ class ContinuousEstimator {
     int in_block = 0;  // results in the current block
     Scalar s0 = Scalar(0), s1 = Scalar(0), s2 = Scalar(0), s0sq = Scalar(0);  // block-statistic moments
     Scalar cusum_hi = Scalar(0), cusum_lo = Scalar(0);
+    std::array<Scalar, Capacity> block_sd{};  // the current block's window sigmas (0: unknown)
     Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();  // per-window sigma
     Scalar relative_spread = std::numeric_limits<Scalar>::quiet_NaN();  // carried over a restart
     bool spread_ok = false;  // spread measured on >= min_windows results: the tests may run
@@ -609,6 +629,24 @@ class ContinuousEstimator {
     }
     ++accepted_;
     return true;
+  }
+
+  // The misfit screen (`misfit_ratio`): false if the window fits far worse than the windows
+  // before it; every finite misfit joins the ring of the newest kMisfits.
+  bool fits(double misfit) noexcept {
+    if (!std::isfinite(misfit)) return true;  // unweighted or failed: joint_add() decides
+    double reference = 1.0;
+    if (misfit_count_ > 0) {
+      std::copy(misfits_.begin(), misfits_.begin() + misfit_count_, misfit_scratch_.begin());
+      reference = std::max(reference, detail::median_inplace(misfit_scratch_.data(), misfit_count_));
+    }
+    misfits_[static_cast<std::size_t>(misfit_head_)] = misfit;
+    misfit_head_ = (misfit_head_ + 1) % kMisfits;
+    misfit_count_ = std::min(misfit_count_ + 1, kMisfits);
+    const double ratio = static_cast<double>(config_.misfit_ratio);
+    const bool ok = !(ratio > 0.0 && misfit > ratio * reference);
+    if (!ok) ++screened_;
+    return ok;
   }
 
   // A stuck or clipped acceleration (detail/dropout.hpp); counts a new run when the previous
@@ -690,9 +728,13 @@ class ContinuousEstimator {
     if (!std::isfinite(x)) return;
     Track& t = tracks_[j];
     const Scalar est = track_(j);
+    // The window's own sigma (weak form with GLS weights), where it exceeds the track's
+    // spread: a window in a lull of the excitation is uncertain, and says so.
+    const Scalar v = pending_var_(j);
+    const Scalar sd = std::isfinite(v) && v > Scalar(0) ? std::sqrt(v) : Scalar(0);
     Scalar z = std::numeric_limits<Scalar>::quiet_NaN();
     if (t.spread_ok && std::isfinite(est)) {
-      const Scalar s = floor_spread(t, est);
+      const Scalar s = std::max(floor_spread(t, est), sd);
       if (s > Scalar(0)) z = (x - est) / s;
     }
     t.value[static_cast<std::size_t>(t.head)] = x;
@@ -713,13 +755,17 @@ class ContinuousEstimator {
       }
     }
 
-    // Blocks: median of the last `block` results into the running mean; drift test on it.
+    // Blocks: median of the last `block` results into the running mean; drift test on it,
+    // on the scale of the larger of the track's spread and the block's median window sigma.
+    t.block_sd[static_cast<std::size_t>(t.in_block)] = sd;
     if (++t.in_block == config_.block) {
       t.in_block = 0;
       newest(t.value, t.head, config_.block);
       const Scalar bm = detail::median_inplace(scratch_.data(), config_.block);
       if (config_.detect && t.s0 > Scalar(0) && t.spread_ok) {
-        const Scalar sb = block_scale_ * floor_spread(t, est);
+        std::copy(t.block_sd.begin(), t.block_sd.begin() + config_.block, scratch_.begin());
+        const Scalar block_sd = detail::median_inplace(scratch_.data(), config_.block);
+        const Scalar sb = block_scale_ * std::max(floor_spread(t, est), block_sd);
         if (sb > Scalar(0)) {
           const Scalar d = std::clamp((bm - est) / sb, -config_.cusum_clip, config_.cusum_clip);
           t.cusum_hi = std::max(Scalar(0), t.cusum_hi + d - config_.cusum_reference);
@@ -999,6 +1045,10 @@ class ContinuousEstimator {
   detail::Storage<Scalar, kChannels> io_{};
   detail::Storage<Scalar, kChannels> mean_square_{};  // running mean square of every raw channel
   long accepted_ = 0;  // plausible samples since construction, reset() or a new level
+  static constexpr int kMisfits = 16;
+  std::array<double, kMisfits> misfits_{}, misfit_scratch_{};  // newest window misfits (ring)
+  int misfit_head_ = 0, misfit_count_ = 0;
+  long screened_ = 0;
   long out_of_range_ = 0;  // finite samples out of range in a row
   detail::DropoutDetector<Scalar, N> dropout_{};
   bool in_dropout_ = false;

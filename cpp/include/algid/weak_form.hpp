@@ -166,8 +166,10 @@ class WeakFormWindows {
     next_traces_.setZero(n_ * 5 * 9);
     identity_traces_.setZero(9);
     normal_.setZero(params_, params_);
+    raw_normal_.setZero(params_, params_);
     rhs_.setZero(params_);
     solution_.setZero(params_);
+    work_.setZero(params_);
     inverse_.setZero(params_, params_);
     model_.setConstant(params_, std::numeric_limits<double>::quiet_NaN());
     noise_.resize(C);
@@ -193,6 +195,7 @@ class WeakFormWindows {
     refresh_pos_ = 0;
     refresh_sub_ = 0;
     results_ = 0;
+    misfit_ = std::numeric_limits<double>::quiet_NaN();
     result_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
     variance_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
   }
@@ -260,6 +263,10 @@ class WeakFormWindows {
   /// True if the latest window's rows were all GLS-weighted (normal() is then an information
   /// matrix: windows can be summed).
   bool result_weighted() const noexcept { return window_weighted_; }
+  /// Weighted residual of the latest window per degree of freedom, r^T W r / (n F - 3n - 1)
+  /// with r = y - Phi theta at the window's own solution: about 1 when the chain and the noise
+  /// estimate describe the window; NaN for an unweighted or failed window.
+  double misfit() const noexcept { return misfit_; }
   /// Window results since reset().
   long results() const noexcept { return results_; }
   /// True once every DOF's rows are weighted by a covariance from the running estimate.
@@ -288,6 +295,7 @@ class WeakFormWindows {
   static constexpr double kTaper[5] = {1.0 / 16, -1.0 / 4, 3.0 / 8, -1.0 / 4, 1.0 / 16};
 
   static constexpr int kNoiseStart = 64;  // fourth differences whose median starts the estimate
+  static constexpr double kNoiseClip = 30.0;  // clip of a later one, times the running mean
   struct Noise {
     double sum = 0.0;  // forgotten sum of squared fourth differences
     double weight = 0.0;  // forgotten count
@@ -348,8 +356,10 @@ class WeakFormWindows {
 
   // The noise estimate: a forgotten mean of squared fourth differences. It starts from the
   // median of the first 64 (one absurd sample among them does not set it); non-finite ones
-  // are skipped. Later garbage inflates it (its windows then fail their solve and stay out of
-  // the joint sum) until it is forgotten.
+  // are skipped; later ones enter clipped at kNoiseClip times the mean so far (for white noise
+  // a squared fourth difference over its mean is chi^2_1: beyond 30 once in 2.5e7), so one
+  // absurd sample moves it by at most 30 dt / noise_horizon_s (0.3 %), while a real rise of
+  // the noise is followed at e-fold per noise_horizon_s / 29 (0.34 s).
   void observe(int c, double x) noexcept {
     History& h = history_[c];
     if (h.count == 4) {
@@ -358,6 +368,7 @@ class WeakFormWindows {
       Noise& s = noise_[c];
       double q = d4 * d4;
       if (std::isfinite(q)) {
+        if (s.started == kNoiseStart && s.sum > 0.0) q = std::min(q, kNoiseClip * s.sum / s.weight);
         s.sum = keep * s.sum + q;
         s.weight = keep * s.weight + 1.0;
         if (s.started < kNoiseStart) {
@@ -534,8 +545,10 @@ class WeakFormWindows {
         rhs_(p) = phi_.col(p).segment(first * F, w).dot(xw_.col(params_).segment(first * F, w));
       }
     } else {
+      raw_normal_ = normal_;
       if (config_.bias_compensation) subtract_bias();
       solve();
+      measure_misfit();
       pending_ = false;
       ++results_;
       return true;
@@ -577,6 +590,18 @@ class WeakFormWindows {
       result_(params_ - 1) = config_.boundary == Boundary::kFree ? Scalar(0) : static_cast<Scalar>(nan);
       variance_(params_ - 1) = Scalar(0);
     }
+  }
+
+  // r^T W r = y^T W y - 2 theta^T Phi^T W y + theta^T Phi^T W Phi theta, with the normal
+  // matrix before the bias correction (the residual of the rows as measured).
+  void measure_misfit() noexcept {
+    misfit_ = std::numeric_limits<double>::quiet_NaN();
+    if (!window_weighted_ || !result_.allFinite()) return;
+    const double yy = phi_.col(params_).dot(xw_.col(params_));
+    const VecD& x = solution_;
+    work_.noalias() = raw_normal_ * x;
+    const double r2 = yy - 2.0 * x.dot(rhs_) + x.dot(work_);
+    misfit_ = std::max(r2, 0.0) / static_cast<double>(std::max(1, R_ - params_));
   }
 
   // Noise loading of DOF i's equation error on acceleration channel c, derivative order d:
@@ -759,17 +784,18 @@ class WeakFormWindows {
   long phase_ = 0, in_hop_ = 0, hops_ = 0;
   VecC z_;
   MatC bins_, seg_;
-  MatD rows_, phi_, xw_, weight_, chol_, wnext_, normal_, inverse_;
+  MatD rows_, phi_, xw_, weight_, chol_, wnext_, normal_, raw_normal_, inverse_;
   MatD gram_[9];
   VecD traces_, next_traces_, identity_traces_;
   detail::Storage<Noise, N == Dynamic ? Dynamic : 2 * N> noise_{};
   detail::Storage<History, N == Dynamic ? Dynamic : 2 * N> history_{};
-  VecD rhs_, solution_, model_;
+  VecD rhs_, solution_, work_, model_;
   bool pending_ = false;
   int step_ = 0;
   int refresh_stage_ = 0, refresh_pos_ = 0, refresh_sub_ = 0, band_ = 0;
   bool weighted_ = false, window_weighted_ = false;
   long results_ = 0;
+  double misfit_ = std::numeric_limits<double>::quiet_NaN();
   Vector<Scalar, kParams> result_, variance_;
 };
 

@@ -27,7 +27,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from ..identification.surrogate import REPLICATES
+from ..identification.surrogate import REPLICATES, threads
 
 #: Bytes hashed at a time (the hash never holds a whole file).
 HASH_BLOCK = 1 << 20
@@ -147,7 +147,8 @@ def run_one(path: str, options: Options, done: frozenset = frozenset()) -> dict:
         if row["key"] in done:
             return {**row, "status": "skipped"}
         row["recorded_at"] = os.stat(p).st_mtime
-        row.update(_analyse(p, options))
+        with threads(1):  # a worker per core: the bootstrap's threads would oversubscribe them
+            row.update(_analyse(p, options))
         row.update(status="ok", error=None)
     except (Exception, MemoryError) as err:  # noqa: BLE001 - one bad recording never stops the batch
         row.update(status="failed", error=error_text(err))

@@ -40,6 +40,7 @@ from __future__ import annotations
 import os
 import warnings
 from concurrent.futures import ThreadPoolExecutor, as_completed
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Callable
 
@@ -55,10 +56,26 @@ from .runner import run_plan
 REPLICATES = 8
 
 
+#: Threads of :func:`parallel_map`; None: one per core (see :func:`threads`).
+_threads: int | None = None
+
+
+@contextmanager
+def threads(count: int | None):
+    """Run :func:`parallel_map` on at most ``count`` threads inside the block (None: one per
+    core). ``algid.fleet`` runs each recording on one, as its workers take a core each."""
+    global _threads
+    saved, _threads = _threads, count
+    try:
+        yield
+    finally:
+        _threads = saved
+
+
 def parallel_map(fn: Callable, items: list, progress: Callable[[int], None] | None = None) -> list:
     """``[fn(x) for x in items]`` on a thread per core (the estimators release the GIL while
-    they run), results in order; ``progress(done)`` after each."""
-    workers = min(len(items), os.cpu_count() or 1)
+    they run; at most :func:`threads` ones), results in order; ``progress(done)`` after each."""
+    workers = min(len(items), _threads or os.cpu_count() or 1)
     if workers <= 1:
         out = []
         for x in items:
