@@ -151,6 +151,30 @@ def test_the_summary_flags_a_machine_whose_stiffness_moved():
     assert list(table["moved"]) == [False, True] and list(table["recordings"]) == [3, 3]
 
 
+def test_a_task_runs_the_bootstrap_on_its_own_thread(fleet, monkeypatch):
+    """A worker takes a core: inside run_one the bootstrap's parallel_map does not start a thread
+    per core (which oversubscribed the cores: a single worker used 1.56 of 2)."""
+    import threading
+
+    from algid.fleet import task
+    from algid.identification import surrogate
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 8)
+    callers = set()
+    real = surrogate.parallel_map
+
+    def spy(fn, items, progress=None):
+        return real(lambda x: (callers.add(threading.get_ident()), fn(x))[1], items, progress)
+
+    monkeypatch.setattr(surrogate, "parallel_map", spy)
+    good = sorted((fleet / "three").rglob("*.npz"))[0]
+    row = task.run_one(str(good), Options())
+    assert row["status"] == "ok" and callers == {threading.get_ident()}
+    callers.clear()
+    spy(lambda x: x, list(range(8)))  # outside a task: a pool of threads
+    assert callers and threading.get_ident() not in callers and surrogate._threads is None
+
+
 def test_a_missing_extra_is_one_line_naming_it(monkeypatch, capsys, tmp_path):
     monkeypatch.setitem(sys.modules, "distributed", None)
     assert main(["batch", str(tmp_path), "--out", str(tmp_path / "out")]) == 2
