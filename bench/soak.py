@@ -16,7 +16,7 @@ clipped for the whole chunk at a range of 0.6-0.9 of the chunk's largest reading
 rows add the dropout runs the estimator reported, its ``BAD_INPUT`` samples and the runs
 injected. None of them may raise a change event.
 
-    python bench/soak.py [--hours 24] [--n 3 10] [--snr 40 20] [--dropouts] [--json bench/results/soak24_n3_40db.json]
+    python bench/soak.py [--hours 24] [--n 3 10] [--snr 40 20] [--dropouts] [--json FILE]
 """
 
 from __future__ import annotations
