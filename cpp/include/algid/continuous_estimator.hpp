@@ -54,7 +54,9 @@
 /// `reset()` and every accessor are noexcept and allocate nothing. The per-parameter work of
 /// a window result (two nth_element passes over at most Capacity values) is spread over the
 /// samples until the next result (`amortize`), so no single sample pays for all 3n+1
-/// parameters; the estimates therefore lag the window end by at most M/K samples.
+/// parameters; the estimates therefore lag the window end by at most M/K samples. The weak
+/// form's O((3n+1)^3) parts (a window's factorisation and its back-substitutions, the joint
+/// system's factorisation and its solution with the inverse) each take a sample of their own.
 ///
 /// Storage: MaxStagger ChainEstimator<N>, the prefilter (8 states per channel), and per
 /// parameter three arrays of Capacity scalars (window results, their z-scores, the block's
@@ -368,6 +370,7 @@ class ContinuousEstimator {
     restart_windows();
     if (weak_) weak_->reset();
     if (joint_) joint_->clear();
+    joint_stage_ = 0;
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     for (int j = 0; j < params_; ++j) {
       tracks_[j] = Track{};
@@ -429,6 +432,7 @@ class ContinuousEstimator {
       f = io_.data() + n_;
     }
     if (weak_form_) {
+      if (joint_stage_ != 0) joint_step();
       weak_->set_model(estimate_.data());
       if (weak_->update(a, f)) {
         const bool in_joint = fits(weak_->misfit());
@@ -963,12 +967,38 @@ class ContinuousEstimator {
       joint_forget(j, J.size - config_.stagger);
       J.trusted[j] = true;
     }
-    joint_solve();
+    if (config_.amortize) {
+      joint_stage_ = 1;  // factored on the next sample, solved on the one after
+    } else {
+      joint_solve();
+    }
+  }
+
+  // One O(P^3) part of the pending joint solve per sample: the factorisation, then the
+  // solution, the inverse and the reported estimates.
+  void joint_step() noexcept {
+    if (joint_stage_ == 1) {
+      joint_factor();
+      joint_stage_ = 2;
+    } else {
+      joint_publish();
+      joint_stage_ = 0;
+    }
   }
 
   void joint_solve() noexcept {
+    joint_factor();
+    joint_publish();
+    joint_stage_ = 0;
+  }
+
+  void joint_factor() noexcept {
     Joint& J = *joint_;
     J.ldlt.compute(J.normal);
+  }
+
+  void joint_publish() noexcept {
+    Joint& J = *joint_;
     J.valid = J.ldlt.info() == Eigen::Success && J.ldlt.vectorD().minCoeff() > 0.0;
     if (J.valid) {
       J.solution = J.rhs;
@@ -1062,6 +1092,7 @@ class ContinuousEstimator {
   std::array<long, MaxStagger> offset_{};
   long window_samples_ = 0;
   int budget_ = 0;
+  int joint_stage_ = 0;  // joint solve pending: 1 factor next, 2 solve next, 0 none
   int confirm_ = 1;
   Scalar forget_ = Scalar(1);
   Scalar block_scale_ = Scalar(1);

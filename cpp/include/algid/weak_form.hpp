@@ -43,8 +43,10 @@
 ///
 /// Real-time contract: the constructor validates and allocates every buffer (sizes depend on
 /// window, band and n); update(), restart(), reset() and set_model() are noexcept and allocate
-/// nothing. The work of a window (the rows; (3n+2) n products of an F-row block of W with a
-/// column; the normal equations row by row; the solve) is spread over three quarters of a hop,
+/// nothing. The work of a window (the rows; (3n+1) n products of an F-row block of W with a
+/// parameter's column and n^2 of an F x F block of W with a block of the right-hand side; the
+/// normal equations row by row; the factorisation; the back-substitutions) is spread over three
+/// quarters of a hop, at most about 2 F^2 multiply-adds a step or one O((3n+1)^3) part a sample,
 /// and a weight refresh (Sigma block by block, the Cholesky factor column by column within its
 /// band, W column by column a row block at a time, the traces block by block) advances by steps
 /// of at most about 9 F^2 multiply-adds, about 6 F^2 per sample, so no sample pays for a whole
@@ -147,10 +149,14 @@ class WeakFormWindows {
     J_ = Q_ + 3;
     F_ = 2 * Q_ + 1;
     R_ = n_ * F_;
-    // window steps: rows, (P + 1) n products of a row block of W with a column, P + 1 rows of
-    // the normal equations, the solve; spread over three quarters of a hop
-    window_steps_ = 2 + (params_ + 1) * n_ + params_;
-    const long budget = std::max(1L, 3 * H_ / 4);
+    // window steps: rows; P n products of a row block of W with a parameter's column (one or
+    // two blocks wide) and n^2 of a block of W with a block of the right-hand side; P rows of
+    // the normal equations; the factorisation, the back-substitutions, the misfit; spread over
+    // three quarters of a hop
+    products_ = params_ * n_ + n_ * n_;
+    window_steps_ = 4 + products_ + params_;
+    // (the factorisation and the back-substitutions end their sample's steps: two samples more)
+    const long budget = std::max(1L, 3 * H_ / 4 - 2);
     steps_ = static_cast<int>(std::max(1L, (static_cast<long>(window_steps_) + budget - 1) / budget));
     const int C = 2 * n_;
     z_.resize(J_);
@@ -245,7 +251,8 @@ class WeakFormWindows {
       if (hops_ >= K_) start_window();
       bins_.middleCols(static_cast<int>(hops_ % K_) * 2 * n, 2 * n).setZero();  // the oldest block restarts
     }
-    for (int s = 0; s < steps_ && pending_; ++s) done = window_step() || done;
+    bool heavy = false;  // an O(P^3) step ran: the rest waits for the next sample
+    for (int s = 0; s < steps_ && pending_ && !heavy; ++s) done = window_step(heavy) || done;
     refresh();
     return done;
   }
@@ -278,7 +285,16 @@ class WeakFormWindows {
   /// Samples between two window results.
   long hop_samples() const noexcept { return H_; }
   /// Samples from the end of a window to its result.
-  long latency_samples() const noexcept { return (window_steps_ - 1) / steps_; }
+  long latency_samples() const noexcept {
+    long sample = 0;
+    int in_sample = 0;
+    for (int step = 0; step < window_steps_; ++step) {
+      if (in_sample == steps_) ++sample, in_sample = 0;
+      ++in_sample;
+      if (step == window_steps_ - 3 || step == window_steps_ - 2) in_sample = steps_;  // heavy: ends the sample
+    }
+    return sample;
+  }
   /// Highest harmonic Q of the test functions (F = 2Q+1 rows per DOF).
   int harmonics() const noexcept { return Q_; }
   /// The configuration in force.
@@ -511,15 +527,18 @@ class WeakFormWindows {
     }
   }
 
-  // One step of the pending window: rows; (P + 1) n products of a row block of the weights
-  // with a column of phi_; P + 1 rows of the normal equations; the bias and the solve.
-  bool window_step() noexcept {
-    const int F = F_, n = n_, P1 = params_ + 1;
+  // One step of the pending window: rows; a product of a row block of the weights with a
+  // parameter's column of phi_ (at most 2 F^2 multiply-adds) or of an F x F block of the
+  // weights with a block of the right-hand side column (which spans every DOF); a row of the
+  // normal equations; the bias and the factorisation; the solution and the inverse; the
+  // misfit. Each O(P^3) part has a step of its own, so no sample carries more than one of them.
+  bool window_step(bool& heavy) noexcept {
+    const int F = F_, n = n_, P = params_, Pn = params_ * n;
     if (step_ == 0) {
       window_weighted_ = weighted_;
       build_rows();
       fill_phi();
-    } else if (step_ <= P1 * n) {
+    } else if (step_ <= Pn) {
       const int p = (step_ - 1) / n, r = (step_ - 1) % n;
       int first, last;
       span(p, first, last);
@@ -532,8 +551,18 @@ class WeakFormWindows {
       } else {
         out = phi_.col(p).segment(r * F, F);
       }
-    } else if (step_ <= P1 * n + params_) {
-      const int p = step_ - 1 - P1 * n;
+    } else if (step_ <= products_) {
+      const int r = (step_ - 1 - Pn) / n, c = (step_ - 1 - Pn) % n;
+      auto out = xw_.col(P).segment(r * F, F);
+      if (!window_weighted_) {
+        if (c == 0) out = phi_.col(P).segment(r * F, F);
+      } else if (c == 0) {
+        out.noalias() = weight_.block(r * F, 0, F, F) * phi_.col(P).segment(0, F);
+      } else {
+        out.noalias() += weight_.block(r * F, c * F, F, F) * phi_.col(P).segment(c * F, F);
+      }
+    } else if (step_ <= products_ + params_) {
+      const int p = step_ - 1 - products_;
       int first, last;
       span(p, first, last);
       if (first > last) {
@@ -544,10 +573,15 @@ class WeakFormWindows {
         normal_.row(p).noalias() = phi_.col(p).segment(first * F, w).transpose() * xw_.block(first * F, 0, w, params_);
         rhs_(p) = phi_.col(p).segment(first * F, w).dot(xw_.col(params_).segment(first * F, w));
       }
-    } else {
+    } else if (step_ == products_ + params_ + 1) {
       raw_normal_ = normal_;
       if (config_.bias_compensation) subtract_bias();
+      factor();
+      heavy = true;
+    } else if (step_ == products_ + params_ + 2) {
       solve();
+      heavy = true;
+    } else {
       measure_misfit();
       pending_ = false;
       ++results_;
@@ -557,17 +591,24 @@ class WeakFormWindows {
     return false;
   }
 
-  void solve() noexcept {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    const bool free_last = config_.boundary == Boundary::kFree || n_ == 1;
-    // Parameters absent from every equation (k_{n+1} with a free end or n = 1): pin them.
-    if (free_last) {
+  // Parameters absent from every equation (k_{n+1} with a free end or n = 1) are pinned; the
+  // corrected normal matrix is factored.
+  void factor() noexcept {
+    if (free_last()) {
       normal_.row(params_ - 1).setZero();
       normal_.col(params_ - 1).setZero();
       normal_(params_ - 1, params_ - 1) = 1.0;
       rhs_(params_ - 1) = 0.0;
     }
     ldlt_.compute(normal_);
+  }
+
+  bool free_last() const noexcept { return config_.boundary == Boundary::kFree || n_ == 1; }
+
+  // The window's result and variances from the factorisation of factor().
+  void solve() noexcept {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const bool free_last = this->free_last();
     bool ok = ldlt_.info() == Eigen::Success && ldlt_.isPositive();
     if (ok) {
       inverse_.setIdentity();
@@ -780,7 +821,7 @@ class WeakFormWindows {
   int params_;
   Eigen::LDLT<MatD> ldlt_;
   long L_ = 0, H_ = 0;
-  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, R_ = 0, steps_ = 1, window_steps_ = 1;
+  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, R_ = 0, steps_ = 1, window_steps_ = 1, products_ = 0;
   long phase_ = 0, in_hop_ = 0, hops_ = 0;
   VecC z_;
   MatC bins_, seg_;
