@@ -216,11 +216,14 @@ def _profiled(dask_worker) -> tuple[bool, int]:
     return dask.config.get("distributed.worker.profile.enabled"), len(dask_worker.profile_history)
 
 
-def test_a_worker_killed_mid_batch_loses_and_repeats_nothing(fleet, tmp_path):
+@pytest.mark.parametrize("workers", [2, 1])
+def test_a_worker_killed_mid_batch_loses_and_repeats_nothing(fleet, tmp_path, workers):
+    """With one worker its death also loses the scattered keys of the output, which the
+    batch scatters again."""
     from distributed import Client
 
     killed = []
-    with local_cluster(2) as cluster, Client(cluster) as c:
+    with local_cluster(workers) as cluster, Client(cluster) as c:
         victim = next(iter(c.run(os.getpid).values()))
 
         def kill_once(counts: dict, total: int) -> None:

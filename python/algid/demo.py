@@ -34,22 +34,22 @@ the position feedback (10c) of :mod:`algid.controller` (``velocity_pole`` =
 windows and test functions up to 30 Hz (first results at 0.31 s); and the growing window
 that serves until then counts as valid only while steady within 1 % over 20 ms (noise-free
 from a few tens of ms on, so the law still substitutes at 0.1 s; at 40 dB never, so the law
-waits for the running estimate, about 0.45 s) (:data:`RIG_ESTIMATOR_OPTIONS`). Table 1,
+waits for the running estimate, 0.41-0.48 s) (:data:`RIG_ESTIMATOR_OPTIONS`). Table 1,
 5 s, 0/2/5 ms, ``bench/demo_report.py --rig-only --seeds 0 1 2``:
 
 * noise-free: all estimates within 1 % from 0.11-0.30 s on, largest error after 0.5 s
-  0.10-0.11 %, but 1.1-2.0 % between 0.1 and 0.3 s (the growing window's own error: the same
+  0.08-0.10 %, but 1.1-2.0 % between 0.1 and 0.3 s (the growing window's own error: the same
   loop whose law never takes the estimates reaches 0.8-2.4 % there); tracking peak after
   1 s 1.06-1.11 % of the stroke (mostly the probe's motion); the substitution disturbs the
   estimates by 0.31-0.79 % (the largest excess of an estimate's error within 0.1 s of it
   over that never-substituted loop's, same noise: ``disturbance_reference=True``);
-* 40 dB, 3 seeds: all estimates within 1 % from 0.45-1.3 s on, largest error after 0.5 s
-  1.0-2.2 % (the dampings; with the loop's signals even a least-squares fit that knew the
+* 40 dB, 3 seeds: all estimates within 1 % from 0.48-0.71 s on, largest error after 0.5 s
+  0.9-1.8 % (the dampings; with the loop's signals even a least-squares fit that knew the
   true velocities and positions would leave a one-sigma of 0.5-1.6 % on them at 0.5 s);
-  tracking peak after 1 s 1.06-1.12 %; the substitution disturbs the estimates by at most
-  0.47 %;
-* a wrong lag (5 ms told as 4 or 6 ms) still tracks (1.07-1.2 %) but the estimates end
-  12-22 % off.
+  tracking peak after 1 s 1.06-1.11 %; the substitution disturbs the estimates by at most
+  0.63 %;
+* a wrong lag (5 ms told as 4 or 6 ms) still tracks (1.07-1.17 %) but the estimates end
+  12-18 % off.
 
 **Noise** (``--noise-db``). The SNR is meant on the accelerations the estimator actually
 gets. The simulator has to fix a closed loop's noise level before the run, from the

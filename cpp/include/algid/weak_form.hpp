@@ -46,7 +46,8 @@
 /// nothing. The work of a window (the rows; (3n+1) n products of an F-row block of W with a
 /// parameter's column and n^2 of an F x F block of W with a block of the right-hand side; the
 /// normal equations row by row; the factorisation; the back-substitutions) is spread over three
-/// quarters of a hop, at most about 2 F^2 multiply-adds a step or one O((3n+1)^3) part a sample,
+/// quarters of a hop (each sample runs the steps that fit in the least budget of multiply-adds,
+/// from 2 F^2 up, that finishes the window in time, or one O((3n+1)^3) part),
 /// and a weight refresh (Sigma block by block, the Cholesky factor column by column within its
 /// band, W column by column a row block at a time, the traces block by block) advances by steps
 /// of at most about 9 F^2 multiply-adds, about 6 F^2 per sample, so no sample pays for a whole
@@ -151,13 +152,16 @@ class WeakFormWindows {
     R_ = n_ * F_;
     // window steps: rows; P n products of a row block of W with a parameter's column (one or
     // two blocks wide) and n^2 of a block of W with a block of the right-hand side; P rows of
-    // the normal equations; the factorisation, the back-substitutions, the misfit; spread over
-    // three quarters of a hop
+    // the normal equations; the factorisation, the back-substitutions, the misfit. A sample
+    // runs the steps that fit in its budget of multiply-adds (at least one): the least budget
+    // from 2 F^2 (the largest step) up with which the window is done within three quarters
+    // of a hop (the factorisation and the back-substitutions each end their sample).
     products_ = params_ * n_ + n_ * n_;
     window_steps_ = 4 + products_ + params_;
-    // (the factorisation and the back-substitutions end their sample's steps: two samples more)
-    const long budget = std::max(1L, 3 * H_ / 4 - 2);
-    steps_ = static_cast<int>(std::max(1L, (static_cast<long>(window_steps_) + budget - 1) / budget));
+    double total = 0.0;
+    for (int step = 0; step < window_steps_; ++step) total += step_cost(step);
+    const long due = std::max(3L, 3 * H_ / 4 - 1);
+    for (window_budget_ = 2.0 * F_ * F_; latency_samples() > due && window_budget_ < total;) window_budget_ *= 1.05;
     const int C = 2 * n_;
     z_.resize(J_);
     bins_.setZero(J_, C * K_);
@@ -252,7 +256,10 @@ class WeakFormWindows {
       bins_.middleCols(static_cast<int>(hops_ % K_) * 2 * n, 2 * n).setZero();  // the oldest block restarts
     }
     bool heavy = false;  // an O(P^3) step ran: the rest waits for the next sample
-    for (int s = 0; s < steps_ && pending_ && !heavy; ++s) done = window_step(heavy) || done;
+    for (double spent = 0.0; pending_ && !heavy && (spent == 0.0 || spent + step_cost(step_) <= window_budget_);) {
+      spent += step_cost(step_);
+      done = window_step(heavy) || done;
+    }
     refresh();
     return done;
   }
@@ -287,11 +294,12 @@ class WeakFormWindows {
   /// Samples from the end of a window to its result.
   long latency_samples() const noexcept {
     long sample = 0;
-    int in_sample = 0;
+    double spent = 0.0;
     for (int step = 0; step < window_steps_; ++step) {
-      if (in_sample == steps_) ++sample, in_sample = 0;
-      ++in_sample;
-      if (step == window_steps_ - 3 || step == window_steps_ - 2) in_sample = steps_;  // heavy: ends the sample
+      if (spent > 0.0 && spent + step_cost(step) > window_budget_) ++sample, spent = 0.0;
+      spent += step_cost(step);
+      if (step == window_steps_ - 3 || step == window_steps_ - 2)
+        spent = window_budget_ + 1.0;  // heavy: ends the sample
     }
     return sample;
   }
@@ -525,6 +533,25 @@ class WeakFormWindows {
         for (int b = 0; b < cnt; ++b)
           normal_(par[a], par[b]) -= s2 * sgn[a] * sgn[b] * trace(blk[a], blk[b], ord[a], ord[b]);
     }
+  }
+
+  // Multiply-adds of window step `step` (at least 1; the O(P^3) steps end their sample instead).
+  double step_cost(int step) const noexcept {
+    const int F = F_, n = n_, Pn = params_ * n_;
+    int first = 0, last = -1;
+    double cost = 0.0;
+    if (step == 0) {
+      cost = 5.0 * F * 4 * n;  // rows: five bins per row and channel
+    } else if (step <= Pn) {
+      span((step - 1) / n, first, last);
+      cost = static_cast<double>(F) * F * (last - first + 1);
+    } else if (step <= products_) {
+      cost = static_cast<double>(F) * F;
+    } else if (step <= products_ + params_) {
+      span(step - 1 - products_, first, last);
+      cost = static_cast<double>(F) * (last - first + 1) * (params_ + 1);
+    }
+    return std::max(1.0, cost);
   }
 
   // One step of the pending window: rows; a product of a row block of the weights with a
@@ -821,7 +848,8 @@ class WeakFormWindows {
   int params_;
   Eigen::LDLT<MatD> ldlt_;
   long L_ = 0, H_ = 0;
-  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, R_ = 0, steps_ = 1, window_steps_ = 1, products_ = 0;
+  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, R_ = 0, window_steps_ = 1, products_ = 0;
+  double window_budget_ = 1.0;  // multiply-adds of window steps per sample
   long phase_ = 0, in_hop_ = 0, hops_ = 0;
   VecC z_;
   MatC bins_, seg_;

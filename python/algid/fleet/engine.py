@@ -7,8 +7,10 @@ are submitted at a time (a sliding window over :func:`distributed.as_completed`)
 client and the scheduler hold a bounded number of futures however many recordings there are.
 The keys already in the output are scattered to every worker once; a worker skips a recording
 whose key is among them. A task whose worker dies is rescheduled by Dask (``retries`` and the
-scheduler's ``allowed-failures``); if Dask gives up, the recording's row says so and carries
-no key, so the next run of the batch tries it again.
+scheduler's ``allowed-failures``); when every worker holding the scattered keys has died (a
+cluster of one worker), the keys are scattered again and the tasks that needed them are
+submitted again. If Dask gives up, the recording's row says so and carries no key, so the next
+run of the batch tries it again.
 
 The embedded cluster is a ``LocalCluster`` of ``workers`` processes with one thread each (the
 work is numpy and C++ that holds the GIL between calls: processes, not threads), each limited
@@ -89,29 +91,43 @@ def _lost_row(path: Path, err: BaseException) -> dict:
     return {**row, "error": f"lost by Dask: {error_text(err)}"}
 
 
+def _scatter(client, keys: set):
+    """The keys already in the output, on every worker (one object, not its elements)."""
+    (future,) = client.scatter([keys], broadcast=True, hash=False)
+    return future
+
+
 def _run(client, paths: list[Path], options: Options, writer: _Writer, progress: ProgressFn) -> tuple[dict, list]:
     """Submit the paths through a sliding window; returns the counts and this run's keys."""
     from distributed import as_completed
 
-    (done,) = client.scatter([writer.store.done()], broadcast=True)  # one object, not its elements
+    known = writer.store.done()
+    done = _scatter(client, known)
     window = IN_FLIGHT_PER_THREAD * max(1, sum(client.nthreads().values()))
     pending = iter(paths)
-    origin: dict = {}
+    origin: dict = {}  # future key -> (path, times its scattered input was lost, that input)
 
-    def submit(path: Path):
+    def submit(path: Path, lost: int = 0):
         future = client.submit(run_one, str(path), options, done, pure=False, retries=RETRIES)
-        origin[future.key] = path
+        origin[future.key] = (path, lost, done)
         return future
 
     queue = as_completed([submit(p) for _, p in zip(range(window), pending)])
     counts, keys = {"ok": 0, "failed": 0, "skipped": 0}, []
     try:
         for future in queue:
+            path, lost, used = origin.pop(future.key)
             try:
                 row = future.result()
             except Exception as err:  # noqa: BLE001 - a task Dask gave up on (its worker kept dying)
-                row = _lost_row(origin[future.key], err)
-            origin.pop(future.key, None)
+                if used.status != "finished" and lost < RETRIES:
+                    # the workers holding the scattered keys all died: scatter them again (once)
+                    if done is used:
+                        done = _scatter(client, known)
+                    future.release()
+                    queue.add(submit(path, lost + 1))
+                    continue
+                row = _lost_row(path, err)
             future.release()
             counts[row["status"]] += 1
             keys.append(row["key"] or "path:" + row["path"])
