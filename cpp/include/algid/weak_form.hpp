@@ -255,10 +255,13 @@ class WeakFormWindows {
       if (hops_ >= K_) start_window();
       bins_.middleCols(static_cast<int>(hops_ % K_) * 2 * n, 2 * n).setZero();  // the oldest block restarts
     }
-    bool heavy = false;  // an O(P^3) step ran: the rest waits for the next sample
-    for (double spent = 0.0; pending_ && !heavy && (spent == 0.0 || spent + step_cost(step_) <= window_budget_);) {
-      spent += step_cost(step_);
-      done = window_step(heavy) || done;
+    for (double spent = 0.0; pending_;) {
+      const int step = step_;
+      const double cost = step_cost(step);
+      if (spent > 0.0 && spent + cost > window_budget_) break;
+      spent += cost;
+      done = window_step() || done;
+      if (heavy_step(step)) break;  // an O(P^3) step ran: the rest waits for the next sample
     }
     refresh();
     return done;
@@ -298,8 +301,7 @@ class WeakFormWindows {
     for (int step = 0; step < window_steps_; ++step) {
       if (spent > 0.0 && spent + step_cost(step) > window_budget_) ++sample, spent = 0.0;
       spent += step_cost(step);
-      if (step == window_steps_ - 3 || step == window_steps_ - 2)
-        spent = window_budget_ + 1.0;  // heavy: ends the sample
+      if (heavy_step(step)) spent = window_budget_ + 1.0;  // ends the sample
     }
     return sample;
   }
@@ -535,6 +537,9 @@ class WeakFormWindows {
     }
   }
 
+  // The factorisation and the back-substitutions: O(P^3), each ends its sample.
+  bool heavy_step(int step) const noexcept { return step == window_steps_ - 3 || step == window_steps_ - 2; }
+
   // Multiply-adds of window step `step` (at least 1; the O(P^3) steps end their sample instead).
   double step_cost(int step) const noexcept {
     const int F = F_, n = n_, Pn = params_ * n_;
@@ -559,7 +564,7 @@ class WeakFormWindows {
   // weights with a block of the right-hand side column (which spans every DOF); a row of the
   // normal equations; the bias and the factorisation; the solution and the inverse; the
   // misfit. Each O(P^3) part has a step of its own, so no sample carries more than one of them.
-  bool window_step(bool& heavy) noexcept {
+  bool window_step() noexcept {
     const int F = F_, n = n_, P = params_, Pn = params_ * n;
     if (step_ == 0) {
       window_weighted_ = weighted_;
@@ -604,10 +609,8 @@ class WeakFormWindows {
       raw_normal_ = normal_;
       if (config_.bias_compensation) subtract_bias();
       factor();
-      heavy = true;
     } else if (step_ == products_ + params_ + 2) {
       solve();
-      heavy = true;
     } else {
       measure_misfit();
       pending_ = false;
@@ -635,7 +638,6 @@ class WeakFormWindows {
   // The window's result and variances from the factorisation of factor().
   void solve() noexcept {
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    const bool free_last = this->free_last();
     bool ok = ldlt_.info() == Eigen::Success && ldlt_.isPositive();
     if (ok) {
       inverse_.setIdentity();
@@ -654,7 +656,7 @@ class WeakFormWindows {
       result_.setConstant(static_cast<Scalar>(nan));
       variance_.setConstant(static_cast<Scalar>(nan));
     }
-    if (free_last) {
+    if (free_last()) {
       result_(params_ - 1) = config_.boundary == Boundary::kFree ? Scalar(0) : static_cast<Scalar>(nan);
       variance_(params_ - 1) = Scalar(0);
     }
