@@ -197,6 +197,10 @@ class ContinuousEstimator(Displayed, _ScheduleView, PackedParameters):
         uncertainty, the drift test's scale); -1 (default): 0.25 weak form, 0.5 algebraic.
     joint_efficiency : float
         Weak form: sigma = sqrt(diag(N^-1) / joint_efficiency) (default 0.3).
+    long_window_s : float
+        Weak form: length [s] of a second, longer set of windows with a joint sum of its own;
+        each parameter is reported from the joint sum (short or long windows) with the smaller
+        uncertainty; -1 (default): twice ``window_s``; 0: none.
     horizon_s : float
         Forgetting time constant of the block mean [s]; 0 = none (default).
     band_hz : float

@@ -129,6 +129,11 @@ struct ContinuousConfig {
   Scalar overlap_efficiency = Scalar(-1);
   /// weak form: sigma = sqrt(diag(N^-1) / joint_efficiency), for the overlap of the windows' information, (0, 1]
   Scalar joint_efficiency = Scalar(0.3);
+  /// weak form with `joint`: length [s] of a second, longer set of weak-form windows with a
+  /// joint sum of its own; each parameter is reported from the joint sum (short or long windows)
+  /// with the smaller uncertainty (long windows resolve the resonances more finely: closer to
+  /// the Cramer-Rao bound on the dampings); -1: twice window_s; 0: none
+  Scalar long_window_s = Scalar(-1);
   Scalar horizon_s = Scalar(0);                   ///< forgetting time constant of the block mean [s]; 0: none
   Scalar prefilter_hz = Scalar(-1);  ///< low-pass on accelerations and forces alike [Hz]; -1: 0.05 / dt, 0: off
   int prefilter_order = 4;  ///< Butterworth order of the prefilter: 2 or 4
@@ -182,6 +187,7 @@ enum class ContinuousConfigError {
   kBadDofs,
   kBadBand,
   kBadNoise,
+  kBadLongWindow,
 };
 
 /// Human-readable text of a ContinuousConfigError.
@@ -211,6 +217,9 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
     case ContinuousConfigError::kBadDofs: return to_string(ConfigError::kBadDofs);
     case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
     case ContinuousConfigError::kBadNoise: return to_string(WeakFormConfigError::kBadNoise);
+    case ContinuousConfigError::kBadLongWindow:
+      return "long_window_s must be -1 (twice window_s), 0 (none) or a window of at least 32 samples that holds "
+             "the band (2 band_hz long_window_s + 1 <= its samples / 2)";
   }
   return "unknown";
 }
@@ -295,6 +304,10 @@ class ContinuousEstimator {
         case WeakFormConfigError::kBadNoise: return ContinuousConfigError::kBadNoise;
         case WeakFormConfigError::kBadDofs: return ContinuousConfigError::kBadDofs;
       }
+      if (c.long_window_s != Scalar(-1) && !(c.long_window_s >= Scalar(0))) return ContinuousConfigError::kBadLongWindow;
+      if (c.joint && resolved_long_window(c) > Scalar(0) &&
+          WeakForm::validate(long_config(c), n) != WeakFormConfigError::kNone)
+        return ContinuousConfigError::kBadLongWindow;
     }
     if (!std::isfinite(c.outlier_ratio) || (c.outlier_ratio != Scalar(0) && !(c.outlier_ratio > Scalar(1))))
       return ContinuousConfigError::kBadOutlierRatio;
@@ -334,7 +347,20 @@ class ContinuousEstimator {
       // and the bias correction assume white.
       weak_ = std::make_unique<WeakForm>(weak_config(config_), n_);
       window_samples_ = weak_->window_samples();
-      if (config_.joint) joint_ = std::make_unique<Joint>(params_, std::max(config_.block, 2 * config_.stagger + 1));
+      if (config_.joint) {
+        joint_ = make_joint(*weak_);
+        config_.long_window_s = resolved_long_window(config_);
+        if (config_.long_window_s > Scalar(0)) {
+          // the longer windows' weights are refreshed with the shorter ones' work per sample
+          auto lc = long_config(config_);
+          const double F = 2.0 * weak_->harmonics() + 1.0;
+          lc.refresh_budget = 6.0 * F * F;
+          long_ = std::make_unique<WeakForm>(lc, n_);
+          long_joint_ = make_joint(*long_);
+        }
+      } else {
+        config_.long_window_s = Scalar(0);
+      }
     } else if (fc > Scalar(0)) {
       filter_.configure(fc, config_.dt, config_.prefilter_order);
       filtered_ = true;
@@ -353,9 +379,6 @@ class ContinuousEstimator {
     const Scalar block_s = static_cast<Scalar>(config_.block) * static_cast<Scalar>(window_samples_) /
                            static_cast<Scalar>(config_.stagger) * config_.dt;
     forget_ = config_.horizon_s > Scalar(0) ? std::exp(-block_s / config_.horizon_s) : Scalar(1);
-    if (joint_ && config_.horizon_s > Scalar(0))
-      joint_->forget =
-          std::exp(-static_cast<double>(hop_samples()) * static_cast<double>(config_.dt / config_.horizon_s));
     block_scale_ = detail::kMedianInefficiency<Scalar> /
                    std::sqrt(static_cast<Scalar>(config_.block) * config_.overlap_efficiency);
     for (int j = 0; j < params_; ++j) known_[j] = Known::kEstimated;
@@ -369,8 +392,9 @@ class ContinuousEstimator {
   void reset() noexcept {
     restart_windows();
     if (weak_) weak_->reset();
-    if (joint_) joint_->clear();
-    joint_stage_ = 0;
+    if (long_) long_->reset();
+    for (Joint* J : {joint_.get(), long_joint_.get()})
+      if (J) J->clear();
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     for (int j = 0; j < params_; ++j) {
       tracks_[j] = Track{};
@@ -393,7 +417,8 @@ class ContinuousEstimator {
     dropout_runs_ = 0;
     last_dropout_ = Dropout::kNone;
     dropout_channel_ = -1;
-    misfit_head_ = misfit_count_ = 0;
+    short_misfits_ = MisfitRing{};
+    long_misfits_ = MisfitRing{};
     screened_ = 0;
     samples_ = 0;
     results_ = 0;
@@ -432,12 +457,19 @@ class ContinuousEstimator {
       f = io_.data() + n_;
     }
     if (weak_form_) {
-      if (joint_stage_ != 0) joint_step();
+      for (Joint* J : {joint_.get(), long_joint_.get()})
+        if (J && J->stage != 0) joint_step(*J);
       weak_->set_model(estimate_.data());
       if (weak_->update(a, f)) {
-        const bool in_joint = fits(weak_->misfit());
+        const bool joins = joint_ && fits(short_misfits_, weak_->misfit());
         harvest(weak_->result(), weak_->variance());
-        if (joint_ && in_joint) joint_add();
+        if (joins) joint_add(*joint_, *weak_);
+      }
+      if (long_) {
+        long_->set_model(estimate_.data());
+        // fully weighted windows only: their summed information is comparable with the short sum's
+        if (long_->update(a, f) && long_->result_fully_weighted() && fits(long_misfits_, long_->misfit()))
+          joint_add(*long_joint_, *long_);
       }
       work();
       return ready() ? Status::kOk : Status::kWarmup;
@@ -501,8 +533,13 @@ class ContinuousEstimator {
   const Vector<Scalar, kParams>& last_window() const noexcept { return last_window_; }
   /// Its variance per parameter (weak form; NaN for algebraic windows) [parameter units^2].
   const Vector<Scalar, kParams>& last_variance() const noexcept { return last_variance_; }
-  /// The weak-form windows (nullptr with algebraic windows), e.g. for noise_rms().
+  /// The weak-form windows of the tracks, the change detector and the short joint sum (nullptr
+  /// with algebraic windows), e.g. for noise_rms().
   const WeakForm* weak_form() const noexcept { return weak_.get(); }
+  /// The long weak-form windows (`long_window_s`; nullptr without them).
+  const WeakForm* long_windows() const noexcept { return long_.get(); }
+  /// Weak form: true if parameter j is reported from the long windows' joint sum.
+  bool from_long_windows(int j) const noexcept { return long_joint_ && best_joint(j) == long_joint_.get(); }
   /// Samples discarded as dropouts (stuck or clipped accelerations) since construction or reset().
   long dropout_samples() const noexcept { return dropout_samples_; }
   /// Runs of dropout samples since construction or reset().
@@ -510,7 +547,7 @@ class ContinuousEstimator {
   /// Kind of the latest dropout run (kNone: none yet) and its acceleration channel (0-based, -1: none).
   Dropout last_dropout() const noexcept { return last_dropout_; }
   int dropout_channel() const noexcept { return dropout_channel_; }
-  /// Weak form: windows kept out of the joint by `misfit_ratio` since construction or reset().
+  /// Weak form: windows kept out of the joint sums by `misfit_ratio` since construction or reset().
   long screened_windows() const noexcept { return screened_; }
   /// Weak form: misfit of the latest window (WeakFormWindows::misfit(); NaN before a weighted one).
   double last_misfit() const noexcept { return weak_ ? weak_->misfit() : std::numeric_limits<double>::quiet_NaN(); }
@@ -547,6 +584,12 @@ class ContinuousEstimator {
  private:
   enum class Known { kEstimated, kZero, kUnidentifiable };
 
+  static constexpr int kMisfits = 16;
+  struct MisfitRing {
+    std::array<double, kMisfits> value{};
+    int head = 0, count = 0;
+  };
+
   struct Track {
     std::array<Scalar, Capacity> value{};  // window results since the restart, newest at head - 1
     std::array<Scalar, Capacity> z{};  // their z-scores against the estimate before them
@@ -575,6 +618,17 @@ class ContinuousEstimator {
   static Scalar resolved_window(const Config& c) noexcept {
     if (c.window_s != Scalar(-1)) return c.window_s;
     return c.method == WindowMethod::kWeakForm ? Scalar(0.5) : Scalar(0.3);
+  }
+
+  static Scalar resolved_long_window(const Config& c) noexcept {
+    return c.long_window_s == Scalar(-1) ? Scalar(2) * resolved_window(c) : c.long_window_s;
+  }
+
+  // The long windows: as the tracks' windows, resolved_long_window(c) long.
+  static typename WeakForm::Config long_config(const Config& c) noexcept {
+    typename WeakForm::Config w = weak_config(c);
+    w.window_s = resolved_long_window(c);
+    return w;
   }
 
   static typename WeakForm::Config weak_config(const Config& c) noexcept {
@@ -636,17 +690,17 @@ class ContinuousEstimator {
   }
 
   // The misfit screen (`misfit_ratio`): false if the window fits far worse than the windows
-  // before it; every finite misfit joins the ring of the newest kMisfits.
-  bool fits(double misfit) noexcept {
+  // of the same length before it; every finite misfit joins the ring of the newest kMisfits.
+  bool fits(MisfitRing& ring, double misfit) noexcept {
     if (!std::isfinite(misfit)) return true;  // unweighted or failed: joint_add() decides
     double reference = 1.0;
-    if (misfit_count_ > 0) {
-      std::copy(misfits_.begin(), misfits_.begin() + misfit_count_, misfit_scratch_.begin());
-      reference = std::max(reference, detail::median_inplace(misfit_scratch_.data(), misfit_count_));
+    if (ring.count > 0) {
+      std::copy(ring.value.begin(), ring.value.begin() + ring.count, misfit_scratch_.begin());
+      reference = std::max(reference, detail::median_inplace(misfit_scratch_.data(), ring.count));
     }
-    misfits_[static_cast<std::size_t>(misfit_head_)] = misfit;
-    misfit_head_ = (misfit_head_ + 1) % kMisfits;
-    misfit_count_ = std::min(misfit_count_ + 1, kMisfits);
+    ring.value[static_cast<std::size_t>(ring.head)] = misfit;
+    ring.head = (ring.head + 1) % kMisfits;
+    ring.count = std::min(ring.count + 1, kMisfits);
     const double ratio = static_cast<double>(config_.misfit_ratio);
     const bool ok = !(ratio > 0.0 && misfit > ratio * reference);
     if (!ok) ++screened_;
@@ -672,6 +726,7 @@ class ContinuousEstimator {
 
   void restart_windows() noexcept {
     if (weak_) weak_->restart();
+    if (long_) long_->restart();
     filter_.reset();
     for (int e = 0; e < MaxStagger; ++e) {
       windows_[e].reseed();
@@ -835,9 +890,9 @@ class ContinuousEstimator {
 
   // The reported estimate of parameter j: the joint solution where it exists, else the track's.
   void publish(int j) noexcept {
-    if (joint_ && joint_->valid && joint_->trusted[j]) {
-      estimate_(j) = static_cast<Scalar>(joint_->solution(j));
-      sigma_(j) = static_cast<Scalar>(std::sqrt(joint_->inverse(j, j) / static_cast<double>(config_.joint_efficiency)));
+    if (const Joint* J = best_joint(j)) {
+      estimate_(j) = static_cast<Scalar>(J->solution(j));
+      sigma_(j) = static_cast<Scalar>(std::sqrt(J->inverse(j, j) / static_cast<double>(config_.joint_efficiency)));
     } else {
       estimate_(j) = track_(j);
       sigma_(j) = track_sigma_(j);
@@ -873,14 +928,16 @@ class ContinuousEstimator {
     }
     t.count = kept;
     clear_aggregation(t);
-    joint_restart(j);
+    for (Joint* J : {joint_.get(), long_joint_.get()})
+      if (J) joint_restart(*J, j);
     finish_restart(j, t, ChangeKind::kStep);
   }
 
   void restart_drift(int j, Track& t, Scalar) noexcept {
     t.count = std::min(t.count, config_.block);  // the block just completed
     clear_aggregation(t);
-    joint_restart(j);
+    for (Joint* J : {joint_.get(), long_joint_.get()})
+      if (J) joint_restart(*J, j);
     finish_restart(j, t, ChangeKind::kDrift);
   }
 
@@ -897,9 +954,10 @@ class ContinuousEstimator {
     ++total_events_;
   }
 
-  // Sum of the GLS-weighted weak-form windows' normal equations since the start (with
-  // `horizon_s` forgetting), and a ring of the newest windows' systems so that a restart of
-  // one parameter can take them out again. Heap-allocated at construction (weak form only).
+  // Sum of the GLS-weighted weak-form windows' normal equations of one window length since
+  // the start (with `horizon_s` forgetting), and a ring of the newest windows' systems so that
+  // a restart of one parameter can take them out again. Heap-allocated at construction (weak
+  // form only).
   struct Joint {
     Eigen::MatrixXd normal, inverse;
     Eigen::VectorXd rhs, solution, column;
@@ -909,6 +967,7 @@ class ContinuousEstimator {
     detail::Storage<int, Dynamic> fresh;  // per parameter: windows since its restart
     detail::Storage<bool, Dynamic> trusted;  // per parameter: the joint estimate is reported
     int head = 0, count = 0, size = 0;
+    int stage = 0;  // solve pending: 1 factor next sample, 2 solve next sample, 0 none
     double forget = 1.0;
     bool valid = false;
 
@@ -932,7 +991,7 @@ class ContinuousEstimator {
       rhs.setZero();
       fresh.fill(0);
       trusted.fill(true);
-      head = count = 0;
+      head = count = stage = 0;
       valid = false;
     }
     int slot(int age) const noexcept {  // age 0: the newest window
@@ -940,13 +999,32 @@ class ContinuousEstimator {
     }
   };
 
-  // A weighted window with a finite result joins the joint system, which is solved again.
-  void joint_add() noexcept {
-    Joint& J = *joint_;
-    const auto& x = weak_->result();
+  // The joint sum that reports parameter j: of the valid ones that trust it, the one with the
+  // smaller variance (both sums overlap their windows alike, K per window length); none: the track.
+  const Joint* best_joint(int j) const noexcept {
+    const Joint* best = nullptr;
+    for (const Joint* J : {joint_.get(), long_joint_.get()})
+      if (J && J->valid && J->trusted[j] && (!best || J->inverse(j, j) < best->inverse(j, j))) best = J;
+    return best;
+  }
+
+  // The joint sum of windows like w's: its ring spans `block` hops of the tracks' windows (and
+  // more than K windows of its own); forgetting per hop of its own with `horizon_s`.
+  std::unique_ptr<Joint> make_joint(const WeakForm& w) const {
+    const long hop = w.hop_samples();
+    const long ring = (config_.block * weak_->hop_samples() + hop - 1) / hop;
+    auto J = std::make_unique<Joint>(params_, static_cast<int>(std::max<long>(ring, 2 * config_.stagger + 1)));
+    if (config_.horizon_s > Scalar(0))
+      J->forget = std::exp(-static_cast<double>(hop) * static_cast<double>(config_.dt / config_.horizon_s));
+    return J;
+  }
+
+  // A weighted window of w with a finite result joins the joint sum J, which is solved again.
+  void joint_add(Joint& J, const WeakForm& w) noexcept {
+    const auto& x = w.result();
     for (int j = 0; j < params_; ++j)
       if (known_[j] == Known::kEstimated && !std::isfinite(x(j))) return;
-    if (!weak_->result_weighted()) return;
+    if (!w.result_weighted()) return;
     if (J.forget < 1.0) {
       J.normal *= J.forget;
       J.rhs *= J.forget;
@@ -956,49 +1034,43 @@ class ContinuousEstimator {
       }
     }
     const int r = J.head;
-    J.ring_normal[r] = weak_->normal();
-    J.ring_rhs[r] = weak_->rhs();
+    J.ring_normal[r] = w.normal();
+    J.ring_rhs[r] = w.rhs();
     J.head = (J.head + 1) % J.size;
     J.count = std::min(J.count + 1, J.size);
-    J.normal += weak_->normal();
-    J.rhs += weak_->rhs();
+    J.normal += w.normal();
+    J.rhs += w.rhs();
     for (int j = 0; j < params_; ++j) {
       if (J.trusted[j] || ++J.fresh[j] < J.size) continue;
-      joint_forget(j, J.size - config_.stagger);
+      joint_forget(J, j, J.size - config_.stagger);
       J.trusted[j] = true;
     }
     if (config_.amortize) {
-      joint_stage_ = 1;  // factored on the next sample, solved on the one after
+      J.stage = 1;  // factored on the next sample, solved on the one after
     } else {
-      joint_solve();
+      joint_solve(J);
     }
   }
 
-  // One O(P^3) part of the pending joint solve per sample: the factorisation, then the
-  // solution, the inverse and the reported estimates.
-  void joint_step() noexcept {
-    if (joint_stage_ == 1) {
-      joint_factor();
-      joint_stage_ = 2;
+  // One O(P^3) part of J's pending solve per sample: the factorisation, then the solution, the
+  // inverse and the reported estimates.
+  void joint_step(Joint& J) noexcept {
+    if (J.stage == 1) {
+      J.ldlt.compute(J.normal);
+      J.stage = 2;
     } else {
-      joint_publish();
-      joint_stage_ = 0;
+      joint_publish(J);
+      J.stage = 0;
     }
   }
 
-  void joint_solve() noexcept {
-    joint_factor();
-    joint_publish();
-    joint_stage_ = 0;
-  }
-
-  void joint_factor() noexcept {
-    Joint& J = *joint_;
+  void joint_solve(Joint& J) noexcept {
     J.ldlt.compute(J.normal);
+    joint_publish(J);
+    J.stage = 0;
   }
 
-  void joint_publish() noexcept {
-    Joint& J = *joint_;
+  void joint_publish(Joint& J) noexcept {
     J.valid = J.ldlt.info() == Eigen::Success && J.ldlt.vectorD().minCoeff() > 0.0;
     if (J.valid) {
       J.solution = J.rhs;
@@ -1014,8 +1086,7 @@ class ContinuousEstimator {
   // Take the `recent` newest windows out, marginalise parameter j out of the rest (its old
   // information is void, the others' is kept: the Schur complement), pin j by a negligible
   // prior at the track's estimate (so the system stays definite), put the recent windows back.
-  void joint_forget(int j, int recent) noexcept {
-    Joint& J = *joint_;
+  void joint_forget(Joint& J, int j, int recent) noexcept {
     recent = std::min(recent, J.count);
     for (int age = 0; age < recent; ++age) {
       const int r = J.slot(age);
@@ -1043,15 +1114,12 @@ class ContinuousEstimator {
     }
   }
 
-  // Parameter j restarted (step or drift): the windows of the ring (the newest, which may
-  // straddle the change and fit no single value of j) leave the joint for every parameter;
-  // the joint forgets all it knew of j, and j's reported estimate is the track's (which
-  // follows a step within a second) until a ring of windows has arrived since; then j is
-  // forgotten once more, except for the newest ring minus K windows (none of which straddles
-  // the change), and the joint takes over again.
-  void joint_restart(int j) noexcept {
-    if (!joint_) return;
-    Joint& J = *joint_;
+  // Parameter j restarted (step or drift): the windows of J's ring (the newest, which may
+  // straddle the change and fit no single value of j) leave J for every parameter; J forgets
+  // all it knew of j, and j is not reported from J until a ring of windows has arrived since;
+  // then j is forgotten once more, except for the newest ring minus K windows (none of which
+  // straddles the change), and J may report j again.
+  void joint_restart(Joint& J, int j) noexcept {
     for (int age = 0; age < J.count; ++age) {
       const int r = J.slot(age);
       J.normal -= J.ring_normal[r];
@@ -1059,10 +1127,10 @@ class ContinuousEstimator {
       J.ring_normal[r].setZero();
       J.ring_rhs[r].setZero();
     }
-    joint_forget(j, 0);
-    joint_->fresh[j] = 0;
-    joint_->trusted[j] = false;
-    joint_solve();
+    joint_forget(J, j, 0);
+    J.fresh[j] = 0;
+    J.trusted[j] = false;
+    joint_solve(J);
   }
 
   static constexpr int kChannels = N == Dynamic ? Dynamic : 2 * N;
@@ -1075,9 +1143,8 @@ class ContinuousEstimator {
   detail::Storage<Scalar, kChannels> io_{};
   detail::Storage<Scalar, kChannels> mean_square_{};  // running mean square of every raw channel
   long accepted_ = 0;  // plausible samples since construction, reset() or a new level
-  static constexpr int kMisfits = 16;
-  std::array<double, kMisfits> misfits_{}, misfit_scratch_{};  // newest window misfits (ring)
-  int misfit_head_ = 0, misfit_count_ = 0;
+  MisfitRing short_misfits_{}, long_misfits_{};  // newest window misfits of each window length
+  std::array<double, kMisfits> misfit_scratch_{};
   long screened_ = 0;
   long out_of_range_ = 0;  // finite samples out of range in a row
   detail::DropoutDetector<Scalar, N> dropout_{};
@@ -1092,7 +1159,6 @@ class ContinuousEstimator {
   std::array<long, MaxStagger> offset_{};
   long window_samples_ = 0;
   int budget_ = 0;
-  int joint_stage_ = 0;  // joint solve pending: 1 factor next, 2 solve next, 0 none
   int confirm_ = 1;
   Scalar forget_ = Scalar(1);
   Scalar block_scale_ = Scalar(1);
@@ -1101,7 +1167,8 @@ class ContinuousEstimator {
   std::array<Scalar, Capacity> scratch_{};
   Vector<Scalar, kParams> estimate_, sigma_, last_window_, last_variance_, pending_, pending_var_;
   std::unique_ptr<WeakForm> weak_;
-  std::unique_ptr<Joint> joint_;
+  std::unique_ptr<WeakForm> long_;  // the long windows (`long_window_s`)
+  std::unique_ptr<Joint> joint_, long_joint_;  // the joint sums of weak_'s and of long_'s windows
   Vector<Scalar, kParams> track_, track_sigma_;
   bool weak_form_ = false;
 

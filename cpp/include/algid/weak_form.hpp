@@ -87,6 +87,8 @@ struct WeakFormConfig {
   Scalar noise_horizon_s = Scalar(10);   ///< forgetting time constant of the noise estimate [s]
   bool weighted = true;                  ///< GLS weights from the running estimate (else unweighted)
   bool bias_compensation = true;         ///< subtract the regressor-noise term of the normal matrix
+  /// multiply-adds per sample of the background refresh of the weights; <= 0 or not finite: 6 F^2
+  double refresh_budget = 0.0;
 };
 
 /// Why a WeakFormConfig is rejected.
@@ -196,6 +198,7 @@ class WeakFormWindows {
     restart();
     weight_.setIdentity();
     weighted_ = false;
+    full_ = false;
     for (int c = 0; c < 2 * n_; ++c) {
       noise_[c] = Noise{};
       history_[c] = History{};
@@ -280,6 +283,9 @@ class WeakFormWindows {
   /// True if the latest window's rows were all GLS-weighted (normal() is then an information
   /// matrix: windows can be summed).
   bool result_weighted() const noexcept { return window_weighted_; }
+  /// True if those weights were the full covariance's (the first refresh weights each DOF's rows
+  /// alone): normal() is then the window's information matrix, and its inverse the variance.
+  bool result_fully_weighted() const noexcept { return window_full_; }
   /// Weighted residual of the latest window per degree of freedom, r^T W r / (n F - 3n - 1)
   /// with r = y - Phi theta at the window's own solution: about 1 when the chain and the noise
   /// estimate describe the window; NaN for an unweighted or failed window.
@@ -568,6 +574,7 @@ class WeakFormWindows {
     const int F = F_, n = n_, P = params_, Pn = params_ * n;
     if (step_ == 0) {
       window_weighted_ = weighted_;
+      window_full_ = weighted_ && full_;
       build_rows();
       fill_phi();
     } else if (step_ <= Pn) {
@@ -688,7 +695,8 @@ class WeakFormWindows {
 
   // Background refresh of the weights W = Sigma^-1 over all n F rows (the equation errors of
   // neighbouring DOFs share channels: Sigma is block pentadiagonal), in steps of at most about
-  // 9 F^2 multiply-adds, as many per sample as a budget of 6 F^2 allows: stage 1 builds Sigma
+  // 9 F^2 multiply-adds, as many per sample as a budget (`refresh_budget`, 6 F^2 by default)
+  // allows: stage 1 builds Sigma
   // block by block from the model into chol_'s lower triangle, stage 2 factors it in place
   // column by column (left-looking, within the band), stage 3 solves for W column by column, a
   // row block per step, stage 4 forms the traces <W_ij, G_de> of the bias term, stage 5 swaps
@@ -696,7 +704,8 @@ class WeakFormWindows {
   // rows weighted alone, about n^2 times less work), so that weighted windows start early.
   void refresh() noexcept {
     if (!config_.weighted) return;
-    const double budget = 6.0 * F_ * F_;
+    const double given = config_.refresh_budget;
+    const double budget = given > 0.0 && std::isfinite(given) ? given : 6.0 * F_ * F_;
     double spent = 0.0;
     while (spent < budget) {
       const double cost = refresh_step();
@@ -723,6 +732,7 @@ class WeakFormWindows {
         weight_.swap(wnext_);
         traces_.swap(next_traces_);
         weighted_ = true;
+        full_ = band_ == 2 || n_ == 1;
         refresh_stage_ = 0;
         return -1.0;
     }
@@ -865,6 +875,7 @@ class WeakFormWindows {
   int step_ = 0;
   int refresh_stage_ = 0, refresh_pos_ = 0, refresh_sub_ = 0, band_ = 0;
   bool weighted_ = false, window_weighted_ = false;
+  bool full_ = false, window_full_ = false;  // the weights in force / the latest window's: full covariance
   long results_ = 0;
   double misfit_ = std::numeric_limits<double>::quiet_NaN();
   Vector<Scalar, kParams> result_, variance_;
