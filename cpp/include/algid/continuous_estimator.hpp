@@ -130,9 +130,10 @@ struct ContinuousConfig {
   /// weak form: sigma = sqrt(diag(N^-1) / joint_efficiency), for the overlap of the windows' information, (0, 1]
   Scalar joint_efficiency = Scalar(0.3);
   /// weak form with `joint`: length [s] of a second, longer set of weak-form windows with a
-  /// joint sum of its own; each parameter is reported from the joint sum (short or long windows)
-  /// with the smaller uncertainty (long windows resolve the resonances more finely: closer to
-  /// the Cramer-Rao bound on the dampings); -1: twice window_s; 0: none
+  /// joint sum of its own, with as many test functions as the others (so their band is
+  /// band_hz window_s / long_window_s); each parameter is reported from the joint sum (short or
+  /// long windows) with the smaller uncertainty (long windows resolve the resonances more
+  /// finely: closer to the Cramer-Rao bound on the dampings); -1: twice window_s; 0: none
   Scalar long_window_s = Scalar(-1);
   Scalar horizon_s = Scalar(0);                   ///< forgetting time constant of the block mean [s]; 0: none
   Scalar prefilter_hz = Scalar(-1);  ///< low-pass on accelerations and forces alike [Hz]; -1: 0.05 / dt, 0: off
@@ -351,11 +352,7 @@ class ContinuousEstimator {
         joint_ = make_joint(*weak_);
         config_.long_window_s = resolved_long_window(config_);
         if (config_.long_window_s > Scalar(0)) {
-          // the longer windows' weights are refreshed with the shorter ones' work per sample
-          auto lc = long_config(config_);
-          const double F = 2.0 * weak_->harmonics() + 1.0;
-          lc.refresh_budget = 6.0 * F * F;
-          long_ = std::make_unique<WeakForm>(lc, n_);
+          long_ = std::make_unique<WeakForm>(long_config(config_), n_);
           long_joint_ = make_joint(*long_);
         }
       } else {
@@ -467,7 +464,7 @@ class ContinuousEstimator {
       }
       if (long_) {
         long_->set_model(estimate_.data());
-        // fully weighted windows only: their summed information is comparable with the short sum's
+        // fully weighted windows only: their summed information compares with the short sum's
         if (long_->update(a, f) && long_->result_fully_weighted() && fits(long_misfits_, long_->misfit()))
           joint_add(*long_joint_, *long_);
       }
@@ -624,10 +621,14 @@ class ContinuousEstimator {
     return c.long_window_s == Scalar(-1) ? Scalar(2) * resolved_window(c) : c.long_window_s;
   }
 
-  // The long windows: as the tracks' windows, resolved_long_window(c) long.
+  // The long windows: as the tracks' windows, resolved_long_window(c) long, with as many test
+  // functions (F = 2 band W + 1): the same cost per window and per sample, a finer resolution in
+  // frequency over a lower band (where the band matters, the short sum's variance is the smaller).
   static typename WeakForm::Config long_config(const Config& c) noexcept {
     typename WeakForm::Config w = weak_config(c);
     w.window_s = resolved_long_window(c);
+    const Scalar band = c.band_hz < Scalar(0) ? Scalar(0.05) / c.dt : c.band_hz;
+    w.band_hz = band * resolved_window(c) / w.window_s;
     return w;
   }
 

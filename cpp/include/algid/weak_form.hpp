@@ -87,8 +87,6 @@ struct WeakFormConfig {
   Scalar noise_horizon_s = Scalar(10);   ///< forgetting time constant of the noise estimate [s]
   bool weighted = true;                  ///< GLS weights from the running estimate (else unweighted)
   bool bias_compensation = true;         ///< subtract the regressor-noise term of the normal matrix
-  /// multiply-adds per sample of the background refresh of the weights; <= 0 or not finite: 6 F^2
-  double refresh_budget = 0.0;
 };
 
 /// Why a WeakFormConfig is rejected.
@@ -695,8 +693,7 @@ class WeakFormWindows {
 
   // Background refresh of the weights W = Sigma^-1 over all n F rows (the equation errors of
   // neighbouring DOFs share channels: Sigma is block pentadiagonal), in steps of at most about
-  // 9 F^2 multiply-adds, as many per sample as a budget (`refresh_budget`, 6 F^2 by default)
-  // allows: stage 1 builds Sigma
+  // 9 F^2 multiply-adds, as many per sample as a budget of 6 F^2 allows: stage 1 builds Sigma
   // block by block from the model into chol_'s lower triangle, stage 2 factors it in place
   // column by column (left-looking, within the band), stage 3 solves for W column by column, a
   // row block per step, stage 4 forms the traces <W_ij, G_de> of the bias term, stage 5 swaps
@@ -704,8 +701,7 @@ class WeakFormWindows {
   // rows weighted alone, about n^2 times less work), so that weighted windows start early.
   void refresh() noexcept {
     if (!config_.weighted) return;
-    const double given = config_.refresh_budget;
-    const double budget = given > 0.0 && std::isfinite(given) ? given : 6.0 * F_ * F_;
+    const double budget = 6.0 * F_ * F_;
     double spent = 0.0;
     while (spent < budget) {
       const double cost = refresh_step();
