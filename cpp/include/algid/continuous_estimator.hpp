@@ -414,8 +414,7 @@ class ContinuousEstimator {
     dropout_runs_ = 0;
     last_dropout_ = Dropout::kNone;
     dropout_channel_ = -1;
-    short_misfits_ = MisfitRing{};
-    long_misfits_ = MisfitRing{};
+    misfits_ = MisfitRing{};
     screened_ = 0;
     samples_ = 0;
     results_ = 0;
@@ -458,14 +457,14 @@ class ContinuousEstimator {
         if (J && J->stage != 0) joint_step(*J);
       weak_->set_model(estimate_.data());
       if (weak_->update(a, f)) {
-        const bool joins = joint_ && fits(short_misfits_, weak_->misfit());
+        const bool joins = joint_ && fits(weak_->misfit());
         harvest(weak_->result(), weak_->variance());
         if (joins) joint_add(*joint_, *weak_);
       }
       if (long_) {
         long_->set_model(estimate_.data());
         // fully weighted windows only: their summed information compares with the short sum's
-        if (long_->update(a, f) && long_->result_fully_weighted() && fits(long_misfits_, long_->misfit()))
+        if (long_->update(a, f) && long_->result_fully_weighted() && fits(long_->misfit()))
           joint_add(*long_joint_, *long_);
       }
       work();
@@ -691,8 +690,11 @@ class ContinuousEstimator {
   }
 
   // The misfit screen (`misfit_ratio`): false if the window fits far worse than the windows
-  // of the same length before it; every finite misfit joins the ring of the newest kMisfits.
-  bool fits(MisfitRing& ring, double misfit) noexcept {
+  // before it, short and long alike (a misfit is per degree of freedom: about 1 for both); every
+  // finite misfit joins the ring of the newest kMisfits. One ring: the long windows' first
+  // weighted ones are compared with the short windows before them, not with each other.
+  bool fits(double misfit) noexcept {
+    MisfitRing& ring = misfits_;
     if (!std::isfinite(misfit)) return true;  // unweighted or failed: joint_add() decides
     double reference = 1.0;
     if (ring.count > 0) {
@@ -1144,7 +1146,7 @@ class ContinuousEstimator {
   detail::Storage<Scalar, kChannels> io_{};
   detail::Storage<Scalar, kChannels> mean_square_{};  // running mean square of every raw channel
   long accepted_ = 0;  // plausible samples since construction, reset() or a new level
-  MisfitRing short_misfits_{}, long_misfits_{};  // newest window misfits of each window length
+  MisfitRing misfits_{};  // newest window misfits
   std::array<double, kMisfits> misfit_scratch_{};
   long screened_ = 0;
   long out_of_range_ = 0;  // finite samples out of range in a row
