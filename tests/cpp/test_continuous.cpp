@@ -581,9 +581,10 @@ void long_windows_report_where_more_certain() {
   }
   for (int j = 0; j < Est::kParams; ++j)
     worst_z = std::max(worst_z, std::abs(both->estimate()(j) - truth[static_cast<std::size_t>(j)]) / both->sigma()(j));
-  std::printf("  long windows, 40 dB, 40 s: %d of %d parameters from the long sum, sigma / short-only sigma <= %.2f, "
-              "worst |error| / sigma %.2f\n",
-              from_long, Est::kParams, worst_ratio, worst_z);
+  std::printf(
+      "  long windows, 40 dB, 40 s: %d of %d parameters from the long sum, sigma / short-only sigma <= %.2f, "
+      "worst |error| / sigma %.2f\n",
+      from_long, Est::kParams, worst_ratio, worst_z);
   CHECK(from_long >= 1);
   CHECK(worst_ratio < 1.05);
   CHECK(worst_z < 4.0);

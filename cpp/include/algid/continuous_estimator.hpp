@@ -305,7 +305,8 @@ class ContinuousEstimator {
         case WeakFormConfigError::kBadNoise: return ContinuousConfigError::kBadNoise;
         case WeakFormConfigError::kBadDofs: return ContinuousConfigError::kBadDofs;
       }
-      if (c.long_window_s != Scalar(-1) && !(c.long_window_s >= Scalar(0))) return ContinuousConfigError::kBadLongWindow;
+      if (c.long_window_s != Scalar(-1) && !(c.long_window_s >= Scalar(0)))
+        return ContinuousConfigError::kBadLongWindow;
       if (c.joint && resolved_long_window(c) > Scalar(0) &&
           WeakForm::validate(long_config(c), n) != WeakFormConfigError::kNone)
         return ContinuousConfigError::kBadLongWindow;
