@@ -627,8 +627,7 @@ class ContinuousEstimator {
   static typename WeakForm::Config long_config(const Config& c) noexcept {
     typename WeakForm::Config w = weak_config(c);
     w.window_s = resolved_long_window(c);
-    const Scalar band = c.band_hz < Scalar(0) ? Scalar(0.05) / c.dt : c.band_hz;
-    w.band_hz = band * resolved_window(c) / w.window_s;
+    w.band_hz = static_cast<Scalar>(WeakForm::band_of(w)) * resolved_window(c) / w.window_s;
     return w;
   }
 
@@ -695,8 +694,8 @@ class ContinuousEstimator {
   // finite misfit joins the ring of the newest kMisfits. One ring: the long windows' first
   // weighted ones are compared with the short windows before them, not with each other.
   bool fits(double misfit) noexcept {
-    MisfitRing& ring = misfits_;
     if (!std::isfinite(misfit)) return true;  // unweighted or failed: joint_add() decides
+    MisfitRing& ring = misfits_;
     double reference = 1.0;
     if (ring.count > 0) {
       std::copy(ring.value.begin(), ring.value.begin() + ring.count, misfit_scratch_.begin());
@@ -932,20 +931,19 @@ class ContinuousEstimator {
     }
     t.count = kept;
     clear_aggregation(t);
-    for (Joint* J : {joint_.get(), long_joint_.get()})
-      if (J) joint_restart(*J, j);
     finish_restart(j, t, ChangeKind::kStep);
   }
 
   void restart_drift(int j, Track& t, Scalar) noexcept {
     t.count = std::min(t.count, config_.block);  // the block just completed
     clear_aggregation(t);
-    for (Joint* J : {joint_.get(), long_joint_.get()})
-      if (J) joint_restart(*J, j);
     finish_restart(j, t, ChangeKind::kDrift);
   }
 
+  // Both joint sums forget j (joint_restart), then the event is recorded.
   void finish_restart(int j, Track& t, ChangeKind kind) noexcept {
+    for (Joint* J : {joint_.get(), long_joint_.get()})
+      if (J) joint_restart(*J, j);
     const Scalar before = estimate_(j);
     refresh(j, t);
     Event& ev = events_[event_count_ < params_ ? event_count_ : params_ - 1];

@@ -309,6 +309,10 @@ class WeakFormWindows {
     }
     return sample;
   }
+  /// Highest test-function frequency [Hz] a configuration asks for (`band_hz`, or 0.05 / dt for -1).
+  static double band_of(const Config& c) noexcept {
+    return c.band_hz < Scalar(0) ? 0.05 / static_cast<double>(c.dt) : static_cast<double>(c.band_hz);
+  }
   /// Highest harmonic Q of the test functions (F = 2Q+1 rows per DOF).
   int harmonics() const noexcept { return Q_; }
   /// The configuration in force.
@@ -343,9 +347,6 @@ class WeakFormWindows {
     const long raw = std::lround(static_cast<double>(c.window_s) / static_cast<double>(c.dt));
     const long k = std::max(1, c.stagger);
     return std::max(k, raw / k * k);
-  }
-  static double band_of(const Config& c) noexcept {
-    return c.band_hz < Scalar(0) ? 0.05 / static_cast<double>(c.dt) : static_cast<double>(c.band_hz);
   }
   static const Config& checked(const Config& c, int n) {
     const WeakFormConfigError e = validate(c, n);
