@@ -210,10 +210,11 @@ def test_a_killed_batch_resumes_without_losing_or_repeating_a_row(fleet, diagnos
     pd.testing.assert_frame_equal(again, first, check_dtype=False)
 
 
-def _profiled(dask_worker) -> tuple[bool, int]:
+def _profiled(dask_worker) -> tuple[bool, int, int, int]:
     import dask
 
-    return dask.config.get("distributed.worker.profile.enabled"), len(dask_worker.profile_history)
+    profile = dask.config.get("distributed.worker.profile.enabled"), len(dask_worker.profile_history)
+    return (*profile, dask_worker.monitor.maxlen, dask.config.get("distributed.admin.low-level-log-length"))
 
 
 @pytest.mark.parametrize("workers", [2, 1])
@@ -232,8 +233,8 @@ def test_a_worker_killed_mid_batch_loses_and_repeats_nothing(fleet, tmp_path, wo
                 killed.append(sum(counts.values()))
 
         table = algid.batch(fleet / "three", tmp_path, c, progress=kill_once)
-        # the restarted worker too runs without Dask's profiler (whose history grows the memory)
-        assert set(c.run(_profiled).values()) == {(False, 0)}
+        # the restarted worker too runs without Dask's profiler and with short in-memory logs
+        assert set(c.run(_profiled).values()) == {(False, 0, 600, 100)}
     assert killed and table.attrs["counts"] == {"ok": 6, "failed": 0, "skipped": 0}
     raw = pd.concat([pd.read_parquet(p) for p in _parts(tmp_path)], ignore_index=True)
     assert len(raw) == 6 and raw["key"].is_unique

@@ -14,7 +14,8 @@ run of the batch tries it again.
 
 The embedded cluster is a ``LocalCluster`` of ``workers`` processes with one thread each (the
 work is numpy and C++ that holds the GIL between calls: processes, not threads), each limited
-to its share of the machine's memory, its logs silenced below errors, Dask's profiler off.
+to its share of the machine's memory, its logs silenced below errors, Dask's profiler off and its in-memory logs short
+(:data:`WORKER_CONFIG`).
 """
 
 from __future__ import annotations
@@ -39,7 +40,15 @@ PART_SECONDS = 30.0
 RETRIES = 2
 
 #: Worker settings of the embedded cluster (merged into this process's Dask configuration).
-NO_PROFILER = {"worker": {"profile": {"enabled": False}}}
+#: Dask's statistical profiler keeps the call trees of its last 1000 one-second cycles per worker
+#: (about 17 min): memory that grows recording by recording for that long (0.25 MiB per 3-DOF
+#: 20 s recording measured); it is off. The system monitor keeps 7200 half-second samples (an
+#: hour) and the developers' logs 1000 entries each: 5 min and 100 entries here, so a worker's
+#: memory levels off within minutes instead of an hour.
+WORKER_CONFIG = {
+    "worker": {"profile": {"enabled": False}},
+    "admin": {"low-level-log-length": 100, "system-monitor": {"log-length": 600}},
+}
 
 ProgressFn = Optional[Callable[[dict, int], None]]
 
@@ -59,10 +68,8 @@ def local_cluster(workers: int | None = None):
         memory_limit="auto",  # the machine's memory shared out among the workers
         dashboard_address=":0",  # any free port: never a clash with another cluster's 8787
         silence_logs=logging.ERROR,
-        # Dask's statistical profiler keeps the call trees of its last 1000 one-second cycles per
-        # worker (about 17 min): memory that grows recording by recording for that long (0.25 MiB
-        # per 3-DOF 20 s recording measured). The nannies start (and restart) workers without it.
-        config={"distributed": dask.config.merge(dask.config.get("distributed"), NO_PROFILER)},  # to the nannies
+        # The nannies start (and restart) their workers with this configuration.
+        config={"distributed": dask.config.merge(dask.config.get("distributed"), WORKER_CONFIG)},
     )
 
 
