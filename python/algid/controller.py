@@ -166,7 +166,7 @@ class ContinuousAdapter(PackedParameters):
         20 ms from a few tens of ms on; under noise it wanders by more, so a tight value
         leaves a noisy loop on the nominal parameters until the running estimate passes
         (the rig's 0.01: at 40 dB the substitution waits for it, 0.41-0.48 s, and disturbs
-        the estimates by at most 0.63 % instead of up to 48 %).
+        the estimates by at most 0.48 % instead of up to 48 %).
     **options
         Passed to :class:`algid.ContinuousEstimator` (``window_s``, ``stagger``, ...).
     """

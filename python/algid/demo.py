@@ -37,17 +37,16 @@ from a few tens of ms on, so the law still substitutes at 0.1 s; at 40 dB never,
 waits for the running estimate, 0.41-0.48 s) (:data:`RIG_ESTIMATOR_OPTIONS`). Table 1,
 5 s, 0/2/5 ms, ``bench/demo_report.py --rig-only --seeds 0 1 2``:
 
-* noise-free: all estimates within 1 % from 0.08-0.11 s on; largest error from 0.1 s on
-  0.11 % (2 ms) and 0.03 % (5 ms), but 1.3 % without lag (the growing window's last spring,
-  until 0.11 s); after 0.5 s 0.04 % and less; tracking peak after 1 s 1.06-1.11 % of the
-  stroke (mostly the probe's motion); the substitution disturbs the estimates by
-  0.005-0.73 % (the largest excess of an estimate's error within 0.1 s of it
+* noise-free: all estimates within 1 % from 0.077-0.099 s on; largest error from 0.1 s on
+  0.40 % (no lag), 0.16 % (2 ms), 0.04 % (5 ms), after 0.5 s 0.04 % and less; tracking peak
+  after 1 s 1.06-1.11 % of the stroke (mostly the probe's motion); the substitution disturbs
+  the estimates by 0.007-0.31 % (the largest excess of an estimate's error within 0.1 s of it
   over that never-substituted loop's, same noise: ``disturbance_reference=True``);
 * 40 dB, 3 seeds: all estimates within 1 % from 0.48-0.71 s on, largest error after 0.5 s
   0.7-1.8 % (the dampings; with the loop's signals even a least-squares fit that knew the
   true velocities and positions would leave a one-sigma of 0.5-1.6 % on them at 0.5 s);
   tracking peak after 1 s 1.06-1.11 %; the substitution disturbs the estimates by at most
-  0.63 %;
+  0.48 %;
 * a wrong lag (5 ms told as 4 or 6 ms) still tracks (1.07-1.17 %) but the estimates end
   12-18 % off.
 

@@ -21,20 +21,36 @@ The force's mean over interval ``k`` is exact by (H1)::
 and the smooth force at ``t_k`` is the value there of the cubic whose means over the four
 intervals around ``t_k`` are those (H2) gives (exact for any cubic; the box of the two
 intervals next to ``t_k`` alone is exact for a straight line only and leaves the
-estimates 0.3-1.5 % off in the demo's rig loop between 0.1 and 0.3 s)::
+estimates up to 0.9 % off at 2 ms of lag in the demo's rig loop between 0.1 and 0.3 s)::
 
     w~_k = (-wbar_{k-2} + 7 wbar_{k-1} + 7 wbar_k - wbar_{k+1}) / 12                  (H3)
 
-so sample ``k`` leaves the smoothing when sample ``k + 1`` arrives, one sample late (the
-second sample, without ``wbar_{-1}``, gets the two-interval box ``(wbar_0 + wbar_1) / 2``,
-the first passes unchanged). Without lag ``wbar_k = u_k`` and (H3) takes the staircase's
+(the second sample, without ``wbar_{-1}``, gets the two-interval box
+``(wbar_0 + wbar_1) / 2``, the first its measured force). Without lag ``wbar_k = u_k`` and (H3) takes the staircase's
 smooth equivalent to fourth order instead of the mean of the two one-sided limits, the
 simulator's sampling convention. The ripple ``w_k - w~_k`` reaches the acceleration
 divided by the mass, so the smooth acceleration is::
 
     a~_k = a_k - (w_k - w~_k) / m_i                                                  (H4)
 
-with a mass ``m_i`` the caller gives (a DOF without a finite positive mass is passed
+**Positions.** The estimator integrates the smooth acceleration twice. The ripple has zero
+mean over every interval, so the velocities agree at the samples, but over interval ``k``
+it moves the mass by ``nu_k / m_i``, with (``w~`` between samples: the straight line between
+``w~_k`` and ``w~_{k+1}`` plus the curvature at ``t_k``)::
+
+    nu_k = int_0^h (h - s) (w(t_k + s) - w~(t_k + s)) ds
+         = u_k h^2 / 2 + (w_k - u_k) (h tau - tau^2 (1 - exp(-h / tau)))
+           - h^2 (2 w~_k + w~_{k+1}) / 6 + h^2 (w~_{k+1} - 2 w~_k + w~_{k-1}) / 24        (H6)
+
+Without lag these add up to about ``h^2 (w - w_0) / (12 m_i)`` in position, which no initial
+condition absorbs, and the estimator reads it as stiffness (1.2 % on Table 1's last spring
+at 0.1 s in the demo's rig loop). The smooth force therefore gets
+``(nu_k - nu_{k-1}) / h^2`` added (and, through (H4), the acceleration the same over the
+mass): a smooth motion whose positions are the measured ones. It needs ``w~_{k+1}``, so
+sample ``k`` leaves the smoothing when sample ``k + 2`` arrives, two samples late (the
+first two samples without it).
+
+(H4) takes a mass ``m_i`` the caller gives (a DOF without a finite positive mass is passed
 unchanged, force and acceleration alike). The controller gives the masses its law has
 accepted and, once it has, smooths the samples before again with them
 (:meth:`algid.controller.TrackingController.observe`).
@@ -79,14 +95,19 @@ class HeldLaggedInput:
         self.n, self.dt = int(n), float(dt)
         self.set_lag(actuator_lag_s)
         self._wbar = np.zeros((4, self.n))  # wbar_{k-3} .. wbar_k [N]
-        self._prev = np.zeros((2, self.n))  # acceleration [m/s^2] and force [N] at t_{k-1}
+        self._w_s = np.zeros((3, self.n))  # w~_{k-3} .. w~_{k-1} (H3) [N]
+        self._raw = np.zeros((3, 3, self.n))  # command, acceleration, force at t_{k-2} .. t_k
+        self._nu = np.zeros(self.n)  # nu_{k-3} (H6) [N s^2]
         self._k = 0  # samples in so far
 
     def set_lag(self, actuator_lag_s: float) -> None:
         """Use the time constant ``actuator_lag_s`` [s] from the next sample on."""
         self.tau = float(actuator_lag_s)
+        h, tau = self.dt, self.tau
         #: g of (H2): the weight of the start value w_k in the interval mean [-]
-        self.g = 0.0 if self.tau == 0 else self.tau / self.dt * -np.expm1(-self.dt / self.tau)
+        self.g = 0.0 if tau == 0 else tau / h * -np.expm1(-h / tau)
+        #: the lag's term of (H6), int_0^h (h - s) exp(-s / tau) ds [s^2]
+        self.e = 0.0 if tau == 0 else h * tau + tau**2 * np.expm1(-h / tau)
 
     def interval_mean(self, command: np.ndarray, force: np.ndarray) -> np.ndarray:
         """(H2): mean force [N] over ``[t_k, t_{k+1})`` from the command held there and the
@@ -97,17 +118,25 @@ class HeldLaggedInput:
         self, command: np.ndarray, accel: np.ndarray, force: np.ndarray, mass: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray] | None:
         """Sample ``k`` in: the command held from ``t_k`` [N], the measured acceleration
-        [m/s^2] and force [N] at ``t_k``; the smooth acceleration (H4) and force (H3) of
-        sample ``k - 1`` out, with the masses ``mass`` [kg] (n,); None for the first sample."""
-        self._wbar[:-1] = self._wbar[1:]
-        self._wbar[-1] = self.interval_mean(np.asarray(command, float), np.asarray(force, float))
-        (a, w), k = self._prev.copy(), self._k
-        self._prev[0], self._prev[1] = accel, force
+        [m/s^2] and force [N] at ``t_k``; the smooth acceleration (H4) and force (H3, H6)
+        of sample ``k - 2`` out, with the masses ``mass`` [kg] (n,); None for the first two."""
+        k, h = self._k, self.dt
         self._k += 1
-        if k <= 1:
-            return None if k == 0 else (a, w)
-        wb = self._wbar  # wbar_{j-2}, wbar_{j-1}, wbar_j, wbar_{j+1} of the sample j = k - 1 out
-        w_s = 0.5 * (wb[1] + wb[2]) if k == 2 else (-wb[0] + 7.0 * (wb[1] + wb[2]) - wb[3]) / 12.0
+        self._raw[:-1] = self._raw[1:]
+        self._raw[-1] = command, accel, force
+        self._wbar[:-1] = self._wbar[1:]
+        self._wbar[-1] = self.interval_mean(self._raw[-1, 0], self._raw[-1, 2])
+        self._w_s[:-1] = self._w_s[1:]
+        wb = self._wbar  # wbar_{k-3} .. wbar_k: (H3) of sample k - 1
+        self._w_s[-1] = (-wb[0] + 7.0 * (wb[1] + wb[2]) - wb[3]) / 12.0 if k >= 3 else 0.5 * (wb[1] + wb[2])
+        if k == 1:
+            self._w_s[-1] = self._raw[-2, 2]  # the first sample: its measured force
+        if k < 2:
+            return None
+        (u, a, w), (s0, s1, s2) = self._raw[0], self._w_s  # sample j = k - 2; w~_{j-1}, w~_j, w~_{j+1}
+        nu = u * h * h / 2 + (w - u) * self.e - h * h * (2.0 * s1 + s2) / 6 + h * h * (s2 - 2.0 * s1 + s0) / 24
+        w_s = s1 + (nu - self._nu) / (h * h) if k >= 4 else s1
+        self._nu = nu
         m = np.asarray(mass, float)
         known = np.isfinite(m) & (m > 0)
         ripple = np.where(known, (w - w_s) / np.where(known, m, 1.0), 0.0)
