@@ -15,7 +15,7 @@ from algid.control_law import pole_placement_gains
 from algid.controller import BezierReference, TrackingController
 from algid.demo import _continuous_factory, _relative_errors, run_scenario, substitution_disturbance
 from algid.estimate_gate import EstimateGate
-from algid.held_input import HeldLaggedInput, LagEstimator
+from algid.held_input import HeldLaggedInput, LagEstimator, RigInput
 from algid.simulator import simulate
 from algid.trajectories import Multisine
 
@@ -75,6 +75,29 @@ def test_smooth_samples_integrate_to_the_measured_positions(tau):
     raw, smooth = _positions_error(a[:-2], x[:-2]), _positions_error(a_s, x[:-2])
     # raw samples: 8.6e-8 m (no lag), 7.9e-7 m (2 ms); smooth: 5.7e-10 and 6.3e-10 m
     assert smooth < 0.01 * raw
+
+
+class _Counting:
+    """An estimator that counts the samples it gets."""
+
+    def __init__(self) -> None:
+        self.samples = 0
+
+    def update(self, accel, force) -> int:
+        self.samples += 1
+        return 0
+
+
+@pytest.mark.parametrize("accepted", [True, False])
+def test_rig_input_reseeds_at_the_switch_only_with_every_mass_accepted(accepted):
+    made = []
+    rig = RigInput(2, H, "estimate", 10, lambda: made.append(_Counting()) or made[-1])
+    first = est = _Counting()
+    for k in range(12):
+        mass = np.array([2.0, 3.0 if accepted else np.nan]) if k >= 5 else np.full(2, np.nan)  # [kg]
+        est, _ = rig.update(k, np.ones(2), np.zeros(2), np.ones(2), mass, est)
+    # two samples late: 0..7 again at k = 9 into the new one, then 8 and 9 at k = 10 and 11
+    assert (est is not first, est.samples, len(made)) == ((True, 10, 1) if accepted else (False, 10, 0))
 
 
 def _open_loop_errors(tau: float) -> tuple[float, float]:

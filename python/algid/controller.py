@@ -110,8 +110,7 @@ from .continuous import PackedParameters
 from .control_law import DEFAULT_POLES, ControlLaw, LawParameters, pole_placement_gains
 from .controller_log import ControllerLog
 from .estimate_gate import ACCEPT_RULES, EstimateGate
-from .estimator import Status
-from .held_input import HeldLaggedInput, LagEstimator
+from .held_input import RigInput
 from .trajectories import BezierReference, bezier
 
 __all__ = [
@@ -310,8 +309,9 @@ class TrackingController:
         held command (0: none), or ``"estimate"``: identify it on line from the commands and
         the measured forces (:class:`~algid.held_input.LagEstimator`). The estimator is then
         fed the smooth-equivalent samples of :class:`~algid.held_input.HeldLaggedInput`
-        (with the accepted masses, one sample late) instead of the raw ones; the samples
-        before the masses were accepted are smoothed again at the switch (:meth:`observe`).
+        (with the accepted masses, two samples late) instead of the raw ones; the samples
+        before the masses were accepted are smoothed again at the switch
+        (:class:`~algid.held_input.RigInput`).
         None (default) feeds the raw samples.
 
     Notes
@@ -391,12 +391,9 @@ class TrackingController:
             n, boundary, self.dt, self.accept, self.settle_window_s, self.settle_tol, self.hold, self.nominal_mass_kg
         )
         self.history = ControllerLog(int(samples), n, self.estimator)
-        lag = self.actuator_lag_s
-        rig = lag is not None and mode == "sampled"
-        self.input_model = HeldLaggedInput(n, self.dt, 0.0 if lag == "estimate" else lag) if rig else None
-        self.lag_estimator = LagEstimator(self.dt) if rig and lag == "estimate" else None
-        # the raw samples (command, acceleration, force) up to the switch, smoothed again there
-        self._raw = np.zeros((self.k_switch, 3, n)) if rig else None
+        factory, rig = self.estimator_factory, self.actuator_lag_s is not None and mode == "sampled"
+        lag, k_sw = self.actuator_lag_s, self.k_switch
+        self.rig = RigInput(n, self.dt, lag, k_sw, lambda: factory(n, self.dt, boundary)) if rig else None
         self._command = np.zeros(n)  # the command held from the latest sample [N]
         self._nominal = LawParameters.pack(np.full(n, self.nominal_mass_kg), np.zeros(n), np.zeros(n + 1))
         self._used_accepted = np.zeros(n, bool)  # DOFs whose estimates the law used so far
@@ -458,18 +455,19 @@ class TrackingController:
     ) -> None:
         """Feed sample ``k`` (accelerations [m/s^2], forces [N]) to the estimator and keep
         its valid estimates for the following intervals. On a rig the estimator gets the
-        smooth sample ``k - 1`` instead, and a new estimator at the switch (see
-        :meth:`_update_smooth`)."""
+        smooth sample ``k - 2`` instead, and a new estimator at the switch
+        (:class:`~algid.held_input.RigInput`)."""
         n = self.n
         if z is not None and k < self.history.T:
             u, xd, _ = self.law.force(t, x_meas, z[:n], z[n : 2 * n], z[2 * n : 3 * n], z[3 * n :], self._p_k)
             self.history.law(k, xd, u)
         if z is None:
             self.law.measured(force)
-        if self.input_model is None:
+        if self.rig is None:
             status = self.estimator.update(accel, force)
-        else:
-            status = self._update_smooth(k, accel, force)
+        else:  # (H4) with the masses the law has accepted
+            mass = np.where(self.gate.accepted, self.gate.good_m, np.nan)
+            self.estimator, status = self.rig.update(k, self._command, accel, force, mass, self.estimator)
         m = np.asarray(self.estimator.mass, dtype=float)
         c = np.asarray(self.estimator.damping, dtype=float)
         kk = np.asarray(self.estimator.stiffness, dtype=float)
@@ -483,29 +481,6 @@ class TrackingController:
                 rank = int(getattr(self.estimator, "phase", "running") == "running")
                 unc = (np.asarray(rel, float), np.asarray(sig, float), rank)
         self.gate.offer(k, m, c, kk, valid, unc)
-
-    def _update_smooth(self, k: int, accel: np.ndarray, force: np.ndarray) -> int:
-        """Sample ``k`` into the rig's input model; its smooth sample ``k - 1`` into the
-        estimator (:class:`~algid.held_input.HeldLaggedInput`, (H4) with the masses the law
-        has accepted: early growing-window masses fed back into their own window spoil it).
-        Until the masses are accepted the samples go in raw; if every DOF's are by the last
-        sample before the switch, a new estimator gets all samples so far smoothed with
-        them, so the estimates the law takes at the switch are those of smooth samples."""
-        if self.lag_estimator is not None:
-            self.input_model.set_lag(self.lag_estimator.update(self._command, force))
-        if k < self.k_switch:
-            self._raw[k] = self._command, accel, force
-        mass = np.where(self.gate.accepted, self.gate.good_m, np.nan)
-        sample = self.input_model.smooth(self._command, accel, force, mass)
-        status = int(Status.WARMUP) if sample is None else self.estimator.update(*sample)
-        if k == self.k_switch - 1 and self.gate.accepted.all():
-            self.estimator = self.estimator_factory(self.n, self.dt, self.boundary)
-            model = HeldLaggedInput(self.n, self.dt, self.input_model.tau)
-            for raw in self._raw[: k + 1]:
-                sample = model.smooth(*raw, self.gate.good_m)
-                if sample is not None:
-                    status = self.estimator.update(*sample)
-        return status
 
     def log(self) -> dict[str, Any]:
         """History of the run (``T`` samples): reference ``x_ref``, ``xd_ref``, ``xdd_ref``

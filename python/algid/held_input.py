@@ -53,7 +53,7 @@ first two samples without it).
 (H4) takes a mass ``m_i`` the caller gives (a DOF without a finite positive mass is passed
 unchanged, force and acceleration alike). The controller gives the masses its law has
 accepted and, once it has, smooths the samples before again with them
-(:meth:`algid.controller.TrackingController.observe`).
+(:class:`RigInput`).
 
 **The lag from the rig's own records.** (H1) at ``s = h`` ties consecutive force samples
 to the command held between them::
@@ -74,7 +74,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["HeldLaggedInput", "LagEstimator"]
+from .estimator import Status
+
+__all__ = ["HeldLaggedInput", "LagEstimator", "RigInput"]
 
 
 class HeldLaggedInput:
@@ -192,3 +194,48 @@ class LagEstimator:
         if not np.isfinite(a) or a <= 0 or self.r0 <= self.syy - a * self.sxy:
             return 0.0
         return -self.dt / np.log(min(a, 1.0 - 1e-12))
+
+
+class RigInput:
+    """The estimator's samples on a rig: the lag from the rig's records (unless given), the
+    smooth samples of :class:`HeldLaggedInput`, and a reseed at the controller's switch.
+
+    (H4) takes the masses the law has accepted (a growing window's early masses fed back
+    into their own window spoil it), so the samples before that go in raw. If every DOF's
+    masses are accepted by the last sample before the switch (``k_switch - 1``), a new
+    estimator (``new_estimator()``) gets all samples so far smoothed with them: the estimates
+    the law takes at the switch are those of smooth samples.
+
+    Parameters
+    ----------
+    n, dt : number of DOF and sample interval [s].
+    actuator_lag_s : time constant [s] of the actuator, or ``"estimate"`` (:class:`LagEstimator`).
+    k_switch : the sample from which the law uses the estimates.
+    new_estimator : callable ``() -> estimator`` (the controller's factory).
+    """
+
+    def __init__(self, n: int, dt: float, actuator_lag_s, k_switch: int, new_estimator) -> None:
+        estimate = actuator_lag_s == "estimate"
+        self.model = HeldLaggedInput(n, dt, 0.0 if estimate else actuator_lag_s)
+        self.lag = LagEstimator(dt) if estimate else None
+        self.k_switch, self.new_estimator = int(k_switch), new_estimator
+        self.raw = np.zeros((max(self.k_switch, 0), 3, int(n)))  # command, acceleration, force
+
+    def update(self, k: int, command, accel, force, mass, estimator) -> tuple:
+        """Sample ``k`` (the command held from ``t_k``, acceleration, force; the accepted
+        masses [kg], NaN where none) into ``estimator``; returns the estimator (a new one
+        after the reseed) and its status."""
+        if self.lag is not None:
+            self.model.set_lag(self.lag.update(command, force))
+        if k < self.k_switch:
+            self.raw[k] = command, accel, force
+        sample = self.model.smooth(command, accel, force, mass)
+        status = int(Status.WARMUP) if sample is None else estimator.update(*sample)
+        if k == self.k_switch - 1 and np.all(np.isfinite(mass)):
+            estimator = self.new_estimator()
+            again = HeldLaggedInput(self.model.n, self.model.dt, self.model.tau)
+            for raw in self.raw[: k + 1]:
+                sample = again.smooth(*raw, mass)
+                if sample is not None:
+                    status = estimator.update(*sample)
+        return estimator, status
