@@ -102,6 +102,7 @@ estimator may also expose ``theta(dof)`` (each DOF's own four estimates), ``sigm
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import partial
 from typing import Any, Callable
 
 import numpy as np
@@ -391,9 +392,9 @@ class TrackingController:
             n, boundary, self.dt, self.accept, self.settle_window_s, self.settle_tol, self.hold, self.nominal_mass_kg
         )
         self.history = ControllerLog(int(samples), n, self.estimator)
-        factory, rig = self.estimator_factory, self.actuator_lag_s is not None and mode == "sampled"
-        lag, k_sw = self.actuator_lag_s, self.k_switch
-        self.rig = RigInput(n, self.dt, lag, k_sw, lambda: factory(n, self.dt, boundary)) if rig else None
+        rig = self.actuator_lag_s is not None and mode == "sampled"
+        new_estimator = partial(self.estimator_factory, n, self.dt, boundary)
+        self.rig = RigInput(n, self.dt, self.actuator_lag_s, self.k_switch, new_estimator) if rig else None
         self._command = np.zeros(n)  # the command held from the latest sample [N]
         self._nominal = LawParameters.pack(np.full(n, self.nominal_mass_kg), np.zeros(n), np.zeros(n + 1))
         self._used_accepted = np.zeros(n, bool)  # DOFs whose estimates the law used so far

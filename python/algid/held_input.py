@@ -26,9 +26,9 @@ estimates up to 0.9 % off at 2 ms of lag in the demo's rig loop between 0.1 and 
     w~_k = (-wbar_{k-2} + 7 wbar_{k-1} + 7 wbar_k - wbar_{k+1}) / 12                  (H3)
 
 (the second sample, without ``wbar_{-1}``, gets the two-interval box
-``(wbar_0 + wbar_1) / 2``, the first its measured force). Without lag ``wbar_k = u_k`` and (H3) takes the staircase's
-smooth equivalent to fourth order instead of the mean of the two one-sided limits, the
-simulator's sampling convention. The ripple ``w_k - w~_k`` reaches the acceleration
+``(wbar_0 + wbar_1) / 2``, the first its measured force). Without lag ``wbar_k = u_k`` and
+(H3) takes the staircase's smooth equivalent to fourth order instead of the mean of the two
+one-sided limits, the simulator's sampling convention. The ripple ``w_k - w~_k`` reaches the acceleration
 divided by the mass, so the smooth acceleration is::
 
     a~_k = a_k - (w_k - w~_k) / m_i                                                  (H4)
@@ -130,9 +130,12 @@ class HeldLaggedInput:
         self._wbar[-1] = self.interval_mean(self._raw[-1, 0], self._raw[-1, 2])
         self._w_s[:-1] = self._w_s[1:]
         wb = self._wbar  # wbar_{k-3} .. wbar_k: (H3) of sample k - 1
-        self._w_s[-1] = (-wb[0] + 7.0 * (wb[1] + wb[2]) - wb[3]) / 12.0 if k >= 3 else 0.5 * (wb[1] + wb[2])
-        if k == 1:
-            self._w_s[-1] = self._raw[-2, 2]  # the first sample: its measured force
+        if k >= 3:
+            self._w_s[-1] = (-wb[0] + 7.0 * (wb[1] + wb[2]) - wb[3]) / 12.0
+        elif k == 2:  # no wbar_{-1}: the two-interval box
+            self._w_s[-1] = 0.5 * (wb[1] + wb[2])
+        elif k == 1:  # the first sample: its measured force
+            self._w_s[-1] = self._raw[-2, 2]
         if k < 2:
             return None
         (u, a, w), (s0, s1, s2) = self._raw[0], self._w_s  # sample j = k - 2; w~_{j-1}, w~_j, w~_{j+1}

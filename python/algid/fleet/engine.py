@@ -14,8 +14,8 @@ run of the batch tries it again.
 
 The embedded cluster is a ``LocalCluster`` of ``workers`` processes with one thread each (the
 work is numpy and C++ that holds the GIL between calls: processes, not threads), each limited
-to its share of the machine's memory, its logs silenced below errors, Dask's profiler off and its in-memory logs short
-(:data:`WORKER_CONFIG`).
+to its share of the machine's memory, its logs silenced below errors, Dask's profiler off
+and its in-memory logs short (:data:`WORKER_CONFIG`).
 """
 
 from __future__ import annotations
