@@ -253,54 +253,87 @@ def identified_mask(chain: Chain) -> np.ndarray:
     return mask
 
 
+@dataclass
+class Drive:
+    """What drives the chain: a piecewise-constant input ``w`` (held over each sample) through
+    a linear input stage ``z' = Af z + Bf w``, the force on the masses ``u = Cf z + Df w``
+    (Butterworth: ``Df = 0``; a first-order actuator lag; a DAC holding the force: no stage,
+    ``Df = I``)."""
+
+    Af: np.ndarray
+    Bf: np.ndarray
+    Cf: np.ndarray
+    Df: np.ndarray
+    z0: np.ndarray  #: input stage state at t = 0
+    w: np.ndarray  #: (T, n) the held input of each sample interval
+
+
 def sensitivities(rec: Record) -> tuple[np.ndarray, np.ndarray]:
     """``J[k, i, j] = d a_i(t_k) / d col_j`` for the identified parameters (columns
     ``0..p-1``, indices into (m, c, k) returned as the second value) then the 2n initial
     positions and velocities, by the forward sensitivity equations integrated exactly."""
-    chain = rec.chain
-    n, h, T = rec.n, rec.dt, rec.t.size
     theta = rec.truth[0]
     if not np.allclose(rec.truth, theta):
         raise ValueError("crlb() needs a record with constant parameters")
-    mask = identified_mask(chain)
-    idx = np.nonzero(mask)[0]
-    p = idx.size
-    A, B = chain_blocks(theta[:n], theta[n : 2 * n], theta[2 * n :])
+    Af, Bf, Cf = force_filter(rec.n, rec.band_hz)
+    nf = Af.shape[0]
+    drive = Drive(Af, Bf, Cf, np.zeros((rec.n, rec.n)), rec.z0[:nf], rec.w)
+    return driven_sensitivities(rec.chain, theta, rec.y0, drive, rec.dt)
+
+
+def _parameter_derivatives(theta: np.ndarray, idx: np.ndarray, n: int) -> tuple[list, list]:
+    """d A / d theta_j and d B / d theta_j of the chain, by central differences: exact for c
+    and k (A is linear in them), O(eps^2) for m."""
     dA, dB = [], []
-    for j in idx:  # central differences: exact for c and k (A is linear in them), O(eps^2) for m
+    for j in idx:
         e = np.zeros_like(theta)
         e[j] = 1e-6 * theta[j]
         Ap, Bp = chain_blocks(*np.split(theta + e, [n, 2 * n]))
         Am, Bm = chain_blocks(*np.split(theta - e, [n, 2 * n]))
         dA.append((Ap - Am) / (2 * e[j]))
         dB.append((Bp - Bm) / (2 * e[j]))
-    Af, Bf, Cf = force_filter(n, rec.band_hz)
+    return dA, dB
+
+
+def driven_sensitivities(
+    chain: Chain, theta: np.ndarray, y0: np.ndarray, drive: Drive, h: float, u_samples: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sensitivities` of ``chain`` (parameters ``theta``, state ``y0`` at t = 0) under
+    ``drive``: one block-triangular LTI system (input stage, chain, one chain copy per
+    column), discretised exactly for the held input. ``u_samples`` (T, n): the force at the
+    sample instants where it jumps there (the mean of its one-sided limits, as the
+    accelerometers see it); default ``Cf z``, continuous."""
+    n, T = chain.n, drive.w.shape[0]
+    idx = np.nonzero(identified_mask(chain))[0]
+    p = idx.size
+    A, B = chain_blocks(theta[:n], theta[n : 2 * n], theta[2 * n :])
+    dA, dB = _parameter_derivatives(theta, idx, n)
+    Af, Bf, Cf, Df = drive.Af, drive.Bf, drive.Cf, drive.Df
     nf, ny = Af.shape[0], 2 * n
     q = p + ny  # sensitivity columns: parameters, then the initial state
     dim = nf + ny + ny * q
     Abig = np.zeros((dim, dim))
-    Abig[:nf, :nf] = Af
+    Bbig = np.zeros((dim, n))
+    Abig[:nf, :nf], Bbig[:nf] = Af, Bf
     Abig[nf : nf + ny, nf : nf + ny] = A
-    Abig[nf : nf + ny, :nf] = B @ Cf
+    Abig[nf : nf + ny, :nf], Bbig[nf : nf + ny] = B @ Cf, B @ Df
     for j in range(q):
         r = nf + ny + j * ny
         Abig[r : r + ny, r : r + ny] = A
         if j < p:
             Abig[r : r + ny, nf : nf + ny] = dA[j]
-            Abig[r : r + ny, :nf] = dB[j] @ Cf
-    Bbig = np.zeros((dim, n))
-    Bbig[:nf] = Bf
+            Abig[r : r + ny, :nf], Bbig[r : r + ny] = dB[j] @ Cf, dB[j] @ Df
     Phi, Gam = discretise(Abig, Bbig, h)
     Zs = np.zeros(dim)
-    Zs[:nf] = rec.z0[:nf]
-    Zs[nf : nf + ny] = rec.y0
+    Zs[:nf] = drive.z0
+    Zs[nf : nf + ny] = y0
     for j in range(ny):  # d y / d y0 = I at t = 0
         Zs[nf + ny + (p + j) * ny + j] = 1.0
     states = np.empty((T, dim))
     for k in range(T):
         states[k] = Zs
-        Zs = Phi @ Zs + Gam @ rec.w[k]
-    uu = states[:, :nf] @ Cf.T
+        Zs = Phi @ Zs + Gam @ drive.w[k]
+    uu = states[:, :nf] @ Cf.T if u_samples is None else u_samples
     y = states[:, nf : nf + ny]
     S = states[:, nf + ny :].reshape(T, q, ny)  # S[k, j] = d y / d col_j
     low = slice(n, 2 * n)
@@ -311,24 +344,61 @@ def sensitivities(rec: Record) -> tuple[np.ndarray, np.ndarray]:
     return J, idx
 
 
-def crlb(rec: Record, snr_db: float, times_s=(1.0, 10.0, 60.0)) -> dict[float, np.ndarray]:
-    """Relative Cramer-Rao bound sqrt((F^-1)_jj) / theta_j on every parameter (m, c, k order,
-    NaN where not identified) from the accelerations in [0, t] for each t in ``times_s``,
-    white noise of ``rms(a_i) 10^(-snr/20)`` on each acceleration, the force known, the
-    initial chain state unknown. The record must have constant parameters."""
-    J, idx = sensitivities(rec)
-    theta, h, T, p = rec.truth[0], rec.dt, rec.t.size, idx.size
-    sigma = rms(rec.a) * 10.0 ** (-snr_db / 20.0)
+def bound(J: np.ndarray, idx: np.ndarray, theta: np.ndarray, sigma: np.ndarray, h: float, times_s) -> dict:
+    """Relative bound ``sqrt((F^-1)_jj) / theta_j`` from the samples in [0, t] for each t in
+    ``times_s`` (white noise ``sigma`` (n,) on the accelerations; NaN where not identified)."""
     Jw = J / sigma[None, :, None]
-    out = {}
+    p, out = idx.size, {}
     for t in times_s:
-        K = min(T, int(round(t / h)))
+        K = min(J.shape[0], int(round(t / h)))
         F = np.einsum("kaj,kal->jl", Jw[:K], Jw[:K])
         cov = np.linalg.inv(F)
         rel = np.full(theta.size, np.nan)
         rel[idx] = np.sqrt(np.diag(cov)[:p]) / np.abs(theta[idx])
         out[float(t)] = rel
     return out
+
+
+def crlb(rec: Record, snr_db: float, times_s=(1.0, 10.0, 60.0)) -> dict[float, np.ndarray]:
+    """Relative Cramer-Rao bound sqrt((F^-1)_jj) / theta_j on every parameter (m, c, k order,
+    NaN where not identified) from the accelerations in [0, t] for each t in ``times_s``,
+    white noise of ``rms(a_i) 10^(-snr/20)`` on each acceleration, the force known, the
+    initial chain state unknown. The record must have constant parameters."""
+    J, idx = sensitivities(rec)
+    sigma = rms(rec.a) * 10.0 ** (-snr_db / 20.0)
+    return bound(J, idx, rec.truth[0], sigma, rec.dt, times_s)
+
+
+def rig_drive(res, actuator_lag_s: float) -> tuple[Drive, np.ndarray | None]:
+    """The :class:`Drive` of a sampled-mode run of :func:`algid.simulator.simulate` (a DAC
+    holding each command, through a first-order lag of ``actuator_lag_s`` [s] or none), from
+    the forces it applied, and the force at the samples the accelerometers saw (None: no
+    jumps). The held commands are recovered from the lag's exact step
+    ``w_{k+1} = c_k + (w_k - c_k) exp(-h / tau)``."""
+    n, h = res.n, res.dt
+    w_app = res.limits["u_applied_plus"]
+    if actuator_lag_s > 0:
+        E = np.exp(-h / actuator_lag_s)
+        cmd = np.empty_like(w_app)
+        cmd[:-1] = (w_app[1:] - E * w_app[:-1]) / (1.0 - E)
+        cmd[-1] = cmd[-2]  # the last interval is not simulated
+        eye = np.eye(n)
+        return Drive(-eye / actuator_lag_s, eye / actuator_lag_s, eye, np.zeros((n, n)), w_app[0].copy(), cmd), None
+    none = np.zeros((0, 0))
+    return Drive(none, np.zeros((0, n)), np.zeros((n, 0)), np.eye(n), np.zeros(0), w_app), res.u_applied
+
+
+def loop_crlb(res, actuator_lag_s: float, times_s) -> dict[float, np.ndarray]:
+    """Relative Cramer-Rao bound (as :func:`crlb`) of a noisy sampled-mode run of
+    :func:`algid.simulator.simulate`, open or closed loop: the accelerometers' white noise of
+    the run's own RMS (``res.noise_rms["accel"]``), the applied force known, the initial
+    state unknown. In closed loop the force depends on past noise; the likelihood still
+    factors sample by sample, so the information is that of the realised force."""
+    drive, u_samples = rig_drive(res, actuator_lag_s)
+    theta = params_of(res.chain)
+    y0 = np.concatenate([res.x[0], res.v[0]])
+    J, idx = driven_sensitivities(res.chain, theta, y0, drive, res.dt, u_samples)
+    return bound(J, idx, theta, np.asarray(res.noise_rms["accel"], dtype=float), res.dt, times_s)
 
 
 def main() -> None:
