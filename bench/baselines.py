@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import lfilter
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+sys.path.append(str(Path(__file__).resolve().parents[1] / "python"))  # an installed algid comes first
 from algid import reference  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------

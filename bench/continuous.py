@@ -46,7 +46,7 @@ from scipy.signal import butter, lfilter
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent / "python"))
+sys.path.append(str(HERE.parent / "python"))  # an installed algid comes first
 import baselines  # noqa: E402
 import crlb as C  # noqa: E402
 

@@ -41,7 +41,7 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.signal import butter
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+sys.path.append(str(Path(__file__).resolve().parents[1] / "python"))  # an installed algid comes first
 from algid.chain import TABLE1, Chain  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------

@@ -27,6 +27,7 @@ into a fresh output folder:
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import os
 import shutil
@@ -35,7 +36,8 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-PATHS = [str(HERE.parent / "python"), str(HERE.parent / "tests")]
+# an installed algid comes first; the checkout's python/ only serves when none is installed
+PATHS = [str(HERE.parent / "tests")] + ([] if importlib.util.find_spec("algid") else [str(HERE.parent / "python")])
 sys.path[:0] = PATHS
 # the workers are new processes: they find algid and the generator through PYTHONPATH
 os.environ["PYTHONPATH"] = os.pathsep.join(PATHS + [os.environ.get("PYTHONPATH", "")])

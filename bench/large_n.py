@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+sys.path.append(str(Path(__file__).resolve().parents[1] / "python"))  # an installed algid comes first
 from algid.chain import stiffness_matrix  # noqa: E402
 
 TONES_HZ = np.geomspace(1.0, 40.0, 6)

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python"))
+sys.path.append(str(HERE.parent / "python"))  # an installed algid comes first
 sys.path.insert(0, str(HERE))
 import blind_diagnosis as B  # noqa: E402
 import identify as I  # noqa: E402

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+sys.path.append(str(Path(__file__).resolve().parents[1] / "python"))  # an installed algid comes first
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import crlb  # noqa: E402
 from soak import FS_HZ, ModalPlant  # noqa: E402

@@ -61,6 +61,12 @@ def diagnosed(fleet, client, tmp_path_factory):
     return out, algid.batch(fleet, out, client, diagnose=True)
 
 
+def test_the_workers_import_the_algid_these_tests_run(client):
+    """Workers start with this process's ``sys.path``: a module that put the checkout's python/
+    (no compiled core there) ahead of the installed algid would break every worker."""
+    assert set(client.run(lambda: __import__("algid").__file__).values()) == {algid.__file__}
+
+
 def test_a_folder_of_good_malformed_and_empty_recordings(fleet, diagnosed):
     out, table = diagnosed
     assert table.attrs["counts"] == {"ok": 9, "failed": 3, "skipped": 0}
