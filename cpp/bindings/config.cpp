@@ -102,9 +102,10 @@ void bind_config_classes(py::module_& m) {
                      "weak form: subtract the regressor-noise term of the normal equations")
       .def_readwrite("joint_efficiency", &Cont::joint_efficiency,
                      "weak form: sigma = sqrt(diag(N^-1) / joint_efficiency) (overlap of the windows' information)")
-      .def_readwrite("long_window_s", &Cont::long_window_s,
-                     "weak form: length of a second, longer set of windows with a joint sum of its own [s] (each "
-                     "parameter reported from the joint sum with the smaller uncertainty); -1: twice window_s, 0: none")
+      .def_readwrite(
+          "long_window_s", &Cont::long_window_s,
+          "weak form: length of a second, longer set of windows with a joint sum of its own [s] (each "
+          "parameter reported from the joint sum with the smaller uncertainty); -1: three times window_s, 0: none")
       .def_readwrite("gls", &Cont::gls, "weak form: rows weighted by their noise covariance (False: unweighted)")
       .def_readwrite("joint", &Cont::joint,
                      "weak form: estimate from the summed window normal equations (False: block medians)")

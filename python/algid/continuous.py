@@ -200,7 +200,7 @@ class ContinuousEstimator(Displayed, _ScheduleView, PackedParameters):
     long_window_s : float
         Weak form: length [s] of a second, longer set of windows with a joint sum of its own;
         each parameter is reported from the joint sum (short or long windows) with the smaller
-        uncertainty; -1 (default): twice ``window_s``; 0: none.
+        uncertainty; -1 (default): three times ``window_s``; 0: none.
     horizon_s : float
         Forgetting time constant of the block mean [s]; 0 = none (default).
     band_hz : float

@@ -45,10 +45,10 @@ waits for the running estimate, 0.41-0.48 s) (:data:`RIG_ESTIMATOR_OPTIONS`). Ta
 * 40 dB, 3 seeds: all estimates within 1 % from 0.48-0.71 s on, largest error after 0.5 s
   0.7-1.8 % (the dampings; with the loop's signals even a least-squares fit that knew the
   true velocities and positions would leave a one-sigma of 0.5-1.6 % on them at 0.5 s);
-  tracking peak after 1 s 1.06-1.11 %; the substitution disturbs the estimates by at most
+  tracking peak after 1 s 1.06-1.12 %; the substitution disturbs the estimates by at most
   0.48 %;
-* a wrong lag (5 ms told as 4 or 6 ms) still tracks (1.07-1.17 %) but the estimates end
-  12-18 % off.
+* a wrong lag (5 ms told as 4 or 6 ms) still tracks (1.07-1.18 %) but the estimates end
+  12-17 % off.
 
 **Noise** (``--noise-db``). The SNR is meant on the accelerations the estimator actually
 gets. The simulator has to fix a closed loop's noise level before the run, from the

@@ -66,7 +66,7 @@ forces alone (:class:`LagEstimator`). Without lag the force jumps at the samples
 sample reads the mean of the one-sided limits, ``w_k = (u_{k-1} + u_k) / 2``, which (H5)
 would take for a lag of about ``h / ln 2``; the estimator therefore reports no lag when
 that model leaves the smaller residual. The smooth samples need ``tau`` well: Table 1's loop
-behind 5 ms of lag, told 4 or 6 ms, gets estimates 12-18 % off (the demo's rig loop, whose
+behind 5 ms of lag, told 4 or 6 ms, gets estimates 12-17 % off (the demo's rig loop, whose
 position feedback still tracks within 1.2 % of the stroke).
 """
 

@@ -549,7 +549,7 @@ void joint_solve_is_spread() {
   CHECK(moved >= checked * (Est::kParams - 1));
 }
 
-// Long windows (`long_window_s`, default twice window_s): a second weak-form engine with a
+// Long windows (`long_window_s`, default three times window_s): a second weak-form engine with a
 // joint sum of its own, each parameter reported from the sum with the smaller variance. Without
 // them (0) nothing is reported from a long sum; with them, on a 40 s record at 40 dB, some
 // parameters are, each with a sigma no larger than the short sum alone gives it (the short
@@ -564,7 +564,7 @@ void long_windows_report_where_more_certain() {
   auto short_only = std::make_unique<Est>(none);
   CHECK(short_only->long_windows() == nullptr);
   CHECK(both->long_windows() != nullptr);
-  CHECK(both->long_windows()->window_samples() == 2 * both->weak_form()->window_samples());
+  CHECK(both->long_windows()->window_samples() == 3 * both->weak_form()->window_samples());
   const Record<N> rec(24, 40000, -1, 0, 1.0, 40.0);
   for (long s = 0; s < rec.T; ++s) {
     both->update(rec.a(s), rec.u(s));

@@ -133,7 +133,7 @@ struct ContinuousConfig {
   /// joint sum of its own, with as many test functions as the others (so their band is
   /// band_hz window_s / long_window_s); each parameter is reported from the joint sum (short or
   /// long windows) with the smaller uncertainty (long windows resolve the resonances more
-  /// finely: closer to the Cramer-Rao bound on the dampings); -1: twice window_s; 0: none
+  /// finely: closer to the Cramer-Rao bound on the dampings); -1: three times window_s; 0: none
   Scalar long_window_s = Scalar(-1);
   Scalar horizon_s = Scalar(0);                   ///< forgetting time constant of the block mean [s]; 0: none
   Scalar prefilter_hz = Scalar(-1);  ///< low-pass on accelerations and forces alike [Hz]; -1: 0.05 / dt, 0: off
@@ -219,7 +219,7 @@ inline const char* to_string(ContinuousConfigError e) noexcept {
     case ContinuousConfigError::kBadBand: return to_string(WeakFormConfigError::kBadBand);
     case ContinuousConfigError::kBadNoise: return to_string(WeakFormConfigError::kBadNoise);
     case ContinuousConfigError::kBadLongWindow:
-      return "long_window_s must be -1 (twice window_s), 0 (none) or a window of at least 32 samples that holds "
+      return "long_window_s must be -1 (three times window_s), 0 (none) or a window of at least 32 samples that holds "
              "the band (2 band_hz long_window_s + 1 <= its samples / 2)";
   }
   return "unknown";
@@ -618,7 +618,7 @@ class ContinuousEstimator {
   }
 
   static Scalar resolved_long_window(const Config& c) noexcept {
-    return c.long_window_s == Scalar(-1) ? Scalar(2) * resolved_window(c) : c.long_window_s;
+    return c.long_window_s == Scalar(-1) ? Scalar(3) * resolved_window(c) : c.long_window_s;
   }
 
   // The long windows: as the tracks' windows, resolved_long_window(c) long, with as many test
