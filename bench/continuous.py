@@ -405,7 +405,10 @@ def main() -> None:
         return
     for item in args.set:
         key, _, value = item.partition("=")
-        OPTIONS[key] = float(value)
+        try:
+            OPTIONS[key] = float(value)
+        except ValueError:
+            ap.error(f"--set {item}: expected OPTION=NUMBER, e.g. long_window_s=2")
     snrs = [None if s == "none" else float(s) for s in args.snr]
     t_start = time.perf_counter()
     results = {
