@@ -8,8 +8,9 @@ import pytest
 
 import algid
 from algid.chain import TABLE1, Chain
+from algid.identification.motion import Motion, band_limited_motion, chain_forces
 from algid.identification.plan import make_plan, natural_frequencies_hz
-from algid.identification.surrogate import Motion, band_limited_motion, chain_forces, replicate_signals
+from algid.identification.surrogate import replicate_signals
 from algid.identification.verdicts import judge
 from algid.noise import analyse
 from algid.recording import Recording, second_derivative
@@ -101,7 +102,12 @@ def test_plan_single_window_for_short_clean_records_else_continuous():
     noisy = analyse(u, a + 0.01 * np.std(a) * rng.standard_normal(a.shape), DT)
     assert "too short" in make_plan(noisy, 0.2).reason
     plan = make_plan(noisy, 10.0, f_natural=TABLE1.natural_frequencies_hz())
-    assert plan.estimator == "continuous" and plan.window_s == pytest.approx(0.5 / 2.2, rel=0.02)
+    # weak-form windows (measured accelerations): one period of the lowest mode
+    assert plan.estimator == "continuous" and plan.window_s == pytest.approx(1.0 / 2.2, rel=0.02)
+    assert plan.method == "weak_form" and plan.window_basis.startswith("one period of the lowest natural")
+    derived = analyse(u, np.cumsum(np.cumsum(a, axis=0), axis=0) * DT**2, DT, "displacement")
+    plan = make_plan(derived, 10.0, f_natural=TABLE1.natural_frequencies_hz())  # the algebraic windows' guess
+    assert plan.method == "algebraic" and plan.window_s == pytest.approx(0.5 / 2.2, rel=0.02)
     assert make_plan(noisy, 10.0, "window").estimator == "window"
     with pytest.raises(ValueError, match="estimator"):
         make_plan(noisy, 10.0, "kalman")

@@ -16,4 +16,6 @@ void bind_chains(py::module_& m, bool local, std::integer_sequence<int, Ns...>) 
 
 void bind_chain_classes(py::module_& m, bool local) { bind_chains(m, local, FixedSizes{}); }
 
+py::tuple chain_sizes() { return sizes_tuple(FixedSizes{}); }
+
 }  // namespace algid_bindings

@@ -4,8 +4,7 @@
 // helpers in bind_estimators.hpp (chains.cpp, continuous.cpp), the configuration structs from
 // config.cpp (in algid._core only; the other modules use them through pybind11's registry).
 // algid/estimator.py imports the widest module the CPU runs.
-#include "bind_estimators.hpp"
-
+// It includes neither the estimators nor the shared helpers: what it binds itself is small.
 #include <algid/detail/cpu.hpp>
 
 #include <pybind11/pybind11.h>
@@ -18,6 +17,7 @@ namespace algid_bindings {
 void bind_chain_classes(py::module_& m, bool module_local);
 void bind_continuous_classes(py::module_& m, bool module_local);
 void bind_config_classes(py::module_& m);
+py::tuple chain_sizes();
 }  // namespace algid_bindings
 
 #ifndef ALGID_MODULE_NAME
@@ -41,6 +41,6 @@ PYBIND11_MODULE(ALGID_MODULE_NAME, m) {
 #endif
   algid_bindings::bind_chain_classes(m, module_local);
   algid_bindings::bind_continuous_classes(m, module_local);
-  m.attr("SIZES") = algid_bindings::sizes_tuple(algid_bindings::FixedSizes{});
+  m.attr("SIZES") = algid_bindings::chain_sizes();
   m.attr("ISA") = ALGID_MODULE_ISA;
 }

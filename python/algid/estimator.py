@@ -76,9 +76,10 @@ ISA: str = str(_chains.ISA)
 
 def estimator_class(kind: str, n: int, core=None):
     """The C++ class of a ``kind`` ("Chain" or "Continuous") estimator of n DOF in ``core``
-    (default: :func:`chain_core`): the fixed-size one when n is in :data:`SIZES`, else the
-    run-time sized one."""
-    return getattr(core or _chains, f"{kind}Estimator{n}" if n in SIZES else f"{kind}EstimatorDynamic")
+    (default: :func:`chain_core`): the fixed-size one where the module has one (chain
+    estimators of the sizes in :data:`SIZES`), else the run-time sized one."""
+    core = core or _chains
+    return getattr(core, f"{kind}Estimator{n}", None) or getattr(core, f"{kind}EstimatorDynamic")
 
 
 def config_fields(config) -> list[str]:

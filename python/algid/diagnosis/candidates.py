@@ -384,7 +384,7 @@ def _fit_grid(
     P = ctx.P
 
     def run(gr):
-        return cross_validate_grid(P, lambda g: window_stats(P, build(g)), gr)
+        return cross_validate_grid(P, lambda g, scoring: window_stats(P, build(g), scoring), gr)
 
     cv = run(grid)
     idx = np.r_[cv.extra["g_index_folds"], cv.extra["g_index"]]

@@ -86,8 +86,10 @@ class WindowStats:
         )
 
 
-def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
-    """Detrend and accumulate the per-window Grams of a stacked model."""
+def window_stats(P: Prepared, specs: list[EqSpec], scoring: bool = True) -> WindowStats:
+    """Detrend and accumulate the per-window Grams of a stacked model; without ``scoring``
+    only what a fit needs (``G``: the band-projected blocks, which cost two FFTs of every
+    column, are left out unless the fit itself is in band)."""
     q = 0 if specs[0].E is None else specs[0].E.shape[1]
     sizes = [s.X.shape[1] for s in specs]
     Ptot = sum(sizes) + q
@@ -97,7 +99,7 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
         off += p
     shared = slice(off, off + q)
     S = N_SUB
-    band = not P.full_band
+    band = not P.full_band and (scoring or P.fit_band)
 
     def sub(Z):  # (nw, L, c) -> (nw, S, L/S, c)
         return Z.reshape(P.nw, S, P.L // S, Z.shape[-1])
@@ -116,7 +118,7 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
         rest = np.concatenate(([s.E] if q else []) + [s.y[:, None]], axis=1) * s.w
         Zr_w = detrend(P, rest)  # (nw, L, q+1)
         Zr = sub(Zr_w)  # (nw, S, L/S, q+1)
-        cached = P._cache.get((s.key, s.w)) if s.key is not None else None
+        cached = P._cache.get((s.key, s.w, band)) if s.key is not None else None
         if cached is None:
             Zx_w = detrend(P, s.X * s.w)
             Zx = sub(Zx_w)
@@ -128,7 +130,7 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
                 np.matmul(Zxb.swapaxes(-1, -2), Zxb) if band else None,
             )
             if s.key is not None:
-                P._cache[(s.key, s.w)] = cached
+                P._cache[(s.key, s.w, band)] = cached
         Zx, gxx, Zxb, gxxb = cached
         p = sizes[k]
         ix = np.r_[np.arange(slices[k].start, slices[k].stop), np.arange(shared.start, shared.stop), Ptot]
@@ -146,7 +148,7 @@ def window_stats(P: Prepared, specs: list[EqSpec]) -> WindowStats:
         shared=shared,
         eqs=[s.e for s in specs],
         blocks=blocks,
-        blocks_band=blocks_band if band else blocks,
+        blocks_band=blocks_band if band else (blocks if P.full_band else []),
         index=index,
     )
 
@@ -232,9 +234,10 @@ def _first_min(new: float, old: float) -> bool:
     return bool(np.isnan(new) or new < old)
 
 
-def cross_validate_grid(P: Prepared, stats_of: Callable[[float], WindowStats], grid: np.ndarray) -> CVResult:
+def cross_validate_grid(P: Prepared, stats_of: Callable[[float, bool], WindowStats], grid: np.ndarray) -> CVResult:
     """Cross-validation of a model with one nonlinear parameter known on ``grid``;
-    ``stats_of(g)`` gives the model's :class:`WindowStats` at grid value ``g``.
+    ``stats_of(g, scoring)`` gives the model's :class:`WindowStats` at grid value ``g``
+    (``scoring``: :func:`window_stats`).
 
     For every fold the grid value is chosen by the (full-band) error on the training
     windows, as the fit itself (refined
@@ -242,9 +245,9 @@ def cross_validate_grid(P: Prepared, stats_of: Callable[[float], WindowStats], g
     and the withheld windows are scored at the chosen grid point. The all-window fit is
     reported at the best grid point (``extra["g"]`` refined, ``extra["g_index"]``).
 
-    The grid is walked once and only the statistics of the grid points some fold (or the
-    all-window fit) currently chooses are kept: memory of at most ``K + 1`` models' Grams,
-    whatever the grid's size.
+    The grid is walked once with the fitting Grams alone; the scoring statistics are built
+    for the grid points the folds and the all-window fit choose: memory of at most ``K + 1``
+    models' Grams, whatever the grid's size.
     """
     K = P.nfolds
     ng = len(grid)
@@ -255,9 +258,8 @@ def cross_validate_grid(P: Prepared, stats_of: Callable[[float], WindowStats], g
     tr = np.zeros((K, ng))
     pick = [-1] * (K + 1)  # the running choice of every fold, then of the all-window fit
     picked_theta: list = [None] * K
-    kept: dict[int, WindowStats] = {}
     for g in range(ng):
-        st = stats_of(grid[g])
+        st = stats_of(grid[g], False)
         Gsum = st.G.sum(axis=0)
         fit_all[g] = sse(Gsum, solve_gram(Gsum))
         Gtr = np.stack([Gsum - st.G[masks[k]].sum(axis=0) for k in range(K)])
@@ -268,7 +270,7 @@ def cross_validate_grid(P: Prepared, stats_of: Callable[[float], WindowStats], g
                 pick[k], picked_theta[k] = g, ths[k]
         if pick[K] < 0 or _first_min(fit_all[g], fit_all[pick[K]]):
             pick[K] = g
-        kept = {i: kept.get(i, st) for i in set(pick)}
+    kept = {i: stats_of(grid[i], True) for i in set(pick)}
     best = pick[K]
     res = cross_validate(P, kept[best])
     test = np.zeros(kept[best].sub_shape)

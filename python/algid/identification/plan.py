@@ -11,22 +11,23 @@ Rules (every threshold named below):
   of at most :data:`SHORT_S`, and for any record too short to give the continuous estimator
   :data:`MIN_WINDOW_RESULTS` window results of at least :data:`SHORTEN_MAX` of the window
   its time scale asks for; otherwise the continuous estimator.
-* **Window length** of the continuous estimator: a first guess, then the best of its
+* **Window length** of the continuous estimator. A first estimate of the chain
+  (:func:`.motion.equation_error_fit`) with a natural frequency inside the signal band sets
+  it to :data:`MODE_PERIODS` periods of the lowest one (a window must see the slowest mode
+  swing to tell its spring from its mass; longer windows integrate more noise): one period
+  for the weak-form windows, whose long windows (three times as long) join them; half a
+  period as the first guess of the algebraic windows, whose length is then the best of its
   multiples :data:`WINDOW_MULTIPLES` by the error the bootstrap measures
-  (:func:`algid.identification.engine.identify`). The guess is half a period of the
-  lowest natural frequency when a first estimate of the chain has one inside the signal
-  band (a window must see the slowest mode swing to tell its spring from its mass; longer
-  windows integrate more noise), otherwise one period of the force's median frequency (a
-  chain without springs, such as a positioning axis, has no mode; its windows must hold
-  whole moves). Clipped to at least :data:`MIN_WINDOW_SAMPLES` samples and at most the
-  record over :data:`MIN_WINDOW_RESULTS` / ``stagger``.
+  (:func:`.surrogate.select_window`). Without a mode in the band, one period of the force's
+  median frequency (a chain without springs, such as a positioning axis, has no mode; its
+  windows must hold whole moves). Clipped to at least :data:`MIN_WINDOW_SAMPLES` samples and
+  at most the record over :data:`MIN_WINDOW_RESULTS` / ``stagger``.
 * **Window results** (``method``): the weak-form windows (GLS over every test-function row,
   bias-compensated, joined by their summed normal equations; ``docs/continuous.md``) when
   the record carries measured accelerations, whose sensor noise is white as their weights
   and bias terms assume; the paper's algebraic windows behind the prefilter when the
   accelerations are derived from velocities or displacements, whose noise the
-  differentiation colours (positioning axis of ``bench/identify.py``, 1 um encoder: mass
-  within 0.04-0.06 % with algebraic windows, 0.3-1.1 % with weak-form ones).
+  differentiation colours (``docs/identify.md`` compares the two on a positioning axis).
 * **Prefilter** (the same low-pass on forces and accelerations, which leaves eq. 1
   unchanged): :data:`PREFILTER_MARGIN` times the top of the signal band or of the natural
   frequencies, whichever is higher; off when that is above :data:`PREFILTER_MAX` of the
@@ -53,7 +54,9 @@ MIN_WINDOW_SAMPLES = 48
 #: A window shortened below this fraction of its guess to give enough window results
 #: means the record is too short for the continuous estimator.
 SHORTEN_MAX = 0.5
-#: Multiples of the first guess of the window length that are tried.
+#: Window length in periods of the lowest natural frequency, per window method.
+MODE_PERIODS = {"weak_form": 1.0, "algebraic": 0.5}
+#: Multiples of the first guess of the algebraic windows' length that are tried.
 WINDOW_MULTIPLES = (0.5, 0.7, 1.0, 1.4, 2.0)
 #: A force whose median frequency is above this share of the Nyquist rate is broadband (white
 #: up to the sampling rate): its period says nothing of the chain's time scale.
@@ -124,12 +127,19 @@ def window_limits(nm: NoiseModel, duration_s: float) -> tuple[float, float]:
     return lo, max(lo, duration_s * STAGGER / MIN_WINDOW_RESULTS)
 
 
+def window_method(nm: NoiseModel) -> str:
+    """The continuous estimator's window results (module docstring)."""
+    return "weak_form" if nm.motion == "acceleration" else "algebraic"
+
+
 def window_length(nm: NoiseModel, duration_s: float, f_natural: np.ndarray) -> tuple[float, str]:
     """First guess of the continuous window length [s] and what set it (module docstring)."""
     fn = np.asarray(f_natural, dtype=float)
     fn = fn[np.isfinite(fn) & (fn > 2.0 / duration_s) & (fn <= nm.f_hi)]
     if fn.size:
-        f_ref, basis = 2.0 * float(fn.min()), f"half a period of the lowest natural frequency ({fn.min():.3g} Hz)"
+        periods = MODE_PERIODS[window_method(nm)]
+        what = "one period" if periods == 1.0 else ("half a period" if periods == 0.5 else f"{periods:g} periods")
+        f_ref, basis = float(fn.min()) / periods, f"{what} of the lowest natural frequency ({fn.min():.3g} Hz)"
     elif np.isfinite(nm.f_mid) and 0 < nm.f_mid < BROADBAND * nm.nyquist:
         f_ref, basis = nm.f_mid, f"one period of the force's median frequency ({nm.f_mid:.3g} Hz)"
     elif np.isfinite(nm.f_mid):
@@ -183,7 +193,7 @@ def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto", f_natu
         reason = f"{why} record: reseeded windows of the recording's time scale, aggregated"
     if estimator == "window":
         return Plan("window", reason, float("nan"), float("nan"), 1, "the whole record")
-    method = "weak_form" if nm.motion == "acceleration" else "algebraic"
+    method = window_method(nm)
     plan = Plan("continuous", reason, L, prefilter_hz(nm, f_natural), STAGGER, basis, method)
     if method == "weak_form" and nm.f_hi >= BROADBAND_BAND * nm.nyquist:
         # signal up to the Nyquist rate: fourth differences are signal, not noise

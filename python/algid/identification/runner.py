@@ -41,7 +41,12 @@ class Run:
     theta : (3n+1,) packed estimate; ``time_s`` (R,) history instants [s] (end of the data
     described); ``history`` (R, 3n+1); ``windows`` number of window results used
     (0 for the single window); ``spread`` (3n+1,) the window results' scatter, 1.4826 times
-    their median absolute deviation (NaN for the single window).
+    their median absolute deviation (NaN for the single window). Weak-form windows also give
+    their generalised least squares uncertainty: ``sigma`` (3n+1,) of the estimate,
+    ``history_sigma`` (R, 3n+1) of the history rows, and ``scatter`` (3n+1,), 1.4826 times the
+    median absolute deviation of the window results from the estimate in units of each
+    window's own standard deviation (about 1 when eq. 1 and white noise explain the windows);
+    NaN otherwise.
     """
 
     theta: np.ndarray
@@ -49,10 +54,17 @@ class Run:
     history: np.ndarray
     windows: int
     spread: np.ndarray = None
+    sigma: np.ndarray = None
+    history_sigma: np.ndarray = None
+    scatter: np.ndarray = None
 
     def __post_init__(self) -> None:
-        if self.spread is None:
-            self.spread = np.full(self.theta.shape, np.nan)
+        nan = np.full(self.theta.shape, np.nan)
+        self.spread = nan if self.spread is None else self.spread
+        self.sigma = nan if self.sigma is None else self.sigma
+        self.scatter = nan if self.scatter is None else self.scatter
+        if self.history_sigma is None:
+            self.history_sigma = np.full(self.history.shape, np.nan)
 
 
 def aggregate(results: np.ndarray) -> np.ndarray:
@@ -126,16 +138,27 @@ def run_continuous(a: np.ndarray, u: np.ndarray, dt: float, boundary: str, plan:
         return Run(theta=nan, time_s=np.array([T * dt]), history=nan[None, :], windows=0)
     spread = 1.4826 * _column_median(np.abs(W - _column_median(W)))
     if weak:
-        theta = np.asarray(est.estimate, float)
+        theta, sigma = np.asarray(est.estimate, float), np.asarray(est.sigma, float)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            z = (W - theta) / np.sqrt(out["window_variance"][keep])
+        scatter = 1.4826 * _column_median(np.abs(z))
         # rows where every parameter finite at the end is (they join one by one)
         final = np.isfinite(theta)
         rows = np.all(np.isfinite(out["estimate"][:, final]), axis=1) if history else np.zeros(0, bool)
-        if not rows.any():
-            return Run(
-                theta=theta, time_s=np.array([T * dt]), history=theta[None, :], windows=int(W.shape[0]), spread=spread
-            )
-        hist, at_s = out["estimate"][rows], out["time_s"][rows]
-        return Run(theta=theta, time_s=at_s, history=hist, windows=int(W.shape[0]), spread=spread)
+        if rows.any():
+            at_s, hist, hist_sigma = out["time_s"][rows], out["estimate"][rows], out["sigma"][rows]
+        else:  # no history asked for, or none complete: the final estimate alone
+            at_s, hist, hist_sigma = np.array([T * dt]), theta[None, :], sigma[None, :]
+        return Run(
+            theta=theta,
+            time_s=at_s,
+            history=hist,
+            windows=int(W.shape[0]),
+            spread=spread,
+            sigma=sigma,
+            history_sigma=hist_sigma,
+            scatter=scatter,
+        )
     rows = min(HISTORY_ROWS, W.shape[0]) if history else 1
     stops = np.unique(np.linspace(1, W.shape[0], rows).round().astype(int))
     hist = np.array([aggregate(W[:s]) for s in stops])

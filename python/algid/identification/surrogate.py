@@ -3,14 +3,8 @@
 A surrogate is a recording of the *identified* chain with the recording's own motion and
 sensor noise, so that the estimator's error on it is known:
 
-1. **Motion.** The recorded motion, band-limited to ``[0, f_cut]`` in the frequency domain,
-   and its exact derivatives or integrals there: ``x_s``, ``v_s = x_s'``, ``a_s = x_s''``,
-   consistent with each other to rounding. From displacements: the line through the first
-   and last sample is taken out before the FFT (so that the periodic extension has no
-   jump) and added back (it has no acceleration); from velocities likewise, the line and
-   the rest's mean integrated exactly. From accelerations: the displacement is
-   the double integral ``-A / w^2`` on the bins above ``2 / duration`` (below, the
-   integral of noise would wander off).
+1. **Motion.** The recorded motion, band-limited to ``[0, f_cut]``, and its exact derivatives
+   or integrals there (:func:`.motion.band_limited_motion`).
 2. **Forces** of the identified chain along that motion, eq. 1 read from left to right:
    ``u_s = M a_s + C v_s + K x_s``. The motion is prescribed, so no simulation runs and an
    unstable or inadmissible estimate gives a surrogate all the same.
@@ -41,19 +35,25 @@ import os
 import warnings
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
 
-from ..chain import stiffness_matrix
 from ..noise import NoiseModel
 from ..recording import derivative, second_derivative
-from .plan import Plan
-from .runner import run_plan
+from .motion import Motion, band_limited_motion, chain_forces
+from .plan import Plan, natural_frequencies_hz, window_candidates, window_limits
+from .runner import Run, run_plan
 
 #: Replicates of the bootstrap.
 REPLICATES = 8
+#: Replicates per candidate window when the algebraic windows' length is chosen.
+SELECT_REPLICATES = 4
+#: When the best window is the longest (shortest) tried, longer (shorter) ones by this
+#: factor are tried, at most this many times, while they score better.
+EXTEND_FACTOR = 1.4
+EXTEND_STEPS = 4
 
 
 #: Threads of :func:`parallel_map`; None: one per core (see :func:`threads`).
@@ -89,72 +89,6 @@ def parallel_map(fn: Callable, items: list, progress: Callable[[int], None] | No
             if progress is not None:
                 progress(done)
         return [f.result() for f in futures]
-
-
-@dataclass
-class Motion:
-    """Band-limited motion (T, n) each: displacement [m], velocity [m/s], acceleration [m/s^2]."""
-
-    x: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
-
-
-def _lowpass_gain(f: np.ndarray, f_cut: float) -> np.ndarray:
-    """1 up to ``f_cut``, a raised-cosine roll-off to 0 at ``1.25 f_cut`` (no ringing)."""
-    g = np.ones_like(f)
-    if f_cut >= f[-1]:
-        return g
-    s = np.clip((f - f_cut) / (0.25 * f_cut), 0.0, 1.0)
-    return 0.5 * (1.0 + np.cos(np.pi * s))
-
-
-def band_limited_motion(y: np.ndarray, kind: str, dt: float, f_cut: float) -> Motion:
-    """Consistent ``x, v, a`` from the recorded motion ``y`` (T, n) (module docstring, 1)."""
-    y = np.asarray(y, dtype=float)
-    T = y.shape[0]
-    t = np.arange(T) * dt
-    f = np.fft.rfftfreq(T, dt)
-    w = 2 * np.pi * f
-    g = _lowpass_gain(f, f_cut)[:, None]
-    if kind == "displacement":
-        slope = (y[-1] - y[0]) / (t[-1] - t[0])
-        line = y[0] + t[:, None] * slope
-        Y = np.fft.rfft(y - line, axis=0) * g
-        x = line + np.fft.irfft(Y, T, axis=0)
-        v = slope + np.fft.irfft(1j * w[:, None] * Y, T, axis=0)
-        a = np.fft.irfft(-(w**2)[:, None] * Y, T, axis=0)
-        return Motion(x, v, a)
-    if kind == "velocity":  # the line through the ends and the periodic rest's mean, integrated exactly
-        slope = (y[-1] - y[0]) / (t[-1] - t[0])
-        Y = np.fft.rfft(y - y[0] - t[:, None] * slope, axis=0) * g
-        v0 = y[0] + Y[0].real / T
-        Y[0] = 0.0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            X = np.where(w[:, None] > 0, Y / (1j * w)[:, None], 0.0)
-        v = v0 + t[:, None] * slope + np.fft.irfft(Y, T, axis=0)
-        x = t[:, None] * v0 + 0.5 * t[:, None] ** 2 * slope + np.fft.irfft(X, T, axis=0)
-        a = slope + np.fft.irfft(1j * w[:, None] * Y, T, axis=0)
-        return Motion(x, v, a)
-    A = np.fft.rfft(y - y.mean(axis=0), axis=0) * g
-    keep = (f >= 2.0 / (T * dt))[:, None]
-    A = np.where(keep, A, 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        X = np.where(keep, -A / (w**2)[:, None], 0.0)
-        V = np.where(keep, A / (1j * w)[:, None], 0.0)
-    return Motion(np.fft.irfft(X, T, axis=0), np.fft.irfft(V, T, axis=0), np.fft.irfft(A, T, axis=0))
-
-
-def chain_forces(theta: np.ndarray, n: int, boundary: str, mo: Motion) -> np.ndarray:
-    """``M a + C v + K x`` (T, n) [N] of packed parameters (NaN counts as 0)."""
-    th = np.nan_to_num(np.asarray(theta, dtype=float))
-    m, c, k = th[:n], th[n : 2 * n], th[2 * n :].copy()
-    if n == 1 and boundary == "fixed":
-        k = np.array([k[0], 0.0])
-    if boundary == "free":
-        k[-1] = 0.0
-    K = stiffness_matrix(k)
-    return mo.a * m + mo.v * c + mo.x @ K.T
 
 
 def replicate_signals(
@@ -216,7 +150,8 @@ def bootstrap(
     history: bool = True,
     missing: np.ndarray | None = None,
 ) -> Bootstrap:
-    """Run ``plan`` on ``replicates`` surrogates of the chain ``theta`` (module docstring).
+    """Run ``plan`` on ``replicates`` surrogates of the chain ``theta`` (module docstring);
+    with none, on the noise-free surrogate alone (``method_bias``; the rest NaN).
 
     ``motion_rec``: the recorded motion (T, n) of kind ``nm.motion``; ``f_cut``: band edge of
     the surrogate motion [Hz]; ``forced``: (n,) DOF that carry a force (the others keep a
@@ -243,6 +178,9 @@ def bootstrap(
         one, list(range(-1, replicates)), None if progress is None else (lambda k: progress(k / (replicates + 1)))
     )
     theta0 = runs[0].theta
+    if replicates == 0:  # the noise-free surrogate alone: the method's own error
+        nan = np.full(theta0.shape, np.nan)
+        return Bootstrap(nan, nan, theta0 - theta, nan, nan[None, :], np.zeros((0, theta0.size)), mo)
     thetas, hists = [r.theta for r in runs[1:]], [r.history for r in runs[1:]]
     R = np.array(thetas)
     rows = min(h.shape[0] for h in hists)
@@ -256,3 +194,86 @@ def bootstrap(
     return Bootstrap(
         sigma=sigma, bias=bias, method_bias=theta0 - theta, spread=spread, history_sigma=hsig, replicates=R, motion=mo
     )
+
+
+def surrogate_band(nm: NoiseModel, theta: np.ndarray, n: int, boundary: str) -> float:
+    """Band edge [Hz] of the surrogate motion: the signal band, widened to hold every natural
+    frequency of the estimate with a margin."""
+    return max([nm.f_hi] + [1.25 * float(f) for f in natural_frequencies_hz(theta, n, boundary)])
+
+
+def select_window(
+    a: np.ndarray,
+    u: np.ndarray,
+    motion_rec: np.ndarray,
+    nm: NoiseModel,
+    plan: Plan,
+    boundary: str,
+    forced: np.ndarray,
+    duration: float,
+    seed: int,
+    missing: np.ndarray | None,
+    progress: Callable[[float], None] | None = None,
+) -> tuple[Plan, Run]:
+    """The algebraic windows' length: every candidate of ``plan`` (:func:`.plan.window_candidates`)
+    run on the record and scored by the root-mean-square error the bootstrap measures on
+    :data:`SELECT_REPLICATES` surrogates (in shares of the force, mean over the parameters);
+    beyond the ends of the range while that improves. Longer windows average more but
+    integrate more of the noise the differentiation coloured (their bias grows): the record
+    decides. Returns the best plan and its run."""
+    from .verdicts import scales
+
+    n = u.shape[1]
+    cands = window_candidates(plan, nm, duration)
+
+    def score(cand: Plan) -> tuple[float, Run]:
+        run = run_plan(a, u, nm.dt, boundary, cand, missing=missing)
+        f_cut = surrogate_band(nm, run.theta, n, boundary)
+        boot = bootstrap(
+            run.theta,
+            motion_rec,
+            nm,
+            cand,
+            boundary,
+            f_cut,
+            forced,
+            SELECT_REPLICATES,
+            seed,
+            history=False,
+            missing=missing,
+        )
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: parameters not estimated
+            rmse = np.sqrt(np.nanmean((boot.replicates - run.theta) ** 2, axis=0))
+        share = rmse * scales(n, boundary, boot.motion, u, forced)[0]
+        return (float(np.nanmean(share)) if np.any(np.isfinite(share)) else np.inf), run
+
+    def tick() -> None:
+        if progress is not None:
+            progress(min(len(scored) / (len(cands) + EXTEND_STEPS), 1.0))
+
+    scored: list[tuple[float, Run]] = []
+    for cand in cands:
+        scored.append(score(cand))
+        tick()
+    best = min(range(len(cands)), key=lambda q: scored[q][0])
+    lengths = sorted(c.window_s for c in cands)
+    lo, hi = window_limits(nm, duration)
+    step = None
+    if cands[best].window_s == lengths[-1]:
+        step = EXTEND_FACTOR
+    elif cands[best].window_s == lengths[0]:
+        step = 1.0 / EXTEND_FACTOR
+    for _ in range(EXTEND_STEPS if step else 0):  # the best is at an end of the range: look beyond
+        L = float(np.clip(cands[best].window_s * step, lo, hi))
+        if abs(L / cands[best].window_s - 1.0) < 0.05:
+            break
+        cand = replace(cands[best], window_s=L, window_basis=f"{L / plan.window_s:.3g} x ({plan.window_basis})")
+        result = score(cand)
+        tick()
+        if not result[0] < scored[best][0]:
+            break
+        cands.append(cand)
+        scored.append(result)
+        best = len(cands) - 1
+    return cands[best], scored[best][1]

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..chain import dof_parameter_names, parameter_names, spring_deformation
 from ..noise import NoiseModel
-from .surrogate import Motion
+from .motion import Motion
 
 #: Uncertainty share above which a parameter is not determined by the record.
 UNDETERMINED = 0.2
