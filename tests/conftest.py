@@ -1,10 +1,14 @@
-"""Shared fixtures: paths to the repository and to the measured data sets."""
+"""Shared fixtures (paths to the repository and to the measured data sets), and the order of
+the run: the C++ tests go last, and the builds they need start in the background as soon as
+the tests are collected, so that they compile while the Python tests run (tests/cpp_builds.py)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
+
+import cpp_builds
 
 REPO = Path(__file__).resolve().parents[1]
 #: Real measured data live beside the checkout (../shared/data), never in the repository.
@@ -21,3 +25,15 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"measured data not present at {SHARED_DATA}")
     return SHARED_DATA
+
+
+def pytest_collection_modifyitems(session, config, items) -> None:
+    """The C++ tests last, their builds started now (module docstring)."""
+    cpp = [item for item in items if Path(str(item.fspath)).name == "test_cpp.py"]
+    if not cpp:
+        return
+    for fixture, build in cpp_builds.FIXTURES.items():
+        if any(fixture in item.fixturenames for item in cpp):
+            cpp_builds.start(build)
+    rest = [item for item in items if Path(str(item.fspath)).name != "test_cpp.py"]
+    items[:] = rest + cpp

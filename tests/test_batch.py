@@ -61,12 +61,14 @@ def diagnosed(fleet, client, tmp_path_factory):
     return out, algid.batch(fleet, out, client, diagnose=True)
 
 
+@pytest.mark.slow
 def test_the_workers_import_the_algid_these_tests_run(client):
     """Workers start with this process's ``sys.path``: a module that put the checkout's python/
     (no compiled core there) ahead of the installed algid would break every worker."""
     assert set(client.run(lambda: __import__("algid").__file__).values()) == {algid.__file__}
 
 
+@pytest.mark.slow
 def test_a_folder_of_good_malformed_and_empty_recordings(fleet, diagnosed):
     out, table = diagnosed
     assert table.attrs["counts"] == {"ok": 9, "failed": 3, "skipped": 0}
@@ -83,6 +85,7 @@ def test_a_folder_of_good_malformed_and_empty_recordings(fleet, diagnosed):
 
 
 @pytest.mark.parametrize("rel", ["three/m01/rec0002.npz", "one/m00/rec0001.csv"])
+@pytest.mark.slow
 def test_rows_equal_identify_and_diagnose_run_one_by_one(fleet, diagnosed, tmp_path, rel):
     path = fleet / rel
     assert main(["identify", str(path), "--json", str(tmp_path / "i.json"), "--quiet"]) == 0
@@ -102,6 +105,7 @@ def test_rows_equal_identify_and_diagnose_run_one_by_one(fleet, diagnosed, tmp_p
     assert (json.loads(row["location"]), json.loads(row["params"])) == (diag["location"], diag["params"])
 
 
+@pytest.mark.slow
 def test_a_second_run_skips_every_recording_it_has(fleet, diagnosed, client):
     out, first = diagnosed
     again = algid.batch(fleet, out, client, diagnose=True)
@@ -174,7 +178,7 @@ def test_a_task_runs_the_bootstrap_on_its_own_thread(fleet, monkeypatch):
 
     monkeypatch.setattr(surrogate, "parallel_map", spy)
     good = sorted((fleet / "three").rglob("*.npz"))[0]
-    row = task.run_one(str(good), Options())
+    row = task.run_one(str(good), Options(estimator="window"))  # the single window's uncertainty: a bootstrap
     assert row["status"] == "ok" and callers == {threading.get_ident()}
     callers.clear()
     spy(lambda x: x, list(range(8)))  # outside a task: a pool of threads
@@ -192,6 +196,7 @@ def _parts(out: Path) -> list[Path]:
     return sorted((out / "results").glob("part-*.parquet"))
 
 
+@pytest.mark.slow
 def test_a_killed_batch_resumes_without_losing_or_repeating_a_row(fleet, diagnosed, client, tmp_path):
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "algid.cli", "batch", str(fleet), "--out", str(out), "--diagnose"]
@@ -224,6 +229,7 @@ def _profiled(dask_worker) -> tuple[bool, int, int, int]:
 
 
 @pytest.mark.parametrize("workers", [2, 1])
+@pytest.mark.slow
 def test_a_worker_killed_mid_batch_loses_and_repeats_nothing(fleet, tmp_path, workers):
     """With one worker its death also loses the scattered keys of the output, which the
     batch scatters again."""
@@ -307,6 +313,7 @@ def scheduler():
                 p.wait()
 
 
+@pytest.mark.slow
 def test_the_same_batch_through_a_scheduler_address(fleet, diagnosed, scheduler, tmp_path, capsys):
     out = tmp_path / "out"
     assert (

@@ -1,5 +1,6 @@
-"""Build the C++ tests with CMake and run each binary, in a Release build and again under
-AddressSanitizer and UndefinedBehaviorSanitizer: one pytest command runs everything.
+"""Build the C++ tests with CMake and run each binary, in a Release build (the fast tier) and
+again under AddressSanitizer and UndefinedBehaviorSanitizer (the slow tier): the builds are
+tests/cpp_builds.py's, started in the background while the Python tests run (conftest.py).
 
 Needs cmake and Eigen (system libeigen3-dev, or cmeel-eigen from the ``test`` extra).
 """
@@ -16,8 +17,9 @@ from pathlib import Path
 
 import pytest
 
+import cpp_builds
+
 REPO = Path(__file__).resolve().parents[1]
-BUILD = REPO / "build" / "cpp-tests"
 BINARIES = [
     "test_quadrature",
     "test_cramer",
@@ -30,48 +32,26 @@ BINARIES = [
     "test_continuous",
     "test_fuzz",
 ]
-# The same tests built for the wider instruction sets the wheel ships (x86-64 only; skipped
-# where the CPU cannot run them, exit code 77).
+# The same tests built for the wider instruction sets the wheel ships (x86-64 only; built for
+# the levels this CPU runs, skipped otherwise).
 WIDE_BINARIES = [f"{name}_{level}" for level in ("v3", "v4") for name in ("test_lanes", "test_sizes")]
 
 
-SANITIZED_BUILD = REPO / "build" / "cpp-tests-sanitized"
-
-
-def _runnable_levels() -> list[str]:
-    """The wide instruction-set levels (v3, v4) this CPU runs: the test binaries are built for
-    those only (a binary this CPU cannot run would be compiled to be skipped)."""
-    from algid import _core
-
-    return [level for level in ("v3", "v4") if _core.cpu_supports(f"x86-64-{level}")]
-
-
-def _configure_and_build(build: Path, *options: str) -> Path:
-    cmake = shutil.which("cmake")
-    if cmake is None:
-        pytest.fail("cmake not found: install the test extra (pip install '.[test]')")
-    cmd = [cmake, "-S", str(REPO), "-B", str(build), "-DALGID_BUILD_TESTS=ON", f"-DPython_EXECUTABLE={sys.executable}"]
-    cmd += [f"-DALGID_TEST_ISA_LEVELS={';'.join(_runnable_levels())}", *options]
-    if shutil.which("ninja") and not (build / "CMakeCache.txt").exists():
-        cmd += ["-G", "Ninja"]
-    for step in (cmd, [cmake, "--build", str(build), "-j", str(os.cpu_count() or 2)]):
-        proc = subprocess.run(step, capture_output=True, text=True)
-        if proc.returncode != 0:
-            pytest.fail(f"{' '.join(step[:3])} failed:\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}")
-    return build
+def _built(name: str) -> Path:
+    try:
+        return cpp_builds.wait(name)
+    except cpp_builds.BuildError as err:
+        pytest.fail(str(err))
 
 
 @pytest.fixture(scope="session")
 def cpp_build() -> Path:
-    return _configure_and_build(BUILD, "-DCMAKE_BUILD_TYPE=Release")
+    return _built("release")
 
 
 @pytest.fixture(scope="session")
 def sanitized_build() -> Path:
-    """The same tests under AddressSanitizer and UndefinedBehaviorSanitizer, in a Debug build
-    (Eigen's and the library's assertions on) optimised to -O1 (tests/cpp/CMakeLists.txt says
-    which checks and why)."""
-    return _configure_and_build(SANITIZED_BUILD, "-DCMAKE_BUILD_TYPE=Debug", "-DALGID_SANITIZE=ON")
+    return _built("sanitized")
 
 
 def _binary(build: Path, name: str) -> Path | None:
@@ -118,8 +98,8 @@ def test_cpp_binary(cpp_build: Path, name: str) -> None:
 
 @pytest.fixture(scope="session")
 def sanitized_runs(sanitized_build: Path) -> dict[str, subprocess.CompletedProcess]:
-    """Every sanitized binary run once, as many at a time as there are cores (they are slow:
-    test_continuous takes about 3 minutes under the sanitizers), the longest first."""
+    """Every sanitized binary run once, as many at a time as there are cores, the longest
+    (test_continuous) first."""
     names = sorted(BINARIES + WIDE_BINARIES, key=lambda name: name != "test_continuous")
     exes = {name: exe for name in names if (exe := _binary(sanitized_build, name)) is not None}
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
@@ -128,6 +108,7 @@ def sanitized_runs(sanitized_build: Path) -> dict[str, subprocess.CompletedProce
 
 
 @pytest.mark.parametrize("name", BINARIES + WIDE_BINARIES)
+@pytest.mark.slow
 def test_cpp_binary_sanitized(sanitized_build: Path, sanitized_runs: dict, name: str) -> None:
     """Every C++ test again under ASan + UBSan: a sanitizer report aborts the binary (non-zero exit)."""
     _locate(sanitized_build, name)
@@ -138,6 +119,7 @@ def test_cpp_binary_sanitized(sanitized_build: Path, sanitized_runs: dict, name:
     ("mode", "report"),
     [("heap-overflow", "AddressSanitizer: heap-buffer-overflow"), ("signed-overflow", "runtime error: signed integer")],
 )
+@pytest.mark.slow
 def test_sanitizers_catch_the_negative_control(sanitized_build: Path, mode: str, report: str) -> None:
     exe = _binary(sanitized_build, "sanitizer_control")
     assert exe is not None, "sanitizer_control was not built"

@@ -63,10 +63,20 @@ def test_gram_blocks_are_the_stacked_matrices(band_hz):
         np.testing.assert_allclose(st.G, full.sum(axis=(1, 2)), rtol=1e-12)
 
 
+@pytest.mark.parametrize("band_hz", [None, 100.0])
+def test_the_fitting_grams_need_no_scoring_blocks(band_hz):
+    """window_stats without scoring gives the same fitting Grams, and leaves out the
+    band-projected blocks unless the band is the whole spectrum (where they are the blocks)."""
+    P, specs = _stacked_model(1, band_hz)
+    full, fit_only = window_stats(P, specs(0.7)), window_stats(P, specs(0.7), scoring=False)
+    np.testing.assert_array_equal(full.G, fit_only.G)
+    assert (fit_only.blocks_band is fit_only.blocks) if band_hz is None else fit_only.blocks_band == []
+
+
 def test_one_pass_grid_search_is_the_all_at_once_search():
     P, specs = _stacked_model(3, 100.0)
     grid = np.geomspace(0.1, 10.0, 17)
-    res = cross_validate_grid(P, lambda g: window_stats(P, specs(g)), grid)
+    res = cross_validate_grid(P, lambda g, scoring: window_stats(P, specs(g), scoring), grid)
     stats = [window_stats(P, specs(g)) for g in grid]  # every grid point at once: the reference
     Gsum = np.array([s.G.sum(axis=0) for s in stats])
     for k in range(P.nfolds):
@@ -95,6 +105,7 @@ def _peak_mb(duration_s: float) -> tuple[float, float]:
         tracemalloc.stop()
 
 
+@pytest.mark.slow
 def test_diagnose_memory_grows_with_the_record_not_faster():
     (p1, d1), (p2, d2) = _peak_mb(8.0), _peak_mb(24.0)
     per_mb = (p2 - p1) / (d2 - d1)

@@ -91,6 +91,7 @@ def test_command_line_on_damaged_files(tmp_path, data, command):
 
 
 @pytest.mark.parametrize("harness, runs", [("reader.py", 20000), ("cli.py", 3000)])
+@pytest.mark.slow
 def test_atheris_short_run(tmp_path, harness, runs):
     """The atheris harness runs (coverage-guided, a fixed seed and number of inputs, so a
     finding reproduces; about 20 s each) without a finding; HDF5 inputs are left to the long runs."""

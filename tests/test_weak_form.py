@@ -164,7 +164,9 @@ def test_misfit_is_the_noise_against_its_weights():
     assert 3.2 < median[s / 2] < 5.0, median
 
 
-@pytest.mark.parametrize("value", [73.0, 1e3, 1e6])
+@pytest.mark.parametrize(
+    "value", [73.0, pytest.param(1e3, marks=pytest.mark.slow), pytest.param(1e6, marks=pytest.mark.slow)]
+)
 def test_one_absurd_sample_stays_out_of_the_joint(value):
     """Finding 9 of docs/reliability.md: one finite acceleration sample far off (73 m/s^2 is 13
     times a1's RMS, 1e6 is 1.8e5 times) that the sample screen lets through (`outlier_ratio`
