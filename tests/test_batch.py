@@ -166,6 +166,7 @@ def test_a_task_runs_the_bootstrap_on_its_own_thread(fleet, monkeypatch):
     per core (which oversubscribed the cores: a single worker used 1.56 of 2)."""
     import threading
 
+    from algid import parallel
     from algid.fleet import task
     from algid.identification import surrogate
 
@@ -182,7 +183,7 @@ def test_a_task_runs_the_bootstrap_on_its_own_thread(fleet, monkeypatch):
     assert row["status"] == "ok" and callers == {threading.get_ident()}
     callers.clear()
     spy(lambda x: x, list(range(8)))  # outside a task: a pool of threads
-    assert callers and threading.get_ident() not in callers and surrogate._threads is None
+    assert callers and threading.get_ident() not in callers and parallel._threads is None
 
 
 def test_a_missing_extra_is_one_line_naming_it(monkeypatch, capsys, tmp_path):

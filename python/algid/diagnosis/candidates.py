@@ -300,13 +300,15 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
     grid = np.log(rms * np.geomspace(1e-3, 1.0, N_GRID))
 
     v_sign = ctx.shared.get(("v_scale", i))  # the Coulomb fit's: the velocity noise around rest
+    # the friction's sign fades in as the Coulomb candidate found, or well inside the zone
+    found = None if v_sign is None else np.tanh(v / v_sign)
+    v2 = v**2
 
     def build(lg):
         vs = np.exp(lg)
-        # the friction's sign fades in as the Coulomb candidate found, or well inside the zone
-        sgn = np.tanh(v / (v_sign if v_sign is not None else STRIBECK_SIGN * vs))
+        sgn = found if found is not None else np.tanh(v / (STRIBECK_SIGN * vs))
         cols = np.stack(
-            [effect_column(P, i, sgn, ctx.mass), effect_column(P, i, np.exp(-((v / vs) ** 2)) * sgn, ctx.mass)], axis=1
+            [effect_column(P, i, sgn, ctx.mass), effect_column(P, i, np.exp(-v2 / vs**2) * sgn, ctx.mass)], axis=1
         )
         return [EqSpec(e=i, X=linear_design(P, i), y=target(P, i), E=cols, key=("base", i))]
 

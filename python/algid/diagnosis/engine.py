@@ -27,6 +27,7 @@ import numpy as np
 from ..chain import Chain
 from ..display import Displayed, number
 from ..noise import channel, white_floor, without_hum
+from ..parallel import parallel_map
 from ..recording import Recording, accelerations, derivative
 from ..recording import motion as recording_motion
 from .band import Band, signal_band
@@ -78,6 +79,9 @@ COMBINATION_GAIN = 0.2
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
+#: Candidates that read what another one found (Stribeck friction: the Coulomb fit's velocity
+#: scale at its DOF): fitted after the others.
+AFTER = ("stribeck_friction",)
 #: Most refits of a state-dependent candidate with states reconstructed under it.
 STATE_REFITS = 4
 STATE_EFFECTS = (
@@ -402,15 +406,21 @@ def _candidates(st: Setup, effects, progress) -> list[Scored]:
     P, lin = st.P, st.lin
     ctx = _context(st)
     todo = [(e, loc) for e, loc in all_candidates(P) if e in effects]
-    scored: list[Scored] = []
-    for k, (eff, loc) in enumerate(todo):
-        where = f"spring {loc}" if eff in SPRING_EFFECTS else f"DOF {loc + 1}"
-        _progress(progress, f"candidate {k + 1}/{len(todo)}: {eff} at {where}")
+
+    def one(item: tuple[str, int]) -> Scored | None:
+        eff, loc = item
         try:
             fit = fit_candidate(ctx, eff, loc)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError):
-            continue
-        scored.append(_assess(P, lin, fit, st.denom, st.floor))
+            return None
+        return _assess(P, lin, fit, st.denom, st.floor)
+
+    def tick(done: int) -> None:
+        _progress(progress, f"candidate {done}/{len(todo)}")
+
+    # a Stribeck candidate reads its DOF's Coulomb fit (ctx.shared): they come after the rest
+    phases = [[c for c in todo if c[0] not in AFTER], [c for c in todo if c[0] in AFTER]]
+    scored = [s for phase in phases for s in parallel_map(one, phase, tick) if s is not None]
     return sorted(_refit_leaders(st, ctx, sorted(scored, key=lambda s: s.gap_after)), key=lambda s: s.gap_after)
 
 

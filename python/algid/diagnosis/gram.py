@@ -16,6 +16,7 @@ __all__ = [
     "WindowStats",
     "cross_validate",
     "cross_validate_grid",
+    "fold_fits",
     "jackknife_std",
     "refine_min",
     "solve_gram",
@@ -88,8 +89,8 @@ class WindowStats:
 
 def window_stats(P: Prepared, specs: list[EqSpec], scoring: bool = True) -> WindowStats:
     """Detrend and accumulate the per-window Grams of a stacked model; without ``scoring``
-    only what a fit needs (``G``: the band-projected blocks, which cost two FFTs of every
-    column, are left out unless the fit itself is in band)."""
+    only what a fit needs, ``G`` (no sub-block or band-projected blocks, unless the fit itself
+    is in band)."""
     q = 0 if specs[0].E is None else specs[0].E.shape[1]
     sizes = [s.X.shape[1] for s in specs]
     Ptot = sum(sizes) + q
@@ -98,8 +99,10 @@ def window_stats(P: Prepared, specs: list[EqSpec], scoring: bool = True) -> Wind
         slices.append(slice(off, off + p))
         off += p
     shared = slice(off, off + q)
+    if not scoring and not (P.fit_band and not P.full_band):
+        return _fitting_grams(P, specs, sizes, slices, shared)
     S = N_SUB
-    band = not P.full_band and (scoring or P.fit_band)
+    band = not P.full_band
 
     def sub(Z):  # (nw, L, c) -> (nw, S, L/S, c)
         return Z.reshape(P.nw, S, P.L // S, Z.shape[-1])
@@ -151,6 +154,38 @@ def window_stats(P: Prepared, specs: list[EqSpec], scoring: bool = True) -> Wind
         blocks_band=blocks_band if band else (blocks if P.full_band else []),
         index=index,
     )
+
+
+def _fitting_grams(
+    P: Prepared, specs: list[EqSpec], sizes: list[int], slices: list[slice], shared: slice
+) -> WindowStats:
+    """:func:`window_stats` without ``scoring`` on a fit over the whole band: the per-window
+    Grams ``G`` of whole detrended windows (no sub-blocks), the only statistics a fit needs.
+
+    The detrended own columns ``Zx`` are orthogonal to each window's line, so ``Zx' Zr = Zx' R``
+    and ``Zr' Zr = R' R - (B' R)' (B' R)`` (``B`` the window's orthonormal line basis): the shared
+    and target columns ``R`` are never detrended themselves."""
+    q = shared.stop - shared.start
+    Ptot = shared.stop
+    G = np.zeros((P.nw, Ptot + 1, Ptot + 1))
+    for k, s in enumerate(specs):
+        R = P.windows(np.concatenate(([s.E] if q else []) + [s.y[:, None]], axis=1) * s.w)  # (nw, L, q+1)
+        C = np.matmul(P.basis.T[None], R)  # (nw, 2, q+1)
+        grr = np.matmul(R.swapaxes(-1, -2), R) - np.matmul(C.swapaxes(-1, -2), C)
+        cached = P._cache.get((s.key, s.w, "window")) if s.key is not None else None
+        if cached is None:
+            Zx = detrend(P, s.X * s.w)
+            cached = (Zx, np.matmul(Zx.swapaxes(-1, -2), Zx))
+            if s.key is not None:
+                P._cache[(s.key, s.w, "window")] = cached
+        Zx, gxx = cached
+        own, other = slices[k], slice(shared.start, Ptot + 1)  # the shared columns, then the target
+        gxr = np.matmul(Zx.swapaxes(-1, -2), R)
+        G[:, own, own] += gxx
+        G[:, own, other] += gxr
+        G[:, other, own] += gxr.swapaxes(-1, -2)
+        G[:, other, other] += grr
+    return WindowStats(G=G, slices=slices, shared=shared, eqs=[s.e for s in specs], blocks=[], blocks_band=[], index=[])
 
 
 def solve_gram(G: np.ndarray) -> np.ndarray:
@@ -226,6 +261,17 @@ def cross_validate(P: Prepared, st: WindowStats) -> CVResult:
     )
 
 
+def fold_fits(G: np.ndarray, member: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The fit on all windows of per-window Grams ``G`` (nw, P+1, P+1) and, for every fold k of
+    ``member`` (K, nw) (1 on the fold's windows), the fit on the other windows, in one solve:
+    their parameters (K+1, P) and in-sample squared errors (K+1,), the all-window fit first."""
+    Gsum = G.sum(axis=0)
+    Gfit = np.concatenate([Gsum[None], Gsum - np.einsum("kw,wij->kij", member, G)])
+    ths = solve_gram(Gfit)
+    ext = np.concatenate([ths, -np.ones((ths.shape[0], 1))], axis=1)
+    return ths, np.einsum("kij,ki,kj->k", Gfit, ext, ext)
+
+
 def _first_min(new: float, old: float) -> bool:
     """``new`` takes the place of ``old`` as the running minimum, as ``np.argmin`` would
     choose: the first NaN wins, else the first strictly smaller value."""
@@ -254,20 +300,17 @@ def cross_validate_grid(P: Prepared, stats_of: Callable[[float, bool], WindowSta
     if ng == 0:  # e.g. the quantiles of a deformation that is zero throughout
         raise ValueError("cross_validate_grid: empty grid")
     masks = [P.folds == k for k in range(K)]
+    member = np.array(masks, dtype=float)  # (K, nw): fold k's windows
     fit_all = np.zeros(ng)
     tr = np.zeros((K, ng))
     pick = [-1] * (K + 1)  # the running choice of every fold, then of the all-window fit
     picked_theta: list = [None] * K
     for g in range(ng):
-        st = stats_of(grid[g], False)
-        Gsum = st.G.sum(axis=0)
-        fit_all[g] = sse(Gsum, solve_gram(Gsum))
-        Gtr = np.stack([Gsum - st.G[masks[k]].sum(axis=0) for k in range(K)])
-        ths = solve_gram(Gtr)  # every fold's training fit in one call
+        ths, err = fold_fits(stats_of(grid[g], False).G, member)
+        fit_all[g], tr[:, g] = err[0], err[1:]
         for k in range(K):
-            tr[k, g] = sse(Gtr[k], ths[k])
             if pick[k] < 0 or _first_min(tr[k, g], tr[k, pick[k]]):
-                pick[k], picked_theta[k] = g, ths[k]
+                pick[k], picked_theta[k] = g, ths[k + 1]
         if pick[K] < 0 or _first_min(fit_all[g], fit_all[pick[K]]):
             pick[K] = g
     kept = {i: stats_of(grid[i], True) for i in set(pick)}

@@ -27,7 +27,8 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from ..identification.surrogate import REPLICATES, threads
+from ..identification.surrogate import REPLICATES
+from ..parallel import threads
 
 #: Bytes hashed at a time (the hash never holds a whole file).
 HASH_BLOCK = 1 << 20
