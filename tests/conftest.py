@@ -4,11 +4,18 @@ the tests are collected, so that they compile while the Python tests run (tests/
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-import pytest
+# The C++ tests compile beside the Python tests: BLAS threads that spin while they wait for a
+# core the compiler holds would slow every numpy call down, so numpy's BLAS runs on one thread
+# (set before numpy is first imported; a value already set is kept).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-import cpp_builds
+import pytest  # noqa: E402
+
+import cpp_builds  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 #: Real measured data live beside the checkout (../shared/data), never in the repository.

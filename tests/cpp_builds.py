@@ -40,8 +40,9 @@ def runnable_levels() -> list[str]:
     return [level for level in ("v3", "v4") if _core.cpu_supports(f"x86-64-{level}")]
 
 
-def configure_and_build(build: Path, options: tuple[str, ...]) -> Path:
-    """Configure and build the C++ tests in ``build``; BuildError on a failed step."""
+def configure_and_build(build: Path, options: tuple[str, ...], jobs: int) -> Path:
+    """Configure and build the C++ tests in ``build`` with ``jobs`` compilers at a time;
+    BuildError on a failed step."""
     cmake = shutil.which("cmake")
     if cmake is None:
         raise BuildError("cmake not found: install the test extra (pip install '.[test]')")
@@ -49,7 +50,7 @@ def configure_and_build(build: Path, options: tuple[str, ...]) -> Path:
     cmd += [f"-DALGID_TEST_ISA_LEVELS={';'.join(runnable_levels())}", *options]
     if shutil.which("ninja") and not (build / "CMakeCache.txt").exists():
         cmd += ["-G", "Ninja"]
-    for step in (cmd, [cmake, "--build", str(build), "-j", str(os.cpu_count() or 2)]):
+    for step in (cmd, [cmake, "--build", str(build), "-j", str(jobs)]):
         proc = subprocess.run(step, capture_output=True, text=True)
         if proc.returncode != 0:
             raise BuildError(f"{' '.join(step[:3])} failed:\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}")
@@ -60,14 +61,16 @@ _pool = ThreadPoolExecutor(max_workers=len(BUILDS), thread_name_prefix="cpp-buil
 _started: dict[str, Future] = {}
 
 
-def start(name: str) -> Future:
-    """Start build ``name`` in the background (once); its future."""
+def start(name: str, background: bool = True) -> Future:
+    """Start build ``name`` (once); its future. In the ``background`` of the Python tests it
+    leaves them a core (one compiler fewer than there are cores)."""
     if name not in _started:
         build, options = BUILDS[name]
-        _started[name] = _pool.submit(configure_and_build, build, options)
+        cores = os.cpu_count() or 2
+        _started[name] = _pool.submit(configure_and_build, build, options, max(1, cores - 1) if background else cores)
     return _started[name]
 
 
 def wait(name: str) -> Path:
-    """The build directory of ``name``, once built (started here if it was not)."""
-    return start(name).result()
+    """The build directory of ``name``, once built (started here, on every core, if it was not)."""
+    return start(name, background=False).result()

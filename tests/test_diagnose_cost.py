@@ -121,4 +121,4 @@ def test_an_empty_grid_is_refused_like_before():
     by the candidate loop, which catches ValueError."""
     P, specs = _stacked_model(4, None)
     with pytest.raises(ValueError, match="empty grid"):
-        cross_validate_grid(P, lambda g: window_stats(P, specs(g)), np.array([]))
+        cross_validate_grid(P, lambda g, scoring: window_stats(P, specs(g), scoring), np.array([]))

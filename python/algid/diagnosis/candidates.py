@@ -56,7 +56,7 @@ from scipy.signal import lfilter, lfilter_zi
 
 from ..chain import spring_columns, spring_deformation, spring_sides, springs
 from .equations import base_design, effect_column, linear_design, target, to_physical
-from .gram import CVResult, EqSpec, cross_validate, cross_validate_grid, jackknife_std, window_stats
+from .gram import CVResult, EqSpec, cross_validate, jackknife_std, score_walk, walk_grid, window_stats
 from .linear import LinearFit
 from .windows import Prepared
 
@@ -179,6 +179,19 @@ def coupled(P: Prepared, i: int) -> list[tuple[int, int]]:
     return out
 
 
+def _cubic_gauss() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """8-point Gauss-Legendre nodes on [0, 1], their weights, and the (4, 8) values there of the
+    Lagrange polynomials of the cubic through the samples at -1, 0, 1, 2 (:func:`lowpass`)."""
+    gx, gw = np.polynomial.legendre.leggauss(8)
+    s_ = 0.5 * (gx + 1.0)
+    nodes = np.array([-1.0, 0.0, 1.0, 2.0])
+    lagrange = np.array([np.prod([(s_ - o) / (nodes[m] - o) for o in np.delete(nodes, m)], axis=0) for m in range(4)])
+    return s_, gw, lagrange
+
+
+_CUBIC_GAUSS = _cubic_gauss()
+
+
 def lowpass(x: np.ndarray, cutoff_hz: float, dt: float) -> np.ndarray:
     """First-order low-pass ``y' = 2 pi fc (x - y)`` of sampled columns (axis 0).
 
@@ -192,15 +205,9 @@ def lowpass(x: np.ndarray, cutoff_hz: float, dt: float) -> np.ndarray:
     wc = 2 * np.pi * cutoff_hz
     lam = wc * dt
     al = np.exp(-lam)
-    gx, gw = np.polynomial.legendre.leggauss(8)
-    s_ = 0.5 * (gx + 1.0)  # nodes on [0, 1]
+    s_, gw, lagrange = _CUBIC_GAUSS
     kern = 0.5 * gw * lam * np.exp(-lam * (1.0 - s_))
-    nodes = np.array([-1.0, 0.0, 1.0, 2.0])
-    w = np.empty(4)
-    for m in range(4):
-        others = np.delete(nodes, m)
-        Lm = np.prod([(s_ - o) / (nodes[m] - o) for o in others], axis=0)
-        w[m] = float(np.sum(kern * Lm))
+    w = lagrange @ kern
     x2 = np.asarray(x, dtype=float)
     x2 = x2 if x2.ndim == 2 else x2[:, None]
     # Two copies of the first sample in front and one extrapolated sample at the end (the
@@ -384,15 +391,21 @@ def _fit_grid(
     refines inside its own bracket), on which the cross-validation is repeated.
     """
     P = ctx.P
+    fitting: dict[float, object] = {}  # the fitting Grams of every grid value walked (the fine grid holds the coarse)
 
-    def run(gr):
-        return cross_validate_grid(P, lambda g, scoring: window_stats(P, build(g), scoring), gr)
+    def stats_of(g: float, scoring: bool):
+        if scoring:
+            return window_stats(P, build(g), True)
+        if g not in fitting:
+            fitting[g] = window_stats(P, build(g), False)
+        return fitting[g]
 
-    cv = run(grid)
-    idx = np.r_[cv.extra["g_index_folds"], cv.extra["g_index"]]
-    lo, hi = max(int(idx.min()) - 1, 0), min(int(idx.max()) + 1, len(grid) - 1)
+    walk = walk_grid(P, stats_of, grid)
+    lo, hi = max(min(walk.pick) - 1, 0), min(max(walk.pick) + 1, len(grid) - 1)
     if hi > lo:
-        cv = run(np.interp(np.arange(FINE * (hi - lo) + 1) / FINE, np.arange(hi - lo + 1), grid[lo : hi + 1]))
+        fine = np.interp(np.arange(FINE * (hi - lo) + 1) / FINE, np.arange(hi - lo + 1), grid[lo : hi + 1])
+        walk = walk_grid(P, stats_of, fine)
+    cv = score_walk(P, stats_of, walk)
     g = cv.extra["g"]
     specs = build(g)  # refit at the refined value
     cv_ref = cross_validate(P, window_stats(P, specs))

@@ -15,8 +15,11 @@ __all__ = [
     "EqSpec",
     "WindowStats",
     "cross_validate",
+    "GridWalk",
     "cross_validate_grid",
     "fold_fits",
+    "score_walk",
+    "walk_grid",
     "jackknife_std",
     "refine_min",
     "solve_gram",
@@ -170,17 +173,21 @@ def _fitting_grams(
     G = np.zeros((P.nw, Ptot + 1, Ptot + 1))
     for k, s in enumerate(specs):
         R = P.windows(np.concatenate(([s.E] if q else []) + [s.y[:, None]], axis=1) * s.w)  # (nw, L, q+1)
-        C = np.matmul(P.basis.T[None], R)  # (nw, 2, q+1)
-        grr = np.matmul(R.swapaxes(-1, -2), R) - np.matmul(C.swapaxes(-1, -2), C)
-        cached = P._cache.get((s.key, s.w, "window")) if s.key is not None else None
-        if cached is None:
+        p = sizes[k]
+        if s.key is None:  # columns of this model alone
             Zx = detrend(P, s.X * s.w)
-            cached = (Zx, np.matmul(Zx.swapaxes(-1, -2), Zx))
-            if s.key is not None:
-                P._cache[(s.key, s.w, "window")] = cached
-        Zx, gxx = cached
+            gxx, gxr, C = np.matmul(Zx.swapaxes(-1, -2), Zx), np.matmul(Zx.swapaxes(-1, -2), R), P.basis.T @ R
+        else:
+            cached = P._cache.get((s.key, s.w, "window"))
+            if cached is None:  # shared columns: [Zx | B]' row-major, one product with R gives Zx' R and B' R
+                Zx = detrend(P, s.X * s.w)
+                lhs = np.concatenate([Zx, np.broadcast_to(P.basis, (P.nw, P.L, 2))], axis=2).swapaxes(-1, -2)
+                cached = P._cache[(s.key, s.w, "window")] = (np.ascontiguousarray(lhs), Zx.swapaxes(-1, -2) @ Zx)
+            lhs, gxx = cached
+            M = lhs @ R  # (nw, p+2, q+1)
+            gxr, C = M[:, :p], M[:, p:]
+        grr = np.matmul(R.swapaxes(-1, -2), R) - np.matmul(C.swapaxes(-1, -2), C)
         own, other = slices[k], slice(shared.start, Ptot + 1)  # the shared columns, then the target
-        gxr = np.matmul(Zx.swapaxes(-1, -2), R)
         G[:, own, own] += gxx
         G[:, own, other] += gxr
         G[:, other, own] += gxr.swapaxes(-1, -2)
@@ -280,27 +287,28 @@ def _first_min(new: float, old: float) -> bool:
     return bool(np.isnan(new) or new < old)
 
 
-def cross_validate_grid(P: Prepared, stats_of: Callable[[float, bool], WindowStats], grid: np.ndarray) -> CVResult:
-    """Cross-validation of a model with one nonlinear parameter known on ``grid``;
-    ``stats_of(g, scoring)`` gives the model's :class:`WindowStats` at grid value ``g``
-    (``scoring``: :func:`window_stats`).
+@dataclass
+class GridWalk:
+    """The choices of a walk over ``grid`` (:func:`walk_grid`): ``pick`` (K+1,) the grid index
+    every fold's training fit chose, then the all-window fit's; ``picked_theta`` (K, P) those
+    fits; ``train_sse`` (K, ng) and ``fit_sse`` (ng,) their errors along the grid."""
 
-    For every fold the grid value is chosen by the (full-band) error on the training
-    windows, as the fit itself (refined
-    by a parabola through the three best neighbours, reported in ``extra["g_folds"]``),
-    and the withheld windows are scored at the chosen grid point. The all-window fit is
-    reported at the best grid point (``extra["g"]`` refined, ``extra["g_index"]``).
+    grid: np.ndarray
+    pick: list[int]
+    picked_theta: np.ndarray
+    train_sse: np.ndarray
+    fit_sse: np.ndarray
 
-    The grid is walked once with the fitting Grams alone; the scoring statistics are built
-    for the grid points the folds and the all-window fit choose: memory of at most ``K + 1``
-    models' Grams, whatever the grid's size.
-    """
+
+def walk_grid(P: Prepared, stats_of: Callable[[float, bool], WindowStats], grid: np.ndarray) -> GridWalk:
+    """Walk ``grid`` once with the fitting Grams alone (``stats_of(g, False)``): every fold's
+    grid value chosen by the (full-band) error on its training windows, as the fit itself,
+    and the all-window fit's by its error."""
     K = P.nfolds
     ng = len(grid)
     if ng == 0:  # e.g. the quantiles of a deformation that is zero throughout
         raise ValueError("cross_validate_grid: empty grid")
-    masks = [P.folds == k for k in range(K)]
-    member = np.array(masks, dtype=float)  # (K, nw): fold k's windows
+    member = np.array([P.folds == k for k in range(K)], dtype=float)  # (K, nw): fold k's windows
     fit_all = np.zeros(ng)
     tr = np.zeros((K, ng))
     pick = [-1] * (K + 1)  # the running choice of every fold, then of the all-window fit
@@ -313,6 +321,16 @@ def cross_validate_grid(P: Prepared, stats_of: Callable[[float, bool], WindowSta
                 pick[k], picked_theta[k] = g, ths[k + 1]
         if pick[K] < 0 or _first_min(fit_all[g], fit_all[pick[K]]):
             pick[K] = g
+    return GridWalk(np.asarray(grid), pick, np.array(picked_theta), tr, fit_all)
+
+
+def score_walk(P: Prepared, stats_of: Callable[[float, bool], WindowStats], walk: GridWalk) -> CVResult:
+    """The cross-validation of a walk: the withheld windows of every fold scored at the grid
+    point the fold chose (refined by a parabola through the three best neighbours, reported
+    in ``extra["g_folds"]``); the all-window fit at the best grid point (``extra["g"]``
+    refined, ``extra["g_index"]``). The scoring statistics are built for the chosen grid
+    points only: memory of at most ``K + 1`` models' Grams, whatever the grid's size."""
+    K, grid, pick = P.nfolds, walk.grid, walk.pick
     kept = {i: stats_of(grid[i], True) for i in set(pick)}
     best = pick[K]
     res = cross_validate(P, kept[best])
@@ -320,21 +338,28 @@ def cross_validate_grid(P: Prepared, stats_of: Callable[[float, bool], WindowSta
     full = np.zeros_like(test)
     g_folds = np.zeros(K)
     for k in range(K):
-        gb = pick[k]
-        g_folds[k] = refine_min(grid, tr[k], gb)
-        test[masks[k]] = kept[gb].sub_sse(masks[k], picked_theta[k], band=True)
-        full[masks[k]] = kept[gb].sub_sse(masks[k], picked_theta[k], band=False)
-    res.theta_folds = np.array(picked_theta)
+        mask, gb = P.folds == k, pick[k]
+        g_folds[k] = refine_min(grid, walk.train_sse[k], gb)
+        test[mask] = kept[gb].sub_sse(mask, walk.picked_theta[k], band=True)
+        full[mask] = kept[gb].sub_sse(mask, walk.picked_theta[k], band=False)
+    res.theta_folds = walk.picked_theta.copy()
     res.test_sub = test
     res.test_sub_full = full
     res.extra = {
-        "g": refine_min(grid, fit_all, best),
+        "g": refine_min(grid, walk.fit_sse, best),
         "g_index": best,
         "g_folds": g_folds,
         "g_index_folds": np.array(pick[:K], dtype=int),
-        "grid_sse": fit_all,
+        "grid_sse": walk.fit_sse,
     }
     return res
+
+
+def cross_validate_grid(P: Prepared, stats_of: Callable[[float, bool], WindowStats], grid: np.ndarray) -> CVResult:
+    """Cross-validation of a model with one nonlinear parameter known on ``grid``;
+    ``stats_of(g, scoring)`` gives the model's :class:`WindowStats` at grid value ``g``
+    (``scoring``: :func:`window_stats`): :func:`walk_grid`, then :func:`score_walk`."""
+    return score_walk(P, stats_of, walk_grid(P, stats_of, grid))
 
 
 def refine_min(grid: np.ndarray, f: np.ndarray, i: int) -> float:
