@@ -20,8 +20,15 @@ into a fresh output folder:
 * memory per worker: each worker's resident memory after its recordings (``rss_mb``), median
   over its first and its last 10 % of recordings, and the difference.
 
-    python bench/fleet.py --count 1000                   # the issue's figures (about 35 min at 2 workers)
-    python bench/fleet.py --count 120 --workers 1 2 --json bench/results/fleet.json
+The default is a 10-recording fleet (every figure, few recordings: a quick look). The
+published figures (docs/fleet.md) come from 100 and 1,000 recordings (1,000 took 2.3 h at one
+worker and 0.9 h at two here):
+
+    python bench/fleet.py                                # 10 recordings, 1 and 2 workers
+    python bench/fleet.py --count 100 --json bench/results/fleet100.json
+    python bench/fleet.py --count 240 --workers 1 2 --json bench/results/fleet.json
+    python bench/fleet.py --count 1000 --workers 2 --json bench/results/fleet1000_2workers.json
+    python bench/fleet.py --count 1000 --workers 1 --json bench/results/fleet1000_1worker.json
 """
 
 from __future__ import annotations
@@ -103,7 +110,7 @@ def measure(paths: list[Path], workers: int, scratch: Path) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--count", type=int, default=1000)
+    ap.add_argument("--count", type=int, default=10, help="recordings (default: 10; the issue's fleet: 1000)")
     ap.add_argument("--machines", type=int, default=0, help="folders (default: count / 25)")
     ap.add_argument("--duration", type=float, default=20.0, help="record length [s]")
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])

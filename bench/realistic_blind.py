@@ -1,6 +1,14 @@
 """Realistic blind check of ``algid diagnose`` (issue 16): hidden effects under the nuisances
 of measured data.
 
+Measures: top-1 effect, location, main parameter and gap shrink of the diagnosis on three
+kinds of rig with sensor and drive nuisances, false alarms, answers ``none`` on real effects,
+the wall time per diagnosis. The default (30 seeds, 0:30) is a quick look and writes to
+``WORK`` only; the published figures (docs/diagnosis.md, README.md, about 20 min) are::
+
+    python bench/realistic_blind.py --seeds 20000:20300 --work /tmp/realistic-20k \
+        --results bench/results/realistic_blind.json
+
 Every seed draws a rig and everything about it; the recording (only what the rig measures)
 goes to ``WORK/recordings/``, the label to ``WORK/labels/``; the diagnosis runs on the
 recording alone through the code path of ``algid diagnose`` and the scoring reads labels
@@ -38,8 +46,10 @@ Scores (issue 16): as the blind check (top-1, location, main parameter within 20
 gap shrink) plus the share of effect cases answered ``none`` and the share of ``none``
 answers on an inadmissible linear fit.
 
+    python bench/realistic_blind.py                                              # seeds 0:30, quick look
     python bench/realistic_blind.py --seeds 0:150 --work /tmp/realistic          # tuning seeds
-    python bench/realistic_blind.py --seeds 20000:20300 --work /tmp/realistic-20k  # the report
+    python bench/realistic_blind.py --seeds 20000:20300 --work /tmp/realistic-20k \
+        --results bench/results/realistic_blind.json                             # the report
 """
 
 from __future__ import annotations
@@ -336,13 +346,21 @@ def summarize(rows: list[dict]) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", default="0:150")
+    ap.add_argument("--seeds", default="0:30", help="seed list, e.g. 0:150 or 3,7,11:20 (default: 0:30)")
     ap.add_argument("--work", type=Path, default=Path("/tmp/algid-realistic"))
     ap.add_argument("--stage", choices=("all", "generate", "diagnose", "score"), default="all")
-    ap.add_argument("--results", type=Path, default=HERE / "results" / "realistic_blind.json")
+    ap.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        help="summary JSON (and its PNG beside it); default WORK/realistic_blind.json, "
+        "the published one is bench/results/realistic_blind.json",
+    )
     args = ap.parse_args(argv)
     seeds = B._parse_seeds(args.seeds)
     work = args.work
+    if args.results is None:
+        args.results = work / "realistic_blind.json"
     if args.stage in ("all", "generate"):
         for k, seed in enumerate(seeds):
             t0 = time.perf_counter()

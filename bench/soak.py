@@ -16,7 +16,18 @@ clipped for the whole chunk at a range of 0.6-0.9 of the chunk's largest reading
 rows add the dropout runs the estimator reported, its ``BAD_INPUT`` samples and the runs
 injected. None of them may raise a change event.
 
-    python bench/soak.py [--hours 24] [--n 3 10] [--snr 40 20] [--dropouts] [--json FILE]
+The default soaks one simulated hour of n = 3 and of n = 10 at 40 dB (every figure, hour 1
+only). The published soaks (docs/reliability.md, "Long runs") are 24 h per configuration
+and 3 h with dropouts:
+
+    python bench/soak.py                     # 1 h of n = 3 and n = 10 at 40 dB
+    python bench/soak.py --hours 24 --n 3 --snr 40 --json bench/results/soak24_n3_40db.json
+    python bench/soak.py --hours 24 --n 3 --snr 20 --json bench/results/soak24_n3_20db.json
+    python bench/soak.py --hours 24 --n 10 --snr 20 --json bench/results/soak24_n10_20db.json
+    python bench/soak.py --hours 24 --n 10 --snr 40 --json bench/results/soak24_n10_40db.json
+    python bench/soak.py --hours 3 --n 3 --snr 40 20 --dropouts --json bench/results/soak_dropouts.json
+
+    python bench/soak.py [--hours 1] [--n 3 10] [--snr 40] [--dropouts] [--json FILE]
 """
 
 from __future__ import annotations
@@ -159,9 +170,17 @@ def _row(r: dict) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--hours", type=float, default=24.0, help="simulated hours per configuration")
+    ap.add_argument(
+        "--hours", type=float, default=1.0, help="simulated hours per configuration (default: 1; the docs: 24)"
+    )
     ap.add_argument("--n", type=int, nargs="+", default=[3, 10], help="chain sizes")
-    ap.add_argument("--snr", type=float, nargs="+", default=[40.0, 20.0], help="SNR on the accelerations [dB]")
+    ap.add_argument(
+        "--snr",
+        type=float,
+        nargs="+",
+        default=[40.0],
+        help="SNR on the accelerations [dB] (default: 40; the docs: 40, 20)",
+    )
     ap.add_argument("--chunk-s", type=float, default=60.0, help="samples per run() call [s]")
     ap.add_argument("--dropouts", action="store_true", help="a sensor dropout in every chunk (module docstring)")
     ap.add_argument("--json", type=Path, help="write the rows as JSON")

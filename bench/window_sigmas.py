@@ -11,6 +11,10 @@ window result and its GLS variance kept. Per parameter:
   with z = error / max(spread, 1 % |truth|, the window's sigma); the test alarms above 6;
 * the window misfits (median, largest over median).
 
+The default simulates 15 minutes (every figure, fewer windows); the published figures
+(docs/reliability.md, "Long runs") take 150:
+
+    python bench/window_sigmas.py                   # n = 10, 20 dB, 15 simulated minutes
     python bench/window_sigmas.py --n 10 --snr 20 --minutes 150 --seed 1
 """
 
@@ -55,7 +59,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", type=int, default=10)
     ap.add_argument("--snr", type=float, default=20.0, help="SNR on the accelerations [dB]")
-    ap.add_argument("--minutes", type=int, default=150)
+    ap.add_argument("--minutes", type=int, default=15, help="simulated minutes (default: 15; the docs: 150)")
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args()
     est, truth, windows, variance, misfit = record(args.n, args.snr, args.minutes, args.seed)

@@ -5,7 +5,13 @@ most 200 characters; an exception the command does not turn into its exit code (
 of ``algid.cli.main`` is bypassed to see it), a crash or a hang is a finding, written to
 ``build/fuzz/cli-crash-*``.
 
-    python bench/fuzz/cli.py -max_total_time=3600 -timeout=60
+It measures nothing: it searches for inputs that break the property. The default stops after
+2 minutes of fuzzing (``targets.DEFAULT_SECONDS``); the published hour (docs/reliability.md,
+"Coverage-guided fuzzing") is the second command below:
+
+    python bench/fuzz/cli.py                          # 2 minutes
+    python bench/fuzz/cli.py -fork=1 -ignore_timeouts=1 -ignore_ooms=1 -max_total_time=3600 \
+        -timeout=60 -rss_limit_mb=3000
 """
 
 import atheris

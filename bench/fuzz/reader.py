@@ -4,8 +4,14 @@ or one ``RecordingError`` with a one-line message; any other exception, a crash,
 (``-timeout``) or a memory blow-up (``-rss_limit_mb``) is a finding, written to
 ``build/fuzz/reader-crash-*`` and replayed with ``python bench/fuzz/reader.py FILE``.
 
+It measures nothing: it searches for inputs that break the property. The default stops after
+2 minutes of fuzzing (``targets.DEFAULT_SECONDS``); the published hour (docs/reliability.md,
+"Coverage-guided fuzzing") is the second command below:
+
     pip install atheris        # Linux and macOS, CPython 3.11-3.13
-    python bench/fuzz/reader.py -max_total_time=3600 -timeout=20
+    python bench/fuzz/reader.py                       # 2 minutes
+    python bench/fuzz/reader.py -fork=1 -ignore_timeouts=1 -ignore_ooms=1 -max_total_time=3600 \
+        -timeout=20 -rss_limit_mb=3000
 """
 
 import atheris

@@ -34,6 +34,8 @@ NPZ_SPLIT = b"\n--\n"
 #: Longest message a reader may raise, whatever the input (a few names quoted to 80
 #: characters each; the command line shortens it to 200).
 MAX_MESSAGE = 1000
+#: How long a harness started without ``-runs`` or ``-max_total_time`` fuzzes [s].
+DEFAULT_SECONDS = 120
 
 
 def _zip_one(content: bytes) -> bytes:
@@ -237,13 +239,16 @@ def write_corpus(folder: Path) -> Path:
 
 def fuzz(name: str, one_input) -> None:
     """Run atheris (libFuzzer's engine) on ``one_input(data, folder)`` with libFuzzer's command
-    line (``-max_total_time=3600``, ``-runs=N``, ...). Without a corpus folder on the command line
-    the seeds go to ``build/fuzz/NAME`` and the fuzzer grows that corpus; findings are written
-    to ``build/fuzz/NAME-crash-*``."""
+    line (``-max_total_time=3600``, ``-runs=N``, ...). Without ``-runs`` or ``-max_total_time``
+    the run stops after :data:`DEFAULT_SECONDS` (libFuzzer's own default is to run until a
+    finding). Without a corpus folder on the command line the seeds go to ``build/fuzz/NAME``
+    and the fuzzer grows that corpus; findings are written to ``build/fuzz/NAME-crash-*``."""
     import atheris
 
     argv = list(sys.argv)
     argv[0] = f"{sys.executable} {Path(argv[0]).resolve()}"  # what -fork=N runs its jobs with
+    if not any(a.startswith(("-runs=", "-max_total_time=")) for a in argv[1:]):
+        argv.insert(1, f"-max_total_time={DEFAULT_SECONDS}")
     out = Path(__file__).resolve().parents[2] / "build" / "fuzz"
     if not any(not a.startswith("-") for a in argv[1:]):
         argv.append(str(write_corpus(out / name)))
