@@ -1,5 +1,8 @@
 """The two baselines a user would otherwise pick, for bench/continuous.py.
 
+A module, not a script: it measures nothing by itself; ``bench/continuous.py`` runs and scores
+both beside the continuous estimator (docs/continuous.md, "Baselines").
+
 RLS (``rls``): recursive least squares with exponential forgetting on the same integrated
 regressors as the algebraic estimator: row 1 of eqs. 3-4 for every DOF,
 

@@ -34,13 +34,15 @@ def shared_data() -> Path:
     return SHARED_DATA
 
 
+@pytest.hookimpl(trylast=True)  # after -m and -k have deselected what will not run
 def pytest_collection_modifyitems(session, config, items) -> None:
     """The C++ tests last, their builds started now (module docstring)."""
     cpp = [item for item in items if Path(str(item.fspath)).name == "test_cpp.py"]
-    if not cpp:
+    if not cpp or config.option.collectonly:
         return
+    wide = any(any(name in item.name for name in ("_v3]", "_v4]")) for item in cpp if "cpp_build" in item.fixturenames)
     for fixture, build in cpp_builds.FIXTURES.items():
         if any(fixture in item.fixturenames for item in cpp):
-            cpp_builds.start(build)
+            cpp_builds.start(build, wide)
     rest = [item for item in items if Path(str(item.fspath)).name != "test_cpp.py"]
     items[:] = rest + cpp

@@ -2,12 +2,13 @@
 run tests that need them (conftest.py), so that they compile while the Python tests run; the
 fixtures of tests/test_cpp.py wait for them.
 
-* ``release``: the tests as firmware builds them (``-O3 -DNDEBUG``), the fast tier;
-* ``sanitized``: the same under AddressSanitizer and UndefinedBehaviorSanitizer, in a Debug
-  build (Eigen's and the library's assertions on) optimised to -O1 (tests/cpp/CMakeLists.txt
-  says which checks and why), the slow tier.
-
-The wide instruction-set binaries (x86-64-v3, v4) are built for the levels this CPU runs.
+* ``release``: the tests as firmware builds them (``-O3 -DNDEBUG``), the fast tier; with
+  ``wide``, also the binaries built for the wider instruction-set levels this CPU runs
+  (x86-64-v3, v4: the slow tier; the same build directory, so that only those are compiled
+  when the fast tier has built the rest);
+* ``sanitized``: every test, the wide ones included, under AddressSanitizer and
+  UndefinedBehaviorSanitizer, in a Debug build (Eigen's and the library's assertions on)
+  optimised to -O1 (tests/cpp/CMakeLists.txt says which checks and why), the slow tier.
 """
 
 from __future__ import annotations
@@ -40,17 +41,17 @@ def runnable_levels() -> list[str]:
     return [level for level in ("v3", "v4") if _core.cpu_supports(f"x86-64-{level}")]
 
 
-def configure_and_build(build: Path, options: tuple[str, ...], jobs: int) -> Path:
-    """Configure and build the C++ tests in ``build`` with ``jobs`` compilers at a time;
-    BuildError on a failed step."""
+def configure_and_build(build: Path, options: tuple[str, ...], levels: list[str]) -> Path:
+    """Configure and build the C++ tests in ``build``, the wide ones for ``levels``, on every
+    core; BuildError on a failed step."""
     cmake = shutil.which("cmake")
     if cmake is None:
         raise BuildError("cmake not found: install the test extra (pip install '.[test]')")
     cmd = [cmake, "-S", str(REPO), "-B", str(build), "-DALGID_BUILD_TESTS=ON", f"-DPython_EXECUTABLE={sys.executable}"]
-    cmd += [f"-DALGID_TEST_ISA_LEVELS={';'.join(runnable_levels())}", *options]
+    cmd += [f"-DALGID_TEST_ISA_LEVELS={';'.join(levels)}", *options]
     if shutil.which("ninja") and not (build / "CMakeCache.txt").exists():
         cmd += ["-G", "Ninja"]
-    for step in (cmd, [cmake, "--build", str(build), "-j", str(jobs)]):
+    for step in (cmd, [cmake, "--build", str(build), "-j", str(os.cpu_count() or 2)]):
         proc = subprocess.run(step, capture_output=True, text=True)
         if proc.returncode != 0:
             raise BuildError(f"{' '.join(step[:3])} failed:\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}")
@@ -61,16 +62,17 @@ _pool = ThreadPoolExecutor(max_workers=len(BUILDS), thread_name_prefix="cpp-buil
 _started: dict[str, Future] = {}
 
 
-def start(name: str, background: bool = True) -> Future:
-    """Start build ``name`` (once); its future. In the ``background`` of the Python tests it
-    leaves them a core (one compiler fewer than there are cores)."""
+def start(name: str, wide: bool = True) -> Future:
+    """Start build ``name`` (once), with the ``wide`` binaries or not (``release``; the
+    sanitized build has them always); its future."""
     if name not in _started:
         build, options = BUILDS[name]
-        cores = os.cpu_count() or 2
-        _started[name] = _pool.submit(configure_and_build, build, options, max(1, cores - 1) if background else cores)
+        levels = runnable_levels() if wide or name != "release" else []
+        _started[name] = _pool.submit(configure_and_build, build, options, levels)
     return _started[name]
 
 
 def wait(name: str) -> Path:
-    """The build directory of ``name``, once built (started here, on every core, if it was not)."""
-    return start(name, background=False).result()
+    """The build directory of ``name``, once built (started here, with the wide binaries, if
+    it was not)."""
+    return start(name).result()

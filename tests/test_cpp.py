@@ -33,8 +33,9 @@ BINARIES = [
     "test_fuzz",
 ]
 # The same tests built for the wider instruction sets the wheel ships (x86-64 only; built for
-# the levels this CPU runs, skipped otherwise).
+# the levels this CPU runs, skipped otherwise): the slow tier.
 WIDE_BINARIES = [f"{name}_{level}" for level in ("v3", "v4") for name in ("test_lanes", "test_sizes")]
+RELEASE_BINARIES = BINARIES + [pytest.param(name, marks=pytest.mark.slow) for name in WIDE_BINARIES]
 
 
 def _built(name: str) -> Path:
@@ -91,7 +92,7 @@ def _check(proc: subprocess.CompletedProcess) -> None:
     assert summary is not None and int(summary.group(2)) == 0 and int(summary.group(1)) > 0
 
 
-@pytest.mark.parametrize("name", BINARIES + WIDE_BINARIES)
+@pytest.mark.parametrize("name", RELEASE_BINARIES)
 def test_cpp_binary(cpp_build: Path, name: str) -> None:
     _check(_run(_locate(cpp_build, name)))
 

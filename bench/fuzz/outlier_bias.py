@@ -1,4 +1,4 @@
-"""One finite acceleration outlier against ``ContinuousEstimator``: Table 1's chain under a
+"""Bias of ``ContinuousEstimator`` from one finite acceleration outlier: Table 1's chain under a
 multisine (``tests/signals.py``, noise-free, 30 s at 1 kHz), one sample of a1 replaced by a value
 of 73 to 1e6 m/s^2 (a1's RMS is 5.4), at 1 s or as the very first sample, with the defaults,
 a tighter ``outlier_ratio`` and without the weak form's bias compensation. Prints the worst
