@@ -8,7 +8,7 @@ import pytest
 
 import algid
 from algid.chain import TABLE1, Chain
-from algid.identification.motion import Motion, band_limited_motion, chain_forces
+from algid.identification.motion import Motion, band_limited_motion, chain_forces, equation_error_fit
 from algid.identification.plan import make_plan, natural_frequencies_hz
 from algid.identification.surrogate import replicate_signals
 from algid.identification.verdicts import judge
@@ -65,6 +65,33 @@ def test_chain_forces_are_eq1_with_the_chain_matrices():
         chain_forces(one.identifiable(), 1, "fixed", mo1)[:, 0],
         2.0 * mo1.a[:, 0] + 3.0 * mo1.v[:, 0] + 800.0 * mo1.x[:, 0],
     )
+
+
+def _first_look(chain, u, fs, noise_db, seed=1):
+    T = u.shape[0] / fs
+    r = simulate(chain, u, T, fs, noise_db=noise_db, noise_on=("accel", "force"), seed=seed)
+    return equation_error_fit(r.u, r.a, analyse(r.u, r.a, 1 / fs), chain.boundary)
+
+
+def test_first_look_is_eq1_on_a_noise_free_multisine():
+    fs, T = 1000.0, 10.0
+    t = np.arange(int(T * fs)) / fs
+    u = np.stack([np.sin(2 * np.pi * (1.3 + i) * t) + 0.5 * np.sin(2 * np.pi * (4.4 + 3 * i) * t) for i in range(3)], 1)
+    theta = _first_look(TABLE1, 10 * u, fs, None)
+    np.testing.assert_allclose(theta, TABLE1.identifiable(), rtol=2e-3)
+
+
+@pytest.mark.parametrize("T", [10.0, 60.0])
+def test_first_look_under_white_forcing_is_not_pulled_by_the_integrated_noise(T):
+    # white to the Nyquist rate: thousands of bins below the first mode, where the doubly
+    # integrated acceleration noise dwarfs the motion; unweighted, the springs came out 3-30x low
+    fs = 1000.0
+    u = 10 * np.random.default_rng(0).standard_normal((int(T * fs), 3))
+    theta = _first_look(TABLE1, u, fs, 40.0)
+    err = np.abs(theta / TABLE1.identifiable() - 1)
+    assert err[:3].max() < 0.01 and err[6:].max() < 0.01 and err[3:6].max() < 0.05
+    fn = natural_frequencies_hz(theta, 3, "fixed")
+    np.testing.assert_allclose(fn, natural_frequencies_hz(TABLE1.identifiable(), 3, "fixed"), rtol=0.005)
 
 
 def test_replicates_carry_the_recordings_noise():

@@ -28,6 +28,9 @@ from ..noise import DETECT, NoiseModel
 #: Derivative order of each kind of recorded motion.
 ORDER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 
+#: Passes of :func:`equation_error_fit`: unweighted, then weighted by the previous pass's noise.
+FIT_PASSES = 3
+
 
 @dataclass
 class Motion:
@@ -101,6 +104,26 @@ def chain_forces(theta: np.ndarray, n: int, boundary: str, mo: Motion) -> np.nda
     return mo.a * th[:n] + mo.v * th[n : 2 * n] + mo.x @ K.T
 
 
+def _stands_out(Z: np.ndarray, channels, dt: float, T: int) -> np.ndarray:
+    """Bins where the summed one-sided PSD of the DFTs ``Z`` (bins, n) stands :data:`DETECT`
+    times above the channels' summed noise floor."""
+    floor = sum(c.floor_psd for c in channels)
+    return np.sum(np.abs(Z) ** 2, axis=1) * 2 * dt / T > DETECT * floor
+
+
+def _residual_sd(theta: np.ndarray, jw: np.ndarray, nm: NoiseModel, boundary: str) -> np.ndarray:
+    """Standard deviation (n, bins) of each equation's residual on the DFT bins ``jw`` that the
+    sensor noise causes, for packed parameters ``theta``: the force's floor plus the motion's
+    floors through the dynamic stiffness ``((jw)^2 M + jw C + K) / (jw)^r`` of its row."""
+    n, r = len(nm.forces), ORDER[nm.motion]
+    th = np.nan_to_num(theta)
+    K = stiffness_matrix(packed_springs(th, n, boundary))
+    Z = ((jw**2)[:, None, None] * np.diag(th[:n]) + jw[:, None, None] * np.diag(th[n : 2 * n]) + K)
+    Z /= (jw**r)[:, None, None]
+    var = np.abs(Z) ** 2 @ np.array([c.floor_psd for c in nm.motions])
+    return np.sqrt(var.T + np.array([c.floor_psd for c in nm.forces])[:, None])
+
+
 def equation_error_fit(u: np.ndarray, y: np.ndarray, nm: NoiseModel, boundary: str) -> np.ndarray:
     """Packed ``m, c, k`` of eq. 1 fitted to forces ``u`` (T, n) [N] and the recorded motion
     ``y`` (T, n) of the kind ``nm.motion`` (module docstring); NaN where the record does not
@@ -112,15 +135,19 @@ def equation_error_fit(u: np.ndarray, y: np.ndarray, nm: NoiseModel, boundary: s
     signal's periodic extension, a constant over the bins: integrating the recorded motion to
     the others (or differentiating it) leaves two such constants per DOF, which eq. 1 carries
     as two unknown terms per equation, ``(j w)^(1 - r)`` and ``(j w)^(-r)`` for a motion of
-    derivative order ``r`` (the initial conditions, fitted alongside and dropped)."""
+    derivative order ``r`` (the initial conditions, fitted alongside and dropped). Each
+    equation on each bin is weighted by the inverse of the residual that the sensor noise
+    causes there (:func:`_residual_sd`, from the previous pass's parameters, :data:`FIT_PASSES`
+    passes): integrating measured accelerations amplifies their noise like ``1 / w^2``, and
+    unweighted, the many bins below the first mode that a broadband force excites would bias
+    the springs towards zero."""
     T, n = u.shape
     dt = nm.dt
     f = np.fft.rfftfreq(T, dt)
     U = np.fft.rfft(u, axis=0)
     P, Q = 3 * n + 1, 5 * n + 1  # parameters, and with two initial-condition terms per DOF
     band = (f >= 2.0 / (T * dt)) & (f <= nm.f_hi)
-    floor = sum(c.floor_psd for c in nm.forces)
-    excited = band & (np.sum(np.abs(U) ** 2, axis=1) * 2 * dt / T > DETECT * floor)
+    excited = band & _stands_out(U, nm.forces, dt, T)
     bins = excited if 2 * n * excited.sum() >= 2 * Q else band
     if not np.any(u != 0.0) or 2 * n * bins.sum() < 2 * Q:
         return np.full(P, np.nan)
@@ -135,10 +162,26 @@ def equation_error_fit(u: np.ndarray, y: np.ndarray, nm: NoiseModel, boundary: s
             D[e, :, 2 * n + j - 1] = X[:, e] - (X[:, other] if other >= 0 else 0.0)
         D[e, :, P + 2 * e] = jw ** (1 - r)
         D[e, :, P + 2 * e + 1] = jw ** (-r)
-    D, b = D.reshape(-1, Q), U[bins].T.reshape(-1)
+    b = U[bins].T
+    theta = np.full(Q, np.nan)
+    weight = np.ones(b.shape)
+    for _ in range(FIT_PASSES):
+        step = _weighted_lstsq(D * weight[..., None], b * weight)
+        if not np.all(np.isfinite(step[:P])):
+            break
+        theta = step
+        weight = 1.0 / _residual_sd(theta[:P], jw, nm, boundary)
+    return theta[:P]
+
+
+def _weighted_lstsq(D: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Real least squares of the complex equations ``D theta = b`` (n, bins, Q) and (n, bins),
+    columns scaled to unit norm; NaN for columns that are zero."""
+    Q = D.shape[-1]
+    D, b = D.reshape(-1, Q), b.reshape(-1)
     D, b = np.concatenate([D.real, D.imag]), np.concatenate([b.real, b.imag])
     scale = np.linalg.norm(D, axis=0)
     used = scale > 0
     theta = np.full(Q, np.nan)
     theta[used] = np.linalg.lstsq(D[:, used] / scale[used], b, rcond=None)[0] / scale[used]
-    return theta[:P]
+    return theta
