@@ -79,9 +79,9 @@ COMBINATION_GAIN = 0.2
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
-#: Candidates that read what another one found (Stribeck friction: the Coulomb fit's velocity
-#: scale at its DOF): fitted after the others.
-AFTER = ("stribeck_friction",)
+#: Candidates that read what another one found at the same location (Stribeck friction: the
+#: Coulomb fit's velocity scale at its DOF): fitted right after it, on the same thread.
+AFTER = {"stribeck_friction": "coulomb_friction"}
 #: Most refits of a state-dependent candidate with states reconstructed under it.
 STATE_REFITS = 4
 STATE_EFFECTS = (
@@ -407,21 +407,34 @@ def _candidates(st: Setup, effects, progress) -> list[Scored]:
     ctx = _context(st)
     todo = [(e, loc) for e, loc in all_candidates(P) if e in effects]
 
+    done = [0]
+
     def one(item: tuple[str, int]) -> Scored | None:
         eff, loc = item
         try:
             fit = fit_candidate(ctx, eff, loc)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError):
-            return None
-        return _assess(P, lin, fit, st.denom, st.floor)
+            fit = None
+        done[0] += 1
+        return None if fit is None else _assess(P, lin, fit, st.denom, st.floor)
 
-    def tick(done: int) -> None:
-        _progress(progress, f"candidate {done}/{len(todo)}")
+    def tick(_groups: int) -> None:
+        _progress(progress, f"candidate {done[0]}/{len(todo)}")
 
-    # a Stribeck candidate reads its DOF's Coulomb fit (ctx.shared): they come after the rest
-    phases = [[c for c in todo if c[0] not in AFTER], [c for c in todo if c[0] in AFTER]]
-    scored = [s for phase in phases for s in parallel_map(one, phase, tick) if s is not None]
+    groups = _dependency_groups(todo)
+    scored = [s for group in parallel_map(lambda g: [one(c) for c in g], groups, tick) for s in group if s is not None]
     return sorted(_refit_leaders(st, ctx, sorted(scored, key=lambda s: s.gap_after)), key=lambda s: s.gap_after)
+
+
+def _dependency_groups(todo: list[tuple[str, int]]) -> list[list[tuple[str, int]]]:
+    """The candidates in groups a thread fits in order: each one that reads another's result
+    (:data:`AFTER`) right after that one at its location; the longest groups first, so that
+    the threads finish together."""
+    groups = {c: [c] for c in todo if not (c[0] in AFTER and (AFTER[c[0]], c[1]) in todo)}
+    for c in todo:
+        if c not in groups:
+            groups[(AFTER[c[0]], c[1])].append(c)
+    return sorted(groups.values(), key=len, reverse=True)
 
 
 def _refit_leaders(st: Setup, ctx: Context, scored: list[Scored]) -> list[Scored]:
