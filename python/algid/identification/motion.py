@@ -118,7 +118,7 @@ def _residual_sd(theta: np.ndarray, jw: np.ndarray, nm: NoiseModel, boundary: st
     n, r = len(nm.forces), ORDER[nm.motion]
     th = np.nan_to_num(theta)
     K = stiffness_matrix(packed_springs(th, n, boundary))
-    Z = ((jw**2)[:, None, None] * np.diag(th[:n]) + jw[:, None, None] * np.diag(th[n : 2 * n]) + K)
+    Z = (jw**2)[:, None, None] * np.diag(th[:n]) + jw[:, None, None] * np.diag(th[n : 2 * n]) + K
     Z /= (jw**r)[:, None, None]
     var = np.abs(Z) ** 2 @ np.array([c.floor_psd for c in nm.motions])
     return np.sqrt(var.T + np.array([c.floor_psd for c in nm.forces])[:, None])
