@@ -20,15 +20,12 @@ into a fresh output folder:
 * memory per worker: each worker's resident memory after its recordings (``rss_mb``), median
   over its first and its last 10 % of recordings, and the difference.
 
-The default is a 10-recording fleet (every figure, few recordings: a quick look). The
-published figures (docs/fleet.md) come from 100 and 1,000 recordings (1,000 took 2.3 h at one
-worker and 0.9 h at two here):
+The default is a 10-recording fleet (every figure, few recordings: a quick look, about a
+minute). The published figures (docs/fleet.md) come from 1,000 recordings at both worker
+counts in one run (about 5 minutes, after 11 minutes generating the fleet the first time):
 
     python bench/fleet.py                                # 10 recordings, 1 and 2 workers
-    python bench/fleet.py --count 100 --json bench/results/fleet100.json
-    python bench/fleet.py --count 240 --workers 1 2 --json bench/results/fleet.json
-    python bench/fleet.py --count 1000 --workers 2 --json bench/results/fleet1000_2workers.json
-    python bench/fleet.py --count 1000 --workers 1 --json bench/results/fleet1000_1worker.json
+    python bench/fleet.py --count 1000 --workers 1 2 --json bench/results/fleet1000.json
 """
 
 from __future__ import annotations

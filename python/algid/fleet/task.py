@@ -148,7 +148,7 @@ def run_one(path: str, options: Options, done: frozenset = frozenset()) -> dict:
         if row["key"] in done:
             return {**row, "status": "skipped"}
         row["recorded_at"] = os.stat(p).st_mtime
-        with threads(1):  # a worker per core: the bootstrap's threads would oversubscribe them
+        with threads(1):  # a worker per core: the bootstrap's and the candidates' threads would oversubscribe them
             row.update(_analyse(p, options))
         row.update(status="ok", error=None)
     except (Exception, MemoryError) as err:  # noqa: BLE001 - one bad recording never stops the batch
