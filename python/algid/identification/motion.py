@@ -167,7 +167,7 @@ def equation_error_fit(u: np.ndarray, y: np.ndarray, nm: NoiseModel, boundary: s
     weight = np.ones(b.shape)
     for _ in range(FIT_PASSES):
         step = _weighted_lstsq(D * weight[..., None], b * weight)
-        if not np.all(np.isfinite(step[:P])):
+        if not np.any(np.isfinite(step[:P])):  # NaN marks the columns that are zero (a free end's spring)
             break
         theta = step
         weight = 1.0 / _residual_sd(theta[:P], jw, nm, boundary)
