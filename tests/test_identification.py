@@ -98,6 +98,44 @@ def test_first_look_under_white_forcing_is_not_pulled_by_the_integrated_noise(T)
     np.testing.assert_allclose(fn, natural_frequencies_hz(TABLE1.identifiable(), 3, "fixed"), rtol=0.005)
 
 
+def _one_force(chain, dof, motion="acceleration", T=20.0, fs=1000.0):
+    """``chain`` under band-limited white forcing (0-20 Hz) on DOF ``dof`` alone, 40 dB."""
+    from scipy.signal import butter, sosfiltfilt
+
+    w = sosfiltfilt(butter(4, 20.0, fs=fs, output="sos"), np.random.default_rng(dof).standard_normal(int(T * fs)))
+    u = np.zeros((w.size, chain.n))
+    u[:, dof] = 10 * w / w.std()
+    r = simulate(chain, u, T, fs, noise_db=40, noise_on=("accel", "force"), seed=dof)
+    if motion == "velocity":
+        return Recording(t=r.t, u=r.u, v=r.v)
+    return Recording(t=r.t, u=r.u, a=r.a)
+
+
+@pytest.mark.parametrize("chain", [TABLE1, Chain.random(4, np.random.default_rng(4))], ids=["table1", "random4"])
+@pytest.mark.parametrize("dof", [0, 2], ids=["dof1", "dof3"])
+def test_one_force_scales_the_whole_chain(chain, dof):
+    # the weak form solves every DOF's equation jointly: a spring in two equations passes the
+    # force's scale on, so every parameter is determined with one shaker (end or interior DOF)
+    res = algid.identify(_one_force(chain, dof))
+    n, truth = chain.n, chain.identifiable()
+    assert res.plan.method == "weak_form" and res.valid, res.reasons
+    err = np.abs(res.theta / truth - 1)
+    assert err[:n].max() < 0.02 and err[2 * n :].max() < 0.02 and err[n : 2 * n].max() < 0.15
+    assert np.max(np.abs(res.theta - truth) / res.sigma) < 5
+    modal, why = res.modes()  # the modal table of the whole chain
+    fn = np.sort(natural_frequencies_hz(truth, n, chain.boundary))
+    np.testing.assert_allclose(modal.frequencies_hz, fn, rtol=0.005, err_msg=why)
+
+
+def test_one_force_with_derived_accelerations_leaves_the_unforced_dofs_without_scale():
+    # the algebraic windows solve each DOF alone: an unforced DOF's equation has no scale
+    res = algid.identify(_one_force(TABLE1, 0, motion="velocity"))
+    assert res.plan.method == "algebraic"
+    status = {v.name: v for v in res.verdicts}
+    assert status["m1"].valid and status["m2"].status == "not_identifiable"
+    assert "solved alone" in status["m2"].reason and np.isnan(res.theta[1])
+
+
 def test_replicates_carry_the_recordings_noise():
     rng = np.random.default_rng(1)
     T = 20000

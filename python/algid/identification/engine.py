@@ -122,7 +122,8 @@ def identify(
         missing,
         progress=lambda f: _progress(progress, "uncertainty", f),
     )
-    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, unc.excess)
+    joint = plan.estimator == "continuous" and plan.method == "weak_form"
+    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, unc.excess, joint)
     # no value at all where the record has no scale for it (an unforced DOF) or the
     # estimator's systems were singular
     blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])

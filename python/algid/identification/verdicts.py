@@ -9,13 +9,17 @@ joins). Statuses, in the order they are tested:
 
 * ``known``: a spring fixed by the model (free right end: 0); ``not_separable``: k2 of one
   DOF between walls (only k1 + k2 is identifiable; it is reported as k1).
-* ``not_identifiable``: the DOF carries no force (its equation has no scale: only ratios
-  of its parameters are determined); the estimator returned no value; the uncertainty
-  share exceeds :data:`UNDETERMINED`; a damping or spring consistent with zero (within
-  three sigma) whose three sigma stand for more than :data:`ZERO_BOUND` of the force. A
-  mass is not identifiable unless it is above zero by three sigma, its relative
-  uncertainty is at most :data:`RELATIVE` and its term is not negligible (inertia is then
-  not determined by the record: quasi-static, or the acceleration lost in the noise).
+* ``not_identifiable``: the DOF has no scale (only ratios of its parameters are determined):
+  it carries no force and, when the DOFs are solved jointly (the weak form's joint solve),
+  no interior spring joins it to a DOF that has one (:func:`scaled_dofs`: a spring estimated
+  in both equations it enters passes the scale on, so one force scales a whole chain; its
+  force scale ``F`` is then the largest in-band term of its equation); the estimator
+  returned no value; the uncertainty share exceeds :data:`UNDETERMINED`; a damping or spring
+  consistent with zero (within three sigma) whose three sigma stand for more than
+  :data:`ZERO_BOUND` of the force. A mass is not identifiable unless it is above zero by
+  three sigma, its relative uncertainty is at most :data:`RELATIVE` and its term is not
+  negligible (inertia is then not determined by the record: quasi-static, or the
+  acceleration lost in the noise).
 * ``inadmissible``: a mass below zero by three sigma, or a damping or spring below zero by
   three sigma, that is not negligible: eq. 1 does not fit the record.
 * ``model_misfit``: the recording's window results scatter more than :data:`EXCESS_MAX`
@@ -99,10 +103,47 @@ def _mass_reason(m: float, share: float, snr: float) -> str:
     return "mass not identifiable: not determined by the record"
 
 
-def scales(n: int, boundary: str, mo: Motion, u: np.ndarray, forced: np.ndarray) -> tuple[np.ndarray, list]:
+def scaled_dofs(forced: np.ndarray, n: int, joint: bool) -> np.ndarray:
+    """(n,) DOFs whose equation has a scale: the forced ones and, when the DOFs are solved
+    jointly (the weak form's joint solve), every DOF joined to one of them by interior
+    springs: a spring estimated in both equations it enters carries the scale across."""
+    scaled = np.asarray(forced, dtype=bool).copy()
+    while joint:
+        joined = [(j - 2, j - 1) for j in range(2, n + 1) if scaled[j - 2] != scaled[j - 1]]
+        for a, b in joined:
+            scaled[a] = scaled[b] = True
+        joint = bool(joined)
+    return scaled
+
+
+def _force_scales(theta: np.ndarray, n: int, mo: Motion, u: np.ndarray, forced: np.ndarray, scaled) -> np.ndarray:
+    """(n,) force standard deviation per DOF: the recorded force where there is one; on a DOF
+    scaled through its springs, the largest in-band term of its equation (inertia, damping or
+    a spring force, from ``theta``); 0 elsewhere."""
+    F = np.where(forced, np.std(u, axis=0), 0.0)
+    th = np.nan_to_num(np.asarray(theta, dtype=float))
+    for i in np.flatnonzero(scaled & ~forced):
+        terms = [th[i] * np.std(mo.a[:, i]), th[n + i] * np.std(mo.v[:, i])]
+        terms += [th[2 * n + j - 1] * np.std(spring_deformation(mo.x, j, n)) for j in (i + 1, i + 2)]
+        F[i] = max(abs(t) for t in terms)
+    return F
+
+
+def scales(
+    n: int,
+    boundary: str,
+    mo: Motion,
+    u: np.ndarray,
+    forced: np.ndarray,
+    theta: np.ndarray | None = None,
+    scaled: np.ndarray | None = None,
+) -> tuple[np.ndarray, list]:
     """Per packed parameter: ``s / F`` (regressor over force standard deviation, module
-    docstring; NaN where no adjacent DOF is forced) and the DOF it belongs to."""
-    F = np.std(u, axis=0)
+    docstring; NaN where no DOF it enters is scaled) and the DOF it belongs to. ``scaled``
+    (:func:`scaled_dofs`, default the forced DOFs) with ``theta`` for the DOFs scaled through
+    their springs."""
+    scaled = np.asarray(forced, dtype=bool) if scaled is None else scaled
+    F = _force_scales(np.zeros(3 * n + 1) if theta is None else theta, n, mo, u, np.asarray(forced, bool), scaled)
     ratio, dofs = [], []
     for name in parameter_names(n):
         fam, idx = name[0], int(name[1:]) - 1
@@ -112,7 +153,7 @@ def scales(n: int, boundary: str, mo: Motion, u: np.ndarray, forced: np.ndarray)
         else:
             near = [idx]
             reg = np.std(mo.a[:, idx] if fam == "m" else mo.v[:, idx])
-        force = max((F[i] for i in near if forced[i]), default=0.0)
+        force = max((F[i] for i in near if scaled[i]), default=0.0)
         ratio.append(reg / force if force > 0 else np.nan)
         dofs.append(near)
     return np.array(ratio), dofs
@@ -128,11 +169,15 @@ def judge(
     forced: np.ndarray,
     nm: NoiseModel,
     excess: np.ndarray | None = None,
+    joint: bool = False,
 ) -> list[Verdict]:
     """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``; ``excess``
-    (3n+1,): window-result scatter of the record over its surrogates' (1 if not given)."""
+    (3n+1,): window-result scatter of the record over its surrogates' (1 if not given);
+    ``joint``: the DOFs were solved together, so an unforced DOF takes its scale from its
+    springs (:func:`scaled_dofs`)."""
     excess = np.ones(theta.shape) if excess is None else np.asarray(excess, dtype=float)
-    ratio, dofs = scales(n, boundary, mo, u, forced)
+    scaled = scaled_dofs(forced, n, joint)
+    ratio, dofs = scales(n, boundary, mo, u, forced, theta, scaled)
     out: list[Verdict] = []
     for p, name in enumerate(parameter_names(n)):
         fam, idx = name[0], int(name[1:]) - 1
@@ -156,9 +201,10 @@ def judge(
                 float(sigma[p]),
                 ratio[p],
                 dofs[p],
-                [i for i in dofs[p] if forced[i]],
+                [i for i in dofs[p] if scaled[i]],
                 mo,
                 nm,
+                joint,
             )
             if v.status in ("ok", "negligible", "inadmissible") and excess[p] > EXCESS_MAX:
                 v = Verdict(
@@ -177,15 +223,19 @@ def judge(
 _WHAT = {"m": "mass", "c": "damping", "k": "stiffness"}
 
 
-def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm) -> Verdict:
+def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm, joint) -> Verdict:
     what = _WHAT[fam]
     if not dofs_f:
         where = " and ".join(str(i + 1) for i in dofs)
+        how = (
+            "nor a spring path to a forced DOF"
+            if joint
+            else "and its equation is solved alone (the algebraic windows), so it has no scale"
+        )
         return Verdict(
             name,
             "not_identifiable",
-            f"{what} not identifiable: no force on DOF {where} (its equation "
-            "has no scale; only ratios of its parameters are determined)",
+            f"{what} not identifiable: no force on DOF {where} {how}; only ratios of its parameters are determined",
             np.nan,
             np.nan,
         )
