@@ -16,6 +16,10 @@ Sections (all through the Python entry point the command line calls):
   and 60 s, SNR 20-60 dB on the accelerations ("accel") or on both channels, seeds
   0..S-1: the median of |error| / sigma per SNR (pooled over systems, channels, seeds and
   parameters; 0.67 for a calibrated Gaussian sigma), and per family.
+* ``one_force``: one shaker: Table 1 and random 4- and 6-DOF chains, the continuous
+  benchmark's forcing on DOF 1 only and, separately, on an interior DOF, 20 s, 40 dB on the
+  accelerations, seeds 0..S-1: validity, worst error per family, largest |error| / sigma and
+  the error over the Cramer-Rao bound of that record per family (``bench/crlb.py``).
 * ``suites``: every record of the accuracy suite (``bench/accuracy.py``), of the calibration
   section and of the blind diagnosis check (``bench/blind_diagnosis.py``, seeds given by
   ``--blind-seeds``): how many produce a valid mass that is not positive, and a valid
@@ -57,7 +61,7 @@ FS = 1000.0
 SNRS = (20, 30, 40, 50, 60)
 #: Record length of the blind diagnosis check's cases [s] (its default).
 BLIND_DURATION_S = 10.0
-SECTIONS = ("accuracy", "short", "slow", "calibration", "suites")
+SECTIONS = ("accuracy", "short", "slow", "calibration", "one_force", "suites")
 
 
 def accuracy_systems() -> dict[str, Chain]:
@@ -228,6 +232,60 @@ def section_calibration(seeds: int, durations=(10.0, 60.0)) -> tuple[dict, list]
     return out, masses
 
 
+def one_force_cases():
+    """(system, chain, forced DOF 0-based): Table 1 and random 4- and 6-DOF chains, the force
+    on DOF 1 and on an interior DOF."""
+    for name, chain in (
+        ("table1", TABLE1),
+        ("random4", Chain.random(4, np.random.default_rng(4))),
+        ("random6", Chain.random(6, np.random.default_rng(6))),
+    ):
+        for dof in (0, chain.n // 2):
+            yield name, chain, dof
+
+
+def section_one_force(seeds: int, duration: float = 20.0, snr: float = 40.0) -> dict:
+    """One shaker: the continuous benchmark's forcing on one DOF only, noise on the
+    accelerations (the Cramer-Rao bound's case, ``bench/crlb.py --forced``); per case the
+    worst error per family, validity, the largest |error| / sigma and, per family, the error
+    over the bound (median of |error| / bound over seeds and parameters, / 0.6745: 1 at the
+    bound)."""
+    out = {}
+    for name, chain, dof in one_force_cases():
+        truth, fam = C.params_of(chain), families(chain.n)
+        rows, ratios = [], {f: [] for f in "mck"}
+        for seed in range(seeds):
+            rec = C.simulate(chain, duration, seed=seed, forced=[dof])
+            a, u = rec.noisy(snr, ("accel",), seed)
+            res = algid.identify(Recording(t=np.arange(a.shape[0]) / FS, u=u, a=a))
+            bound = C.crlb(rec, snr, (duration,))[float(duration)] * np.abs(truth)
+            err = np.abs(res.theta - truth)
+            for f in "mck":
+                ratios[f] += list(err[fam[f]] / bound[fam[f]])
+            rows.append(
+                {
+                    "seed": seed,
+                    "valid": bool(res.valid),
+                    "invalid": [r for r in res.reasons if "negligible" not in r],
+                    "worst": worst_per_family(chain, res.theta),
+                    "max_abs_z": float(np.nanmax(err / res.sigma)),
+                }
+            )
+        x_crlb = {f: float(np.median(v) / 0.6745) for f, v in ratios.items()}
+        key = f"{name}/dof{dof + 1}"
+        out[key] = {"x_crlb": x_crlb, "runs": rows}
+        worst = {f: max(r["worst"][f] for r in rows) for f in "mck"}
+        print(
+            f"one force {key:13s} valid {sum(r['valid'] for r in rows)}/{seeds}  worst "
+            + " ".join(f"{f} {100 * worst[f]:.3f} %" for f in "mck")
+            + "  x CRLB "
+            + " ".join(f"{f} {x_crlb[f]:.2f}" for f in "mck")
+            + f"  max |z| {max(r['max_abs_z'] for r in rows):.1f}",
+            flush=True,
+        )
+    return out
+
+
 def _suite_row(label: str, res) -> dict:
     n = res.n
     bad_mass = [v.name for p, v in enumerate(res.verdicts[:n]) if v.valid and not res.theta[p] > 0]
@@ -323,6 +381,8 @@ def main(argv=None) -> int:
     calib_rows: list = []
     if "calibration" in only:
         doc["calibration"], calib_rows = section_calibration(args.seeds)
+    if "one_force" in only:
+        doc["one_force"] = section_one_force(args.seeds)
     if "suites" in only:
         doc["suites"] = section_suites(_seeds(args.blind_seeds), calib_rows)
     doc["wall_s"] = time.perf_counter() - t0
