@@ -127,6 +127,15 @@ def test_one_force_scales_the_whole_chain(chain, dof):
     np.testing.assert_allclose(modal.frequencies_hz, fn, rtol=0.005, err_msg=why)
 
 
+def test_continuous_estimator_with_one_force_estimates_every_dof():
+    # sample by sample too: the weak form's joint solve scales the unforced DOFs
+    rec = _one_force(TABLE1, 0)
+    out = algid.ContinuousEstimator(3, 1e-3).run(np.ascontiguousarray(rec.a), np.ascontiguousarray(rec.u))
+    last = np.concatenate([out["mass"][-1], out["damping"][-1], out["stiffness"][-1]])
+    err = np.abs(last / TABLE1.identifiable() - 1)
+    assert err[:3].max() < 0.01 and err[6:].max() < 0.01 and err[3:6].max() < 0.1
+
+
 def test_one_force_with_derived_accelerations_leaves_the_unforced_dofs_without_scale():
     # the algebraic windows solve each DOF alone: an unforced DOF's equation has no scale
     res = algid.identify(_one_force(TABLE1, 0, motion="velocity"))
