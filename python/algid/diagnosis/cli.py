@@ -1,4 +1,4 @@
-"""``algid diagnose RECORDING [--json OUT|-] [--plots DIR] [--boundary fixed|free]``.
+"""``algid diagnose RECORDING [--json OUT|-] [--plots DIR] [--model OUT] [--boundary fixed|free]``.
 
 Registered by the top-level ``algid`` command through :func:`add_parser`. The report goes
 to stdout (to stderr with ``--json -``, which puts the JSON on stdout), progress (on a
@@ -38,6 +38,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     )
     p.add_argument("--json", metavar="OUT", help="write the JSON result to OUT ('-': stdout)")
     p.add_argument("--plots", metavar="DIR", help="write the diagnosis figures (PNG) into DIR")
+    p.add_argument(
+        "--model",
+        metavar="OUT",
+        help="write the chain refitted with the reported effect to OUT (JSON that algid.Chain.from_json reads)",
+    )
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
     p.add_argument("--quiet", action="store_true", help="no progress and no report on the terminal")
     add_recording_options(p)
@@ -78,6 +83,18 @@ def run(args: argparse.Namespace) -> int:
             out.write_text(json.dumps(to_json(d), indent=1))
         except OSError as err:
             return _err(f"--json {out}: {err.strerror or err}")
+    if args.model:
+        from .corrected import corrected_model
+        from .report import json_safe
+
+        model = corrected_model(d)
+        if model is None:
+            print("algid diagnose: --model: no effect reported, the linear chain is the model", file=sys.stderr)
+        else:
+            try:
+                Path(args.model).write_text(json.dumps(json_safe(model), indent=1))
+            except OSError as err:
+                return _err(f"--model {args.model}: {err.strerror or err}")
     if args.plots:
         try:
             from ..plotting.diagnosis import save_figures

@@ -8,15 +8,16 @@ import numpy as np
 
 from .candidates import MAIN_PARAM
 from .core import METRIC, METRIC_FORCE
+from .corrected import corrected_model
 from .units import SI
 
 
-def _clean(x):
+def json_safe(x):
     """JSON-safe floats (NaN/inf -> None)."""
     if isinstance(x, dict):
-        return {k: _clean(v) for k, v in x.items()}
+        return {k: json_safe(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
+        return [json_safe(v) for v in x]
     if isinstance(x, (np.floating, float)):
         x = float(x)
         return x if math.isfinite(x) else None
@@ -33,7 +34,8 @@ def to_json(d) -> dict:
     linear model, the location indicators and timings; ``units``, the unit of every number
     by its name (``m``, ``c``, ``k`` of the linear model, the signals, every effect
     parameter: ``k3`` in ``N/m^3``, or ``V/V^3`` for forces and displacements in volts),
-    ``recording_units`` (by role, as the recording declares them) and ``recording_notes``."""
+    ``recording_units`` (by role, as the recording declares them) and ``recording_notes``;
+    ``corrected_model``, the chain refitted with the reported effect (:mod:`.corrected`)."""
     ranking = []
     for s in d.ranking:
         ranking.append(
@@ -77,6 +79,7 @@ def to_json(d) -> dict:
         "ranking": ranking,
         "params_std": d.params_std,
         "main_param": MAIN_PARAM.get(d.effect),
+        "corrected_model": corrected_model(d),
         "linear_model": {
             "n": d.P.n,
             "boundary": d.P.boundary,
@@ -101,7 +104,7 @@ def to_json(d) -> dict:
         "recording_units": dict(d.recording_units),
         "recording_notes": list(d.recording_notes),
     }
-    return _clean(out)
+    return json_safe(out)
 
 
 def _combination_json(s) -> dict | None:
@@ -113,6 +116,26 @@ def _combination_json(s) -> dict | None:
         for eff, loc in zip(s.fit.effect.split("+"), s.fit.location["parts"])
     ]
     return {"effects": parts, "gap_after": s.gap_after, "gap_after_fullband": s.gap_after_full, "z_noise": s.z}
+
+
+def _corrected_lines(d) -> list[str]:
+    """The chain refitted with the effect, one line per DOF, values +- one sigma."""
+    cm = corrected_model(d)
+    if cm is None:
+        return []
+    n = cm["n"]
+
+    def val(x, s):
+        return "n/a" if x is None else f"{x:.5g}" + ("" if s is None else f" +- {s:.2g}")
+
+    out = [f"  chain with the effect (m [{d.units['m']}], c [{d.units['c']}], springs [{d.units['k']}]):"]
+    for i in range(n):
+        springs = "  ".join(
+            f"k{j + 1}={val(cm['stiffness'][j], cm['sigma_stiffness'][j])}" for j in (i, i + 1) if j < n or i == n - 1
+        )
+        m, c = val(cm["mass"][i], cm["sigma_mass"][i]), val(cm["damping"][i], cm["sigma_damping"][i])
+        out.append(f"    DOF {i + 1}: m={m}  c={c}  {springs}")
+    return out
 
 
 def _fmt_params(params: dict, std: dict | None = None, units: dict = SI) -> str:
@@ -212,6 +235,7 @@ def to_text(d, source: str = "") -> str:
             f"[{d.gap_after_full:.4g}, {shrink_f:.3g}x]"
         )
         L.append(f"  fitted: {_fmt_params(d.params, d.params_std, d.units)}")
+        L.extend(_corrected_lines(d))
         combo = d.extra.get("combination")
         if combo is not None:
             parts = " + ".join(

@@ -1,0 +1,84 @@
+"""The chain with the diagnosed effect in it: the model a user takes away from a diagnosis.
+
+The reported candidate was fitted as eq. 1 plus the effect's columns on the equations it enters
+(:mod:`.candidates`), cross-validated over the folds; its chain parameters are the corrected
+ones for those equations, the linear fit's for the others (the effect does not enter them).
+Physical units per equation (:func:`.equations.to_physical`); an interior spring estimated in
+two forced equations is their inverse-variance weighted mean (an effect on one of them leaves
+that equation's estimate the less certain). A DOF without force has no scale
+here (its parameters are per unit mass): its mass and damping are ``None`` and its springs
+come from a forced neighbour's equation only. Standard deviations: the delete-a-group
+jackknife over the folds' fits, the spread the effect's parameters are given.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .equations import to_physical
+from .gram import jackknife_std
+
+
+def _physical(P, eqs: list[int], cv) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Equation -> (physical parameters (p,), per-fold physical parameters (K, p))."""
+    return {
+        e: (to_physical(P, e, cv.theta[sl]), np.array([to_physical(P, e, f[sl]) for f in cv.theta_folds]))
+        for e, sl in zip(eqs, cv.stats.slices)
+    }
+
+
+def _packed(P, names: list[list[str]], thetas: dict[int, np.ndarray], var: dict[int, np.ndarray]) -> np.ndarray:
+    """``m1..mn, c1..cn, k1..k{n+1}`` from per-equation physical parameters, an interior
+    spring the mean of its equations' estimates weighted by ``1 / var`` (NaN where no forced
+    equation holds the parameter; free end ``k{n+1} = 0``)."""
+    n = P.n
+    out = np.full(3 * n + 1, np.nan)
+    springs: dict[int, list[tuple[float, float]]] = {}
+    for e, th in thetas.items():
+        if not P.forced[e]:
+            continue
+        out[e], out[n + e] = th[0], th[1]
+        for name, value, v in zip(names[e][2:], th[2:], var[e][2:]):
+            springs.setdefault(int(name[1:]), []).append((float(value), 1.0 / max(float(v), 1e-300)))
+    for j, pairs in springs.items():
+        values, weights = np.array(pairs).T
+        out[2 * n + j - 1] = float(np.sum(values * weights) / np.sum(weights))
+    if P.boundary == "free" and n > 1:
+        out[3 * n] = 0.0
+    return out
+
+
+def corrected_model(d) -> dict | None:
+    """The chain refitted with the effect :func:`~.engine.diagnose` reports (module
+    docstring) as a dict that :meth:`algid.Chain.from_json` reads: ``n, boundary, mass,
+    damping, stiffness`` (``None`` where the record gives no scale), their ``sigma_*``, the
+    ``effects`` (``effect, location, params, params_std``) and the withheld gap with them;
+    ``None`` when no effect is reported."""
+    if d.best is None:
+        return None
+    P, lin, fit = d.P, d.lin, d.best.fit
+    per_eq = _physical(P, list(range(P.n)), lin.cv)
+    per_eq.update(_physical(P, fit.eqs, fit.cv))
+    var = {e: jackknife_std(v[1]) ** 2 for e, v in per_eq.items()}
+    theta = _packed(P, lin.names, {e: v[0] for e, v in per_eq.items()}, var)
+    K = len(next(iter(per_eq.values()))[1])
+    folds = np.array([_packed(P, lin.names, {e: v[1][k] for e, v in per_eq.items()}, var) for k in range(K)])
+    sigma = jackknife_std(folds)
+    n = P.n
+
+    def listed(x: np.ndarray) -> list:
+        return [float(v) if np.isfinite(v) else None for v in x]
+
+    return {
+        "n": n,
+        "boundary": P.boundary,
+        "mass": listed(theta[:n]),
+        "damping": listed(theta[n : 2 * n]),
+        "stiffness": listed(theta[2 * n :]),
+        "sigma_mass": listed(sigma[:n]),
+        "sigma_damping": listed(sigma[n : 2 * n]),
+        "sigma_stiffness": listed(sigma[2 * n :]),
+        "effects": [{"effect": d.effect, "location": d.location, "params": d.params, "params_std": d.params_std}],
+        "gap_after": d.gap_after,
+        "refitted_dofs": sorted(e + 1 for e in fit.eqs),
+    }
