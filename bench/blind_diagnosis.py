@@ -85,8 +85,8 @@ MORE_EFFECTS = ("stribeck_friction", "amplitude_damping")
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
 MAIN = {
     "coulomb_friction": "force",
-    "quadratic_damping": "c2",
-    "cubic_stiffness": "k3",
+    "quadratic_damping": "c_quadratic",
+    "cubic_stiffness": "k_cubic",
     "clearance": "gap",
     "input_delay": "delay",
     "sensor_bias": "bias",
@@ -280,8 +280,8 @@ def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -
             "amplitude_damping": np.abs(d) * _deformation(v, j),
         }[effect]
         key = {
-            "cubic_stiffness": "k3",
-            "clearance": "stiffness",
+            "cubic_stiffness": "k_cubic",
+            "clearance": "k_contact",
             "parameter_drift": "rel_change",
             "amplitude_damping": "c_amp",
         }[effect]
@@ -294,9 +294,9 @@ def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -
             k3 = sign * scale
             if k3 < 0:  # a softening spring must stay stable: at most 30 % of k at 3 rms(d)
                 k3 = -min(-k3, 0.3 * chain.stiffness[j - 1] / (3 * _rms(d)) ** 2)
-            params = {"k3": float(k3)}
+            params = {"k_cubic": float(k3)}
         elif effect == "clearance":
-            params = {"gap": gap, "stiffness": float(scale)}
+            params = {"gap": gap, "k_contact": float(scale)}
         elif effect == "amplitude_damping":
             params = {"c_amp": float(scale)}
         else:
@@ -325,9 +325,9 @@ def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -
         elif effect == "quadratic_damping":
 
             def errors(p):
-                return {i: -p["c2"] * v[:, i] * np.abs(v[:, i]) / m[i]}
+                return {i: -p["c_quadratic"] * v[:, i] * np.abs(v[:, i]) / m[i]}
 
-            params = {"c2": solve_linear(errors({"c2": 1.0}), dofs)}
+            params = {"c_quadratic": solve_linear(errors({"c_quadratic": 1.0}), dofs)}
         elif effect == "input_delay":
 
             def errors(p):
@@ -619,7 +619,7 @@ def timing_check(repeats: int = 3) -> dict:
         u,
         20.0,
         1000.0,
-        effects=[{"name": "cubic_stiffness", "location": {"spring": 2}, "params": {"k3": 3e5}}],
+        effects=[{"name": "cubic_stiffness", "location": {"spring": 2}, "params": {"k_cubic": 3e5}}],
         noise_db=50.0,
         seed=1,
     )

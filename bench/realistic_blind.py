@@ -209,7 +209,7 @@ def axis_case(seed: int, rng) -> tuple[Recording, dict]:
             "v_stribeck": float(rng.uniform(0.05, 0.3)) * v_rms,
         }
     elif effect == "quadratic_damping":
-        params = {"c2": r * u_rms / v_rms**2}
+        params = {"c_quadratic": r * u_rms / v_rms**2}
     elif effect == "input_delay":
         params = {"delay": float(rng.uniform(0.002, 0.02))}
     effects = [] if effect == "none" else [{"name": effect, "location": {"dof": 1}, "params": params}]
@@ -247,10 +247,10 @@ def device_case(seed: int, rng) -> tuple[Recording, dict]:
     if effect == "coulomb_friction":
         params = {"force": r * u_rms}
     elif effect == "clearance":
-        params = {"gap": float(rng.uniform(0.05, 0.3)) * amp, "stiffness": k}
+        params = {"gap": float(rng.uniform(0.05, 0.3)) * amp, "k_contact": k}
         k_lin, loc = 0.0, {"spring": 1}
     elif effect == "cubic_stiffness":
-        params = {"k3": float(rng.choice([-0.5, 1.0])) * r * k / x_rms**2}
+        params = {"k_cubic": float(rng.choice([-0.5, 1.0])) * r * k / x_rms**2}
         loc = {"spring": 1}
     elif effect == "amplitude_damping":
         params = {"c_amp": r * u_rms / (x_rms * v_rms)}

@@ -16,7 +16,7 @@ from signals import multisine
 #: Effects mixed into a fleet (None: the linear chain), cycled over the recordings.
 EFFECTS = (
     None,
-    {"name": "cubic_stiffness", "location": {"spring": 1}, "params": {"k3": 3e7}},
+    {"name": "cubic_stiffness", "location": {"spring": 1}, "params": {"k_cubic": 3e7}},
     {"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": 1.5}},
 )
 #: Sensor SNRs [dB] cycled over the recordings.

@@ -195,9 +195,9 @@ def test_linear_fit_recovers_table1_without_noise():
 
 CASES = [
     ("coulomb_friction", {"dof": 2}, {"force": 0.6}),
-    ("quadratic_damping", {"dof": 1}, {"c2": 30.0}),
-    ("cubic_stiffness", {"spring": 2}, {"k3": 5e5}),
-    ("clearance", {"spring": 3}, {"gap": 0.004, "stiffness": 300.0}),
+    ("quadratic_damping", {"dof": 1}, {"c_quadratic": 30.0}),
+    ("cubic_stiffness", {"spring": 2}, {"k_cubic": 5e5}),
+    ("clearance", {"spring": 3}, {"gap": 0.004, "k_contact": 300.0}),
     ("input_delay", {"dof": 3}, {"delay": 0.0015}),
     ("sensor_bias", {"dof": 2}, {"bias": 0.02}),
     ("sensor_lowpass", {"dof": 1}, {"cutoff_hz": 80.0}),
@@ -235,10 +235,10 @@ def test_no_false_alarm_on_a_linear_chain_with_noise():
 
 def test_one_dof_reports_spring_one_for_the_second_spring():
     ch = Chain([2.0], [4.0], [800.0, 600.0])
-    res = simulate(ch, [{"name": "cubic_stiffness", "location": {"spring": 2}, "params": {"k3": 8e5}}], seed=4)
+    res = simulate(ch, [{"name": "cubic_stiffness", "location": {"spring": 2}, "params": {"k_cubic": 8e5}}], seed=4)
     d = diagnose(Recording(t=res.t, u=res.u, a=res.a))
     assert d.effect == "cubic_stiffness" and d.location == {"spring": 1}
-    assert d.params["k3"] == pytest.approx(8e5, rel=0.05)  # an odd law: the same on either side
+    assert d.params["k_cubic"] == pytest.approx(8e5, rel=0.05)  # an odd law: the same on either side
     from algid.diagnosis.core import to_physical
 
     # With the effect, the linear part is the parallel sum k1 + k2 (the linear-only fit
@@ -250,11 +250,14 @@ def test_one_dof_reports_spring_one_for_the_second_spring():
 
 def test_displacement_only_recording_gives_the_same_diagnosis():
     res = simulate(
-        TABLE1, [{"name": "quadratic_damping", "location": {"dof": 3}, "params": {"c2": 40.0}}], noise_db=None, seed=2
+        TABLE1,
+        [{"name": "quadratic_damping", "location": {"dof": 3}, "params": {"c_quadratic": 40.0}}],
+        noise_db=None,
+        seed=2,
     )
     d = diagnose(Recording(t=res.t, u=res.u, x=res.x))
     assert (d.effect, d.location) == ("quadratic_damping", {"dof": 3})
-    assert d.params["c2"] == pytest.approx(40.0, rel=0.02)
+    assert d.params["c_quadratic"] == pytest.approx(40.0, rel=0.02)
 
 
 def test_unforced_dof_has_parameters_per_unit_mass():
@@ -281,7 +284,10 @@ def _run_cli(*argv):
 
 def test_cli_json_contract_and_figures(tmp_path):
     res = simulate(
-        TABLE1, [{"name": "cubic_stiffness", "location": {"spring": 3}, "params": {"k3": 6e5}}], duration=6.0, seed=8
+        TABLE1,
+        [{"name": "cubic_stiffness", "location": {"spring": 3}, "params": {"k_cubic": 6e5}}],
+        duration=6.0,
+        seed=8,
     )
     rec = save_recording(tmp_path / "rec.csv", Recording(t=res.t, u=res.u, a=res.a))
     out = tmp_path / "diag.json"

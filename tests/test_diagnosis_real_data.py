@@ -43,8 +43,8 @@ def test_silverbox_is_a_hardening_cubic_spring():
     assert (d.effect, d.location) == ("cubic_stiffness", {"spring": 1})
     oracle = _ls_cubic_oracle(rec)
     assert 3.0 < oracle < 4.0  # the PROVENANCE value, 3.5
-    assert d.params["k3"] == pytest.approx(oracle, rel=0.1)
-    assert d.params["k3"] > 0  # hardening
+    assert d.params["k_cubic"] == pytest.approx(oracle, rel=0.1)
+    assert d.params["k_cubic"] > 0  # hardening
     k = d.lin.stiffness()[0]
     assert 1.0 < k < 1.15  # PROVENANCE: 1.09-1.12
     assert d.gap_after < 0.6 * d.gap_before

@@ -91,3 +91,25 @@ def test_old_names_warn_and_mean_the_new_ones(table1_record):
     for est in (old, new):  # both restarted: the same as a fresh estimator on the same samples
         np.testing.assert_array_equal(est.run(a[100:400], u[100:400])["mass"], fresh["mass"])
     assert np.isfinite(fresh["mass"][-1]).all()
+
+
+def test_effect_parameters_never_take_a_chain_parameters_name():
+    # k3 is the third spring: the cubic coefficient is k_cubic, the contact stiffness k_contact
+    import re
+
+    from algid.diagnosis.units import PARAMETER_DIMENSIONS
+    from algid.simulator.effects import _EFFECT_SPECS
+
+    names = set(PARAMETER_DIMENSIONS) | {p for _, req, opt in _EFFECT_SPECS.values() for p in req + opt}
+    clashes = {p for p in names if re.fullmatch(r"[mck]\d+", p) or p in ("mass", "damping", "stiffness")}
+    assert not clashes
+
+
+def test_renamed_effect_parameters_still_read_with_a_warning():
+    import pytest
+
+    from algid.simulator.effects import Effect
+
+    with pytest.warns(DeprecationWarning, match="k_cubic"):
+        e = Effect("cubic_stiffness", {"spring": 1}, {"k3": 2.0})
+    assert dict(e.params) == {"k_cubic": 2.0}

@@ -48,7 +48,7 @@ def rhs_reference(chain: Chain, force, effects=(), v_eps=None, duration=1.0):
                 f[i] -= level * np.tanh(v[i] / v_eps[i + 1])
             elif e.name == "quadratic_damping":
                 i = e.location["dof"] - 1
-                f[i] -= e.params["c2"] * v[i] * abs(v[i])
+                f[i] -= e.params["c_quadratic"] * v[i] * abs(v[i])
             elif e.name in ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping"):
                 j = e.location["spring"]  # joins DOF j-1 (xe[j-1]) and DOF j (xe[j])
                 d = xe[j] - xe[j - 1]
@@ -56,9 +56,9 @@ def rhs_reference(chain: Chain, force, effects=(), v_eps=None, duration=1.0):
                 if e.name == "amplitude_damping":
                     s = e.params["c_amp"] * abs(d) * (ve[j] - ve[j - 1])
                 elif e.name == "cubic_stiffness":
-                    s = e.params["k3"] * d**3
+                    s = e.params["k_cubic"] * d**3
                 elif e.name == "clearance":
-                    s = e.params["stiffness"] * max(abs(d) - e.params["gap"], 0.0) * np.sign(d)
+                    s = e.params["k_contact"] * max(abs(d) - e.params["gap"], 0.0) * np.sign(d)
                 else:
                     s = k[j - 1] * e.params["rel_change"] * t / duration * d
                 if j <= n:
@@ -162,8 +162,8 @@ def _effects_error(effects, substeps=None, duration=1.0):
 
 def test_smooth_effects_match_solve_ivp():
     effects = [
-        Effect("cubic_stiffness", {"spring": 2}, {"k3": 3e7}),
-        Effect("quadratic_damping", {"dof": 3}, {"c2": 200.0}),
+        Effect("cubic_stiffness", {"spring": 2}, {"k_cubic": 3e7}),
+        Effect("quadratic_damping", {"dof": 3}, {"c_quadratic": 200.0}),
         Effect("parameter_drift", {"spring": 1}, {"rel_change": -0.3}),
         Effect("sensor_lowpass", {"dof": 2}, {"cutoff_hz": 15.0}),
     ]
@@ -177,7 +177,7 @@ def test_smooth_effects_match_solve_ivp():
 def test_steep_effects_match_solve_ivp_and_converge_with_substeps():
     """Dry friction and a clearance contact switch within a step: fourth order is lost at
     the switches, the error is still small and shrinks with sub-steps."""
-    clearance = [Effect("clearance", {"spring": 4}, {"gap": 5e-4, "stiffness": 3000.0})]
+    clearance = [Effect("clearance", {"spring": 4}, {"gap": 5e-4, "k_contact": 3000.0})]
     friction = [Effect("coulomb_friction", {"dof": 1}, {"force": 0.3, "v_eps": 2e-4})]
     stribeck = [
         Effect("stribeck_friction", {"dof": 2}, {"force": 0.2, "static": 0.5, "v_stribeck": 2e-3, "v_eps": 2e-4})
@@ -333,8 +333,8 @@ def test_to_arrays_is_the_recording_format():
 @pytest.mark.parametrize(
     "bad",
     [
-        ("spring_softening", {"spring": 1}, {"k3": 1.0}),
-        ("cubic_stiffness", {"dof": 1}, {"k3": 1.0}),
+        ("spring_softening", {"spring": 1}, {"k_cubic": 1.0}),
+        ("cubic_stiffness", {"dof": 1}, {"k_cubic": 1.0}),
         ("cubic_stiffness", {"spring": 1}, {"k": 1.0}),
         ("coulomb_friction", {"dof": 1}, {"force": -1.0}),
         ("sensor_lowpass", {"dof": 1}, {"cutoff_hz": 0.0}),
@@ -352,8 +352,8 @@ def test_effect_locations_are_checked_against_the_chain():
     free = Chain([1.0, 1.0], [1.0, 1.0], [100.0, 100.0, 0.0], boundary="free")
     for chain, eff in (
         (TABLE1, Effect("coulomb_friction", {"dof": 4}, {"force": 1.0})),
-        (TABLE1, Effect("cubic_stiffness", {"spring": 5}, {"k3": 1.0})),
-        (free, Effect("cubic_stiffness", {"spring": 3}, {"k3": 1.0})),
+        (TABLE1, Effect("cubic_stiffness", {"spring": 5}, {"k_cubic": 1.0})),
+        (free, Effect("cubic_stiffness", {"spring": 3}, {"k_cubic": 1.0})),
     ):
         with pytest.raises(ValueError):
             simulate(chain, None, 0.01, effects=[eff])

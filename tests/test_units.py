@@ -45,7 +45,7 @@ def duffing():
     spectrum = np.zeros(T // 2 + 1, complex)
     spectrum[lines] = np.exp(2j * np.pi * rng.uniform(size=lines.size))
     u = np.fft.irfft(spectrum, T)
-    effect = {"name": "cubic_stiffness", "location": {"spring": 1}, "params": {"k3": K3}}
+    effect = {"name": "cubic_stiffness", "location": {"spring": 1}, "params": {"k_cubic": K3}}
     res = simulate(DUFFING, 10 * u[:, None] / u.std(), T / fs, fs, effects=[effect], noise_db=60, seed=4)
     return res.t, res.u, res.x, res.a
 
@@ -83,10 +83,10 @@ def test_si_labels_are_those_of_the_candidates_table():
         "v_scale": "m/s",
         "v_stribeck": "m/s",
         "c_amp": "N s/m^2",
-        "c2": "N s^2/m^2",
-        "k3": "N/m^3",
+        "c_quadratic": "N s^2/m^2",
+        "k_cubic": "N/m^3",
         "gap": "m",
-        "stiffness": "N/m",
+        "k_contact": "N/m",
         "delay": "s",
         "bias": "m/s^2",
         "cutoff_hz": "Hz",
@@ -97,11 +97,11 @@ def test_si_labels_are_those_of_the_candidates_table():
 def test_labels_in_the_units_the_recording_declares():
     volts = diagnosis_units(VOLTS, "displacement")
     assert (volts["m"], volts["c"], volts["k"]) == ("V s^2/V", "V s/V", "V/V")
-    assert (volts["k3"], volts["gap"], volts["c2"], volts["bias"]) == ("V/V^3", "V", "V s^2/V^2", "V/s^2")
+    assert (volts["k_cubic"], volts["gap"], volts["c_quadratic"], volts["bias"]) == ("V/V^3", "V", "V s^2/V^2", "V/s^2")
     # accelerations in V: a length is V s^2
     acc = diagnosis_units({"acceleration": "V"}, "acceleration")
     assert (acc["displacement"], acc["velocity"], acc["acceleration"]) == ("V s^2", "V s", "V")
-    assert (acc["k3"], acc["m"], acc["delay"]) == ("N/(V^3 s^6)", "N/V", "s")
+    assert (acc["k_cubic"], acc["m"], acc["delay"]) == ("N/(V^3 s^6)", "N/V", "s")
     # a compound label stays one symbol; a unit alone is written as it is
     assert unit_label({"velocity": "mV/(m/s)"}, "velocity", length=-1) == "1/((mV/(m/s)) s)"
     assert unit_label({"velocity": "mV/(m/s)"}, "velocity", length=1, time=-1) == "mV/(m/s)"
@@ -126,7 +126,18 @@ def test_effect_parameters_scale_as_their_units_say(duffing, motion):
                 assert value == pytest.approx(fitted[s.fit.effect][name] * alpha**a * beta**b, rel=1e-6), name
                 checked.add(name)
             assert name in volts.units
-    assert checked >= {"k3", "gap", "stiffness", "c_amp", "c2", "force", "v_scale", "bias", "delay", "cutoff_hz"}
+    assert checked >= {
+        "k_cubic",
+        "gap",
+        "k_contact",
+        "c_amp",
+        "c_quadratic",
+        "force",
+        "v_scale",
+        "bias",
+        "delay",
+        "cutoff_hz",
+    }
     m, c, k = volts.lin.theta[0]
     np.testing.assert_allclose([m, c, k], np.array(si.lin.theta[0]) * alpha / beta, rtol=1e-9)
 
@@ -145,12 +156,12 @@ def test_diagnose_report_json_and_figures_in_the_recording_units(tmp_path, capsy
     code, stdout, stderr = _cli(capsys, "diagnose", path, "--json", out, "--plots", tmp_path / "figs")
     assert code == 0, stderr
     doc = json.loads(out.read_text())
-    assert doc["effect"] == "cubic_stiffness" and doc["params"]["k3"] == pytest.approx(K3, rel=0.02)
+    assert doc["effect"] == "cubic_stiffness" and doc["params"]["k_cubic"] == pytest.approx(K3, rel=0.02)
     expected = diagnosis_units(units, "displacement")
     assert doc["units"] == expected and doc["recording_notes"] == []
     assert doc["recording_units"] == {"time": "s", "force": "N", "displacement": "m"} | units
     k3 = "V/V^3" if units else "N/m^3"
-    assert doc["units"]["k3"] == k3 and re.search(rf"fitted: k3 = \S+ \+- \S+ {re.escape(k3)}\n", stdout)
+    assert doc["units"]["k_cubic"] == k3 and re.search(rf"fitted: k_cubic = \S+ \+- \S+ {re.escape(k3)}\n", stdout)
     header = "m [V s^2/V]  c [V s/V]   springs [V/V]" if units else "m [kg]      c [N s/m]   springs [N/m]"
     assert f"  DOF   {header}\n" in stdout
     assert sorted(f.name for f in (tmp_path / "figs").iterdir()) == sorted(FIGURES)
@@ -187,11 +198,11 @@ def test_silverbox_read_as_volts_is_diagnosed_in_volts(tmp_path, capsys, shared_
     assert code == 0, stderr
     doc = json.loads(out.read_text())
     assert (doc["effect"], doc["location"]) == ("cubic_stiffness", {"spring": 1})
-    assert 3.0 < doc["params"]["k3"] < 4.0  # PROVENANCE.md: k3 ~ 3.5 V/V^3 (hardening)
-    assert (doc["units"]["k3"], doc["units"]["k"], doc["units"]["m"]) == ("V/V^3", "V/V", "V s^2/V")
+    assert 3.0 < doc["params"]["k_cubic"] < 4.0  # PROVENANCE.md: k3 ~ 3.5 V/V^3 (hardening)
+    assert (doc["units"]["k_cubic"], doc["units"]["k"], doc["units"]["m"]) == ("V/V^3", "V/V", "V s^2/V")
     assert doc["recording_units"] == {"time": "s", "force": "V", "displacement": "V"}
     assert doc["recording_notes"] == ["no time column: t = k * 0.0016384 s"]
-    assert "springs [V/V]" in stdout and re.search(r"fitted: k3 = 3\.\d+ \+- \S+ V/V\^3\n", stdout)
+    assert "springs [V/V]" in stdout and re.search(r"fitted: k_cubic = 3\.\d+ \+- \S+ V/V\^3\n", stdout)
 
 
 # ---------------------------------------------------------------------------- identify

@@ -10,9 +10,9 @@ The definitions are those of the simulator (the names are part of the interface)
 | coulomb_friction | dof i | ``+ force * tanh(v_i / v_scale)`` in eq. i | force [N], v_scale [m/s] |
 | stribeck_friction | dof i | ``+ (force + (static - force) exp(-(v_i/v_s)^2)) sgn(v_i)`` | force, static [N], v_s |
 | amplitude_damping | spring j | ``f = c_amp * |d| d'`` (micro-slip: damping growing with amplitude) | c_amp [N s/m^2] |
-| quadratic_damping | dof i | ``+ c2 * v_i |v_i|`` in eq. i | c2 [N s^2/m^2] |
-| cubic_stiffness | spring j | ``f = k3 d^3`` | k3 [N/m^3] |
-| clearance | spring j | ``f = stiffness * sign(d) max(|d| - gap, 0)`` | gap [m], stiffness [N/m] |
+| quadratic_damping | dof i | ``+ c_quadratic * v_i |v_i|`` in eq. i | c_quadratic [N s^2/m^2] |
+| cubic_stiffness | spring j | ``f = k_cubic d^3`` | k_cubic [N/m^3] |
+| clearance | spring j | ``f = k_contact * sign(d) max(|d| - gap, 0)`` | gap [m], k_contact [N/m] |
 | input_delay | dof i | eq. i is driven by ``u_i(t - delay)`` | delay [s] |
 | sensor_bias | dof i | true acceleration is ``a_i - bias`` | bias [m/s^2] |
 | sensor_lowpass | dof i | measured ``a_i`` is the first-order low-pass of the true one | cutoff_hz [Hz] |
@@ -78,8 +78,8 @@ MAIN_PARAM = {
     "coulomb_friction": "force",
     "stribeck_friction": "force",
     "amplitude_damping": "c_amp",
-    "quadratic_damping": "c2",
-    "cubic_stiffness": "k3",
+    "quadratic_damping": "c_quadratic",
+    "cubic_stiffness": "k_cubic",
     "clearance": "gap",
     "input_delay": "delay",
     "sensor_bias": "bias",
@@ -95,8 +95,8 @@ PHYSICAL = {
     "coulomb_friction": lambda p: p["force"] > 0,
     "stribeck_friction": lambda p: p["force"] > 0 and p["static"] > p["force"],
     "amplitude_damping": lambda p: p["c_amp"] > 0,
-    "quadratic_damping": lambda p: p["c2"] > 0,
-    "clearance": lambda p: p["gap"] > 0 and p["stiffness"] > 0,
+    "quadratic_damping": lambda p: p["c_quadratic"] > 0,
+    "clearance": lambda p: p["gap"] > 0 and p["k_contact"] > 0,
     "input_delay": lambda p: p["delay"] > 0,
     "sensor_lowpass": lambda p: p["cutoff_hz"] > 0,
 }
@@ -451,7 +451,7 @@ def fit_clearance(ctx: Context, j: int) -> CandidateFit:
             for e, s in sides
         ]
 
-    return _fit_grid(ctx, "clearance", {"spring": j}, build, grid, lambda g: g, ["gap"], ["stiffness"])
+    return _fit_grid(ctx, "clearance", {"spring": j}, build, grid, lambda g: g, ["gap"], ["k_contact"])
 
 
 def fit_delay(ctx: Context, i: int) -> CandidateFit:
@@ -633,7 +633,7 @@ def fit_combination(ctx: Context, fits: list[CandidateFit]) -> CandidateFit:
 
 def _coefficient_names(fit: CandidateFit) -> list[str]:
     """Names of a candidate's shared (linear) coefficients, in column order."""
-    return {"coulomb_friction": ["force"], "stribeck_friction": ["force", "excess"], "clearance": ["stiffness"]}.get(
+    return {"coulomb_friction": ["force"], "stribeck_friction": ["force", "excess"], "clearance": ["k_contact"]}.get(
         fit.effect, [MAIN_PARAM[fit.effect]]
     )
 

@@ -121,7 +121,7 @@ class Diagnosis:
     """Result of :func:`diagnose` (see :func:`.report.to_json` for the published fields).
 
     ``units`` names the unit of every number by its name (``m``, ``c``, ``k``, ``force``,
-    ``acceleration``, ``k3``, ...: :func:`.units.diagnosis_units`), in the units the
+    ``acceleration``, ``k_cubic``, ...: :func:`.units.diagnosis_units`), in the units the
     recording declares (``recording_units``, by role); ``recording_notes`` are what the
     reader did (columns ignored, units converted)."""
 

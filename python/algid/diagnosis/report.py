@@ -33,7 +33,7 @@ def to_json(d) -> dict:
     every ranked candidate, the signal band and the full-band gaps (``*_fullband``), the
     linear model, the location indicators and timings; ``units``, the unit of every number
     by its name (``m``, ``c``, ``k`` of the linear model, the signals, every effect
-    parameter: ``k3`` in ``N/m^3``, or ``V/V^3`` for forces and displacements in volts),
+    parameter: ``k_cubic`` in ``N/m^3``, or ``V/V^3`` for forces and displacements in volts),
     ``recording_units`` (by role, as the recording declares them) and ``recording_notes``;
     ``corrected_model``, the chain refitted with the reported effect (:mod:`.corrected`)."""
     ranking = []

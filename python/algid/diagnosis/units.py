@@ -21,10 +21,10 @@ PARAMETER_DIMENSIONS = {
     "v_scale": (0, 1, -1),
     "v_stribeck": (0, 1, -1),
     "c_amp": (1, -2, 1),
-    "c2": (1, -2, 2),
-    "k3": (1, -3, 0),
+    "c_quadratic": (1, -2, 2),
+    "k_cubic": (1, -3, 0),
     "gap": (0, 1, 0),
-    "stiffness": (1, -1, 0),
+    "k_contact": (1, -1, 0),
     "delay": (0, 0, 1),
     "bias": (0, 1, -2),
 }
@@ -35,7 +35,7 @@ FIXED_UNITS = {"cutoff_hz": "Hz", "rel_change": "-"}
 def diagnosis_units(units: dict[str, str], motion: str) -> dict[str, str]:
     """Unit label of every number a diagnosis reports, by name: ``m``, ``c``, ``k`` of the
     linear chain, the signals ``force``, ``displacement``, ``velocity``, ``acceleration`` and
-    every effect parameter (``k3``, ``gap``, ...), for a recording with ``units`` (by role)
+    every effect parameter (``k_cubic``, ``gap``, ...), for a recording with ``units`` (by role)
     whose motion measured is ``motion`` (:func:`algid.recording.motion`)."""
     params = {name: unit_label(units, motion, *dims) for name, dims in PARAMETER_DIMENSIONS.items()}
     return signal_unit_labels(units, motion) | parameter_unit_labels(units, motion) | params | FIXED_UNITS

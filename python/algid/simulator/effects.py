@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..chain import Chain
+from ..deprecation import warn_renamed
 
 __all__ = ["COULOMB_V_EPS", "EFFECT_NAMES", "Effect", "as_effect"]
 
@@ -19,9 +20,9 @@ COULOMB_V_EPS = 1e-4
 #: ``name -> (location key, required params, optional params)``.
 _EFFECT_SPECS: dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]] = {
     "coulomb_friction": ("dof", ("force",), ("v_eps",)),
-    "quadratic_damping": ("dof", ("c2",), ()),
-    "cubic_stiffness": ("spring", ("k3",), ()),
-    "clearance": ("spring", ("gap", "stiffness"), ()),
+    "quadratic_damping": ("dof", ("c_quadratic",), ()),
+    "cubic_stiffness": ("spring", ("k_cubic",), ()),
+    "clearance": ("spring", ("gap", "k_contact"), ()),
     "input_delay": ("dof", ("delay",), ()),
     "sensor_bias": ("dof", ("bias",), ()),
     "sensor_lowpass": ("dof", ("cutoff_hz",), ()),
@@ -29,6 +30,14 @@ _EFFECT_SPECS: dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]] = {
     "force_offset": ("dof", ("offset",), ()),
     "stribeck_friction": ("dof", ("force", "static", "v_stribeck"), ("v_eps",)),
     "amplitude_damping": ("spring", ("c_amp",), ()),
+}
+
+#: Effect parameters renamed so that none shares a name with a chain parameter
+#: (``k3`` is the third spring): ``effect -> {old: new}``, the old names warn.
+_RENAMED_PARAMS = {
+    "quadratic_damping": {"c2": "c_quadratic"},
+    "cubic_stiffness": {"k3": "k_cubic"},
+    "clearance": {"stiffness": "k_contact"},
 }
 
 #: The effect names the simulator knows (part of the public interface).
@@ -47,11 +56,11 @@ class Effect:
         ``coulomb_friction``  location ``{"dof": i}``, params ``{"force": F [N]}``
             (optional ``"v_eps"`` [m/s]): a force ``-F tanh(v_i / v_eps)`` on mass i
             (smooth, steep dry friction; default ``v_eps`` in :mod:`algid.simulator`).
-        ``quadratic_damping``  ``{"dof": i}``, ``{"c2": [N s^2/m^2]}``: ``-c2 v_i |v_i|``.
-        ``cubic_stiffness``  ``{"spring": j}``, ``{"k3": [N/m^3]}``: spring force
-            ``k3 d_j^3`` added to spring j (negative ``k3`` softens).
-        ``clearance``  ``{"spring": j}``, ``{"gap": [m], "stiffness": [N/m]}``: a contact
-            in parallel with spring j, force ``stiffness (|d_j| - gap) sign(d_j)`` when
+        ``quadratic_damping``  ``{"dof": i}``, ``{"c_quadratic": [N s^2/m^2]}``: ``-c_quadratic v_i |v_i|``.
+        ``cubic_stiffness``  ``{"spring": j}``, ``{"k_cubic": [N/m^3]}``: spring force
+            ``k_cubic d_j^3`` added to spring j (negative ``k_cubic`` softens).
+        ``clearance``  ``{"spring": j}``, ``{"gap": [m], "k_contact": [N/m]}``: a contact
+            in parallel with spring j, force ``k_contact (|d_j| - gap) sign(d_j)`` when
             ``|d_j| > gap``, zero otherwise.
         ``input_delay``  ``{"dof": i}``, ``{"delay": [s]}``: the force reaching mass i lags
             the recorded one by ``delay``.
@@ -94,6 +103,10 @@ class Effect:
         if isinstance(idx, bool) or not float(idx).is_integer():
             raise ValueError(f"effect {self.name!r}: {key} index must be an integer, got {idx!r}")
         params = dict(self.params) if self.params is not None else {}
+        for old, new in _RENAMED_PARAMS.get(self.name, {}).items():
+            if old in params and new not in params:
+                warn_renamed(f"effect {self.name!r} parameter {old!r}", repr(new), stacklevel=5)
+                params[new] = params.pop(old)
         missing = [p for p in required if p not in params]
         unknown = [p for p in params if p not in required + optional]
         if missing or unknown:
@@ -145,7 +158,7 @@ class Effect:
 
 def _check_param_ranges(name: str, p: dict) -> None:
     positive = {"cutoff_hz", "v_eps", "v_stribeck"}
-    nonneg = {"force", "c2", "gap", "stiffness", "delay", "static", "c_amp"}
+    nonneg = {"force", "c_quadratic", "gap", "k_contact", "delay", "static", "c_amp"}
     for key, val in p.items():
         if key in positive and not val > 0:
             raise ValueError(f"effect {name!r}: {key} must be > 0, got {val}")

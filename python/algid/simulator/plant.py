@@ -75,7 +75,7 @@ class Plant:
             elif e.name == "stribeck_friction":
                 self.dof_terms.append(("cf", e.dof, p["force"], p["static"], p["v_stribeck"], v_eps[q]))
             elif e.name == "quadratic_damping":
-                self.dof_terms.append(("qd", e.dof, p["c2"], 0.0, 0.0, 0.0))
+                self.dof_terms.append(("qd", e.dof, p["c_quadratic"], 0.0, 0.0, 0.0))
             elif e.name == "force_offset":
                 self.dof_terms.append(("fo", e.dof, p["offset"], 0.0, 0.0, 0.0))
 
@@ -84,17 +84,17 @@ class Plant:
             return (D[[e.spring - 1 for e in sel]] if sel else None), sel
 
         self.cs_D, cs = rows("cubic_stiffness")
-        self.cs_k3 = np.array([e.params["k3"] for e in cs])
+        self.cs_k3 = np.array([e.params["k_cubic"] for e in cs])
         self.cl_D, cl = rows("clearance")
         self.cl_gap = np.array([e.params["gap"] for e in cl])
-        self.cl_k = np.array([e.params["stiffness"] for e in cl])
+        self.cl_k = np.array([e.params["k_contact"] for e in cl])
         self.dr_D, dr = rows("parameter_drift")
         self.dr_rate = np.array([chain.stiffness[e.spring - 1] * e.params["rel_change"] / duration_s for e in dr])
         self.ad_D, ad = rows("amplitude_damping")
         self.ad_c = np.array([e.params["c_amp"] for e in ad])
         self.spring_terms: list[tuple[str, int, float, float]] = (
-            [("cs", e.spring - 1, e.params["k3"], 0.0) for e in cs]
-            + [("cl", e.spring - 1, e.params["gap"], e.params["stiffness"]) for e in cl]
+            [("cs", e.spring - 1, e.params["k_cubic"], 0.0) for e in cs]
+            + [("cl", e.spring - 1, e.params["gap"], e.params["k_contact"]) for e in cl]
             + [("dr", e.spring - 1, r, 0.0) for e, r in zip(dr, self.dr_rate)]
             + [("ad", e.spring - 1, e.params["c_amp"], 0.0) for e in ad]
         )

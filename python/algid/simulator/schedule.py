@@ -57,7 +57,7 @@ def _clearance_substeps(inp: RunInputs) -> int:
         if e.name == "clearance" and inp.substeps is None:
             j = e.spring - 1
             adj = [chain.mass[i] for i in (j - 1, j) if 0 <= i < inp.n]
-            w = math.sqrt(e.params["stiffness"] / min(adj))
+            w = math.sqrt(e.params["k_contact"] / min(adj))
             ns = max(ns, int(math.ceil(h * w / 0.25)))
     return ns
 
