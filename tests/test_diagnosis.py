@@ -314,6 +314,7 @@ def test_cli_json_contract_and_figures(tmp_path):
             "damping_force.png",
             "window_parameters.png",
             "ranking.png",
+            "prediction.png",
         ]
     )
 

@@ -170,6 +170,7 @@ def test_diagnose_report_json_and_figures_in_the_recording_units(tmp_path, capsy
     target = expected["force"] if force_form(d.P, 0) else expected["acceleration"]
     assert f"DOF 1\n[{target}]" in figures["residuals_time.png"]
     assert f"DOF 1\n[({target})^2/Hz]" in figures["residuals_spectrum.png"]
+    assert f"DOF 1\n[{target}]" in figures["prediction.png"]
     restoring, damping = figures["restoring_force.png"], figures["damping_force.png"]
     force = expected["force"]
     assert {f"restoring force [{force}]", f"unexplained force [{force}]"} <= set(restoring)

@@ -17,7 +17,10 @@ recording and the linear chain:
   (least squares, and the on-line estimator reseeded per window when available), relative
   to the whole-record fit;
 * ``ranking.png`` — which: withheld gap of every candidate against the linear model and
-  the noise floor.
+  the noise floor;
+* ``prediction.png`` — how well: the measured acceleration (or force, in the force form) of
+  every DOF against what the linear chain and the chain with the reported effect predict
+  from the same record, on the stretch where the linear model fails most.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from scipy.signal import welch
 from ..chain import spring_deformation, spring_sides, springs
 from ..diagnosis.equations import force_form
 from ..diagnosis.locate import window_parameters
+from ..diagnosis.windows import detrend
 from . import subplots
 
 DPI = 90
@@ -266,6 +270,37 @@ def fig_ranking(d, top: int = 12):
     return fig
 
 
+def fig_prediction(d, windows: int = 2):
+    """The target of every equation (window-detrended, as the fits see it) and the two
+    models' predictions of it, target minus equation error, over ``windows`` windows centred
+    on the one where the linear model's error is largest."""
+    P = d.P
+    before, after = d.residuals()
+    y = detrend(P, P.y).reshape(before.shape)
+    worst = int(np.argmax((P.windows(before) ** 2).sum(axis=(1, 2))))
+    lo = max(0, min(worst - windows // 2, P.nw - windows))
+    span = slice(lo * P.L, min(P.nw, lo + windows) * P.L)
+    t = P.t[span]
+    n = P.n
+    fig, axes = subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
+    for i, ax in enumerate(axes[:, 0]):
+        ax.plot(t, y[span, i], color=C_MEAS, lw=1.6, label="measured")
+        ax.plot(t, (y - before)[span, i], color=C_BEFORE, lw=0.8, ls="--", label="linear model")
+        if d.best is not None:
+            ax.plot(t, (y - after)[span, i], color=C_AFTER, lw=0.8, label=_label(d))
+        ax.set_ylabel(f"DOF {i + 1}\n[{_target_unit(d, i)}]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(loc="upper right", fontsize=7, ncol=3)
+    axes[-1, 0].set_xlabel("time [s]  (each window's straight line removed, as the fits see it)")
+    fig.suptitle(
+        f"Measured against predicted, where the linear model fails most (in-band gap {d.gap_before:.3g} -> "
+        f"{d.gap_after:.3g})",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    return fig
+
+
 FIGURES = {
     "residuals_time.png": fig_residuals_time,
     "residuals_spectrum.png": fig_residuals_spectrum,
@@ -273,6 +308,7 @@ FIGURES = {
     "damping_force.png": fig_damping_force,
     "window_parameters.png": fig_window_parameters,
     "ranking.png": fig_ranking,
+    "prediction.png": fig_prediction,
 }
 
 
