@@ -41,7 +41,7 @@ def test_quasi_static_device_is_solved_for_the_force():
 
 
 def test_friction_with_backlash_is_reported_as_a_combination():
-    backlash = {"name": "clearance", "location": {"spring": 1}, "params": {"gap": 2e-4, "stiffness": 2e4}}
+    backlash = {"name": "clearance", "location": {"spring": 1}, "params": {"gap": 2e-4, "k_contact": 2e4}}
     d = diagnose(displacement_driven(seed=0, stiffness_n_m=0.0, effects=[_coulomb(20.0), backlash]).recording)
     combo = to_json(d)["combination"]
     assert combo is not None
