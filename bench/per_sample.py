@@ -2,7 +2,8 @@
 
 Run from the repository root::
 
-    python bench/per_sample.py            # full run (~2-4 min on 2 cores, most of it building)
+    python bench/per_sample.py            # every figure from 1 round of timing
+    python bench/per_sample.py --rounds 3 # the full run: 3 rounds, each figure's best median kept
     python bench/per_sample.py --quick    # fewer windows, no callgrind, no x86-64-v3 build
     python bench/per_sample.py --baseline b531827   # and the code of that revision, side by side
 
@@ -345,7 +346,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="3 windows, no callgrind, no x86-64-v3/v4 builds")
     ap.add_argument("--no-wide", action="store_true", help="skip the -march=x86-64-v3 and -v4 builds")
     ap.add_argument("--no-callgrind", action="store_true")
-    ap.add_argument("--rounds", type=int, default=3, help="repetitions of the timing (best median kept)")
+    ap.add_argument(
+        "--rounds", type=int, default=1, help="repetitions of the timing, best median kept (default: 1; full run: 3)"
+    )
     ap.add_argument("--output", type=Path, default=RESULTS)
     ap.add_argument(
         "--baseline",

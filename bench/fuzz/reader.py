@@ -5,7 +5,8 @@ or one ``RecordingError`` with a one-line message; any other exception, a crash,
 ``build/fuzz/reader-crash-*`` and replayed with ``python bench/fuzz/reader.py FILE``.
 
 It measures nothing: it searches for inputs that break the property. The default stops after
-2 minutes of fuzzing (``targets.DEFAULT_SECONDS``); the published hour (docs/reliability.md,
+2 minutes of fuzzing (``targets.DEFAULT_SECONDS``), or earlier at a finding; an input that runs
+longer than 20 s is one (``-timeout=20`` unless given); the published hour (docs/reliability.md,
 "Coverage-guided fuzzing") is the second command below:
 
     pip install atheris        # Linux and macOS, CPython 3.11-3.13
@@ -20,4 +21,4 @@ with atheris.instrument_imports(include=["algid", "targets"]):
     import targets
 
 if __name__ == "__main__":
-    targets.fuzz("reader", targets.reader)
+    targets.fuzz("reader", targets.reader, timeout=20)

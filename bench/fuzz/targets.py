@@ -237,18 +237,23 @@ def write_corpus(folder: Path) -> Path:
     return folder
 
 
-def fuzz(name: str, one_input) -> None:
+def fuzz(name: str, one_input, timeout: int) -> None:
     """Run atheris (libFuzzer's engine) on ``one_input(data, folder)`` with libFuzzer's command
     line (``-max_total_time=3600``, ``-runs=N``, ...). Without ``-runs`` or ``-max_total_time``
     the run stops after :data:`DEFAULT_SECONDS` (libFuzzer's own default is to run until a
-    finding). Without a corpus folder on the command line the seeds go to ``build/fuzz/NAME``
-    and the fuzzer grows that corpus; findings are written to ``build/fuzz/NAME-crash-*``."""
+    finding); without ``-timeout`` an input that runs longer than ``timeout`` seconds is a
+    finding (libFuzzer's own default is 1200 s, and the time limit is only checked between
+    inputs, so one hanging input would hold the run that long). Without a corpus folder on the
+    command line the seeds go to ``build/fuzz/NAME`` and the fuzzer grows that corpus; findings
+    are written to ``build/fuzz/NAME-crash-*`` (``NAME-timeout-*`` for a hang)."""
     import atheris
 
     argv = list(sys.argv)
     argv[0] = f"{sys.executable} {Path(argv[0]).resolve()}"  # what -fork=N runs its jobs with
     if not any(a.startswith(("-runs=", "-max_total_time=")) for a in argv[1:]):
         argv.insert(1, f"-max_total_time={DEFAULT_SECONDS}")
+    if not any(a.startswith("-timeout=") for a in argv[1:]):
+        argv.insert(1, f"-timeout={timeout}")
     out = Path(__file__).resolve().parents[2] / "build" / "fuzz"
     if not any(not a.startswith("-") for a in argv[1:]):
         argv.append(str(write_corpus(out / name)))
