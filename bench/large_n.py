@@ -6,8 +6,8 @@ phases), so v and a are exact and u = M a + C v + K x is eq. 1 exactly. The reco
 (0.5 s at 1 kHz by default) is written as an npz and identified by the command line
 (``--estimator window``: the paper's single window), timed end to end as a user runs it.
 
-The default sizes (3, 10, 11, 30, 200) take about a minute here; n = 1000 alone takes more
-than 10 minutes and several GB of memory, so it is an option:
+The default sizes (3, 10, 11, 30, 200) take under a minute here; n = 1000 alone takes more
+than 5 minutes and several GB of memory, so it is an option:
 
     python bench/large_n.py                                  # n = 3, 10, 11, 30, 200
     python bench/large_n.py --sizes 3,10,11,30,200,1000      # and n = 1000
