@@ -62,30 +62,41 @@ def _target_unit(d, e: int) -> str:
     return d.units["force"] if force_form(d.P, e) else d.units["acceleration"]
 
 
-def fig_residuals_time(d):
-    P = d.P
-    before, after = d.residuals()
-    n = P.n
+def _time_panels(d, draw, xlabel: str, title: str):
+    """One panel per DOF equation over time, ``draw(ax, i)`` filling panel ``i``, in the
+    equation's target unit, the legend on the first panel."""
+    n = d.P.n
     fig, axes = subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
-    t = P.t
-    tw = P.t[0] + P.dt * P.L * (np.arange(P.nw) + 0.5)
     for i, ax in enumerate(axes[:, 0]):
-        ax.plot(t, before[:, i], color=C_BEFORE, lw=0.4, alpha=0.8, label="linear model")
-        if d.best is not None:
-            ax.plot(t, after[:, i], color=C_AFTER, lw=0.4, alpha=0.8, label=_label(d))
-        rms_w = np.sqrt((P.windows(before[:, i]) ** 2).mean(axis=1))
-        ax.step(tw, rms_w, where="mid", color="k", lw=1.0, label="RMS per window (linear)")
+        draw(ax, i)
         ax.set_ylabel(f"DOF {i + 1}\n[{_target_unit(d, i)}]")
         ax.grid(alpha=0.3)
     axes[0, 0].legend(loc="upper right", fontsize=7, ncol=3)
-    axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(
-        f"Acceleration equation error over time (in-band gap {d.gap_before:.3g} -> {d.gap_after:.3g}; "
-        f"full band {d.gap_before_full:.3g} -> {d.gap_after_full:.3g})",
-        fontsize=10,
-    )
+    axes[-1, 0].set_xlabel(xlabel)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def fig_residuals_time(d):
+    P = d.P
+    before, after = d.residuals()
+    tw = P.t[0] + P.dt * P.L * (np.arange(P.nw) + 0.5)
+
+    def draw(ax, i):
+        ax.plot(P.t, before[:, i], color=C_BEFORE, lw=0.4, alpha=0.8, label="linear model")
+        if d.best is not None:
+            ax.plot(P.t, after[:, i], color=C_AFTER, lw=0.4, alpha=0.8, label=_label(d))
+        rms_w = np.sqrt((P.windows(before[:, i]) ** 2).mean(axis=1))
+        ax.step(tw, rms_w, where="mid", color="k", lw=1.0, label="RMS per window (linear)")
+
+    return _time_panels(
+        d,
+        draw,
+        "time [s]",
+        f"Acceleration equation error over time (in-band gap {d.gap_before:.3g} -> {d.gap_after:.3g}; "
+        f"full band {d.gap_before_full:.3g} -> {d.gap_after_full:.3g})",
+    )
 
 
 def fig_residuals_spectrum(d):
@@ -281,24 +292,20 @@ def fig_prediction(d, windows: int = 2):
     lo = max(0, min(worst - windows // 2, P.nw - windows))
     span = slice(lo * P.L, min(P.nw, lo + windows) * P.L)
     t = P.t[span]
-    n = P.n
-    fig, axes = subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
-    for i, ax in enumerate(axes[:, 0]):
+
+    def draw(ax, i):
         ax.plot(t, y[span, i], color=C_MEAS, lw=1.6, label="measured")
         ax.plot(t, (y - before)[span, i], color=C_BEFORE, lw=0.8, ls="--", label="linear model")
         if d.best is not None:
             ax.plot(t, (y - after)[span, i], color=C_AFTER, lw=0.8, label=_label(d))
-        ax.set_ylabel(f"DOF {i + 1}\n[{_target_unit(d, i)}]")
-        ax.grid(alpha=0.3)
-    axes[0, 0].legend(loc="upper right", fontsize=7, ncol=3)
-    axes[-1, 0].set_xlabel("time [s]  (each window's straight line removed, as the fits see it)")
-    fig.suptitle(
+
+    return _time_panels(
+        d,
+        draw,
+        "time [s]  (each window's straight line removed, as the fits see it)",
         f"Measured against predicted, where the linear model fails most (in-band gap {d.gap_before:.3g} -> "
         f"{d.gap_after:.3g})",
-        fontsize=10,
     )
-    fig.tight_layout()
-    return fig
 
 
 FIGURES = {
