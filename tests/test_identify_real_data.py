@@ -23,7 +23,21 @@ pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"measured data not pr
 sys.path.insert(0, str(REPO / "bench"))
 
 
+def _identify_cli(path: Path, out: Path, *extra: str) -> dict:
+    proc = subprocess.run(
+        [sys.executable, "-m", "algid.cli", "identify", str(path), "--json", str(out), *extra],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(out.read_text())
+
+
 def test_silverbox_through_the_command_line(tmp_path):
+    """The linear chain is close to the least-squares fit but biased by the cubic spring:
+    ``model_misfit`` pointing at ``--effect cubic_stiffness:1``; with that effect, m, c, k and
+    the cubic coefficient are valid, the latter the diagnosis's within 5 %."""
     from real_data_diagnosis import silverbox_recording
 
     from algid.diagnosis import diagnose
@@ -31,16 +45,10 @@ def test_silverbox_through_the_command_line(tmp_path):
 
     rec = silverbox_recording(DATA, "all")
     path = save_recording(tmp_path / "silverbox.npz", rec)
-    out = tmp_path / "silverbox.json"
-    proc = subprocess.run(
-        [sys.executable, "-m", "algid.cli", "identify", str(path), "--json", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert proc.returncode == 0, proc.stderr
-    doc = json.loads(out.read_text())
-    assert doc["valid"] is True and doc["motion"] == "displacement"
+    doc = _identify_cli(path, tmp_path / "linear.json")
+    assert doc["valid"] is False and doc["motion"] == "displacement"
+    assert [p["status"] for p in doc["parameters"][:3]] == ["model_misfit"] * 3
+    assert "--effect cubic_stiffness:1" in doc["parameters"][0]["reason"]
     est = np.array([doc["mass"][0], doc["damping"][0], doc["stiffness"][0]])
     sig = np.array([doc["sigma_mass"][0], doc["sigma_damping"][0], doc["sigma_stiffness"][0]])
     assert np.all(est > 0)
@@ -48,6 +56,12 @@ def test_silverbox_through_the_command_line(tmp_path):
     assert 5e-6 < ls[0] < 6e-6 and 1.0 < ls[2] < 1.1  # the PROVENANCE values (volt units)
     close = (np.abs(est / ls - 1) <= 0.05) | (np.abs(est - ls) <= 3 * sig)
     assert close.all(), (est, ls, sig)
+
+    doc = _identify_cli(path, tmp_path / "cubic.json", "--effect", "cubic_stiffness")
+    assert doc["valid"] is True and all(p["valid"] for p in doc["parameters"])
+    (e,) = doc["effects"]
+    assert e["effect"] == "cubic_stiffness" and e["valid"]
+    assert e["params"]["k_cubic"] == pytest.approx(diagnose(rec).params["k_cubic"], rel=0.05)
 
 
 @pytest.mark.parametrize("level", [1, 7])

@@ -48,6 +48,17 @@ def _packed(P, names: list[list[str]], thetas: dict[int, np.ndarray], var: dict[
     return out
 
 
+def effect_parts(effect: str, location: dict, params: dict, params_std: dict) -> list[dict]:
+    """A reported effect as a list of ``{effect, location, params, params_std}``, one per part
+    of a combination (``a+b``, whose location holds ``parts`` and params one dict per effect)."""
+    if "+" not in effect:
+        return [{"effect": effect, "location": location, "params": params, "params_std": params_std}]
+    return [
+        {"effect": e, "location": loc, "params": params[e], "params_std": params_std[e]}
+        for e, loc in zip(effect.split("+"), location["parts"])
+    ]
+
+
 def corrected_model(d) -> dict | None:
     """The chain refitted with the effect :func:`~.engine.diagnose` reports (module
     docstring) as a dict that :meth:`algid.Chain.from_json` reads: ``n, boundary, mass,
@@ -78,7 +89,7 @@ def corrected_model(d) -> dict | None:
         "sigma_mass": listed(sigma[:n]),
         "sigma_damping": listed(sigma[n : 2 * n]),
         "sigma_stiffness": listed(sigma[2 * n :]),
-        "effects": [{"effect": d.effect, "location": d.location, "params": d.params, "params_std": d.params_std}],
+        "effects": effect_parts(d.effect, d.location, d.params, d.params_std),
         "gap_after": d.gap_after,
         "refitted_dofs": sorted(e + 1 for e in fit.eqs),
     }

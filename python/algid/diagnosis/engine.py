@@ -24,7 +24,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..chain import Chain
+from ..chain import Chain, springs
 from ..display import Displayed, number
 from ..noise import channel, white_floor, without_hum
 from ..parallel import parallel_map
@@ -60,11 +60,16 @@ MIN_REL_REDUCTION = 0.01
 #: A sensor bias is reported only beyond this many times the bias that the sample mean
 #: of the white sensor noise itself puts in the record (sigma / sqrt(N)).
 BIAS_NOISE_FACTOR = 10.0
-#: A gap left this many times above the sensor-noise floor counts as unexplained: with no
-#: candidate beyond noise the diagnosis is ``unknown`` rather than ``none``, and so it is
-#: when the best candidate explains less than :data:`MIN_EXPLAINED` of the excess
-#: ``gap_before^2 - floor^2`` (it is then still listed first in the ranking).
+#: A gap left this many times above the sensor-noise floor counts as unexplained: the
+#: diagnosis is ``unknown`` when the best candidate leaves it and explains less than
+#: :data:`MIN_EXPLAINED` of the excess ``gap_before^2 - floor^2`` (it is then still listed
+#: first in the ranking).
 UNKNOWN_FLOOR_RATIO = 3.0
+#: A model explains a record to its noise when its withheld gap is at most this many times the
+#: noise floor: with no candidate beyond noise the diagnosis is ``none`` only then, and
+#: :func:`algid.identify` calls a fit valid only then (the gap of a linear record's own fit
+#: stays below 1.7x on the blind benches).
+FIT_FLOOR_RATIO = 2.0
 MIN_EXPLAINED = 0.5
 #: A linear gap below this (0.01 % NRMS) is numerical resolution (quadrature, the
 #: integrator of a simulation): reported as ``none`` whatever the candidates say.
@@ -426,6 +431,57 @@ def _candidates(st: Setup, effects, progress) -> list[Scored]:
     return sorted(_refit_leaders(st, ctx, sorted(scored, key=lambda s: s.gap_after)), key=lambda s: s.gap_after)
 
 
+def parse_effect(spec: str, n: int, boundary: str) -> tuple[str, int]:
+    """``NAME[:LOCATION]`` (``coulomb_friction:1``, ``cubic_stiffness:2``) as ``(effect,
+    loc)``, ``loc`` 0-based for a DOF effect and 1-based for a spring effect (as
+    :func:`.candidates.fit_candidate` takes it); the location may be left out on one DOF.
+    Raises ``ValueError`` naming the nearest effect or the locations there are."""
+    import difflib
+
+    name, _, where = str(spec).strip().partition(":")
+    if name not in EFFECTS:
+        near = difflib.get_close_matches(name, EFFECTS, n=3, cutoff=0.5)
+        hint = f"did you mean {' or '.join(near)}?" if near else f"effects: {', '.join(EFFECTS)}"
+        raise ValueError(f"unknown effect {name!r}: {hint}")
+    spring = name in SPRING_EFFECTS
+    places = list(springs(n, boundary)) if spring else list(range(1, n + 1))
+    what = "spring" if spring else "DOF"
+    if not where:
+        if len(places) != 1:
+            raise ValueError(
+                f"{name} needs a location on this {n}-DOF chain: {name}:{what} with {what} in "
+                f"{', '.join(map(str, places))}"
+            )
+        where = str(places[0])
+    try:
+        loc = int(where)
+    except ValueError:
+        raise ValueError(f"{spec}: the location must be a {what} number, got {where!r}") from None
+    if loc not in places:
+        raise ValueError(f"{spec}: no {what} {loc} on this {n}-DOF chain ({what}s: {', '.join(map(str, places))})")
+    return name, loc if spring else loc - 1
+
+
+def _given(st: Setup, ctx: Context, given: list[tuple[str, int]], progress) -> Scored:
+    """The effects the user names, fitted (together when several: :func:`.candidates.fit_combination`)
+    and scored whether or not they are significant; a state-dependent one refitted with the
+    states reconstructed under it. A Stribeck fit starts from the Coulomb fit at its place."""
+    if len({(e, loc) for e, loc in given}) < len(given):
+        raise ValueError("an effect is given twice at the same place")
+    if len(given) > 1 and not all(e in ADDITIVE for e, _ in given):
+        raise ValueError(f"only these effects can be fitted together: {', '.join(ADDITIVE)}")
+    fits = []
+    for k, (eff, loc) in enumerate(given):
+        _progress(progress, f"fitting {eff} ({k + 1}/{len(given)})")
+        if eff in AFTER:
+            fit_candidate(ctx, AFTER[eff], loc)
+        fits.append(fit_candidate(ctx, eff, loc))
+    scored = _refit_leaders(st, ctx, [_assess(st.P, st.lin, f, st.denom, st.floor) for f in fits], every=True)
+    if len(scored) == 1:
+        return scored[0]
+    return _assess(st.P, st.lin, fit_combination(ctx, [s.fit for s in scored]), st.denom, st.floor)
+
+
 def _dependency_groups(todo: list[tuple[str, int]]) -> list[list[tuple[str, int]]]:
     """The candidates in groups a thread fits in order: each one that reads another's result
     (:data:`AFTER`) right after that one at its location; the longest groups first, so that
@@ -437,16 +493,16 @@ def _dependency_groups(todo: list[tuple[str, int]]) -> list[list[tuple[str, int]
     return sorted(groups.values(), key=len, reverse=True)
 
 
-def _refit_leaders(st: Setup, ctx: Context, scored: list[Scored]) -> list[Scored]:
-    """Refit the leading state-dependent candidates with states reconstructed under them
-    (a strong effect biases the states reconstructed by the linear model), repeated while
-    the withheld gap keeps shrinking."""
+def _refit_leaders(st: Setup, ctx: Context, scored: list[Scored], every: bool = False) -> list[Scored]:
+    """Refit the three leading state-dependent candidates (``every``: all of them, significant
+    or not) with states reconstructed under them (a strong effect biases the states
+    reconstructed by the linear model), repeated while the withheld gap keeps shrinking."""
     P, lin = st.P, st.lin
     if st.measured is not None:  # the states are measured, not reconstructed
         return scored
-    for idx in range(min(3, len(scored))):
+    for idx in range(len(scored) if every else min(3, len(scored))):
         s = scored[idx]
-        if s.fit.effect not in STATE_EFFECTS or not s.significant:
+        if s.fit.effect not in STATE_EFFECTS or not (s.significant or every):
             continue
         loc = s.fit.location.get("dof", s.fit.location.get("spring"))
         loc = loc - 1 if "dof" in s.fit.location else loc
@@ -524,6 +580,7 @@ def diagnose(
     boundary: str = "fixed",
     progress: Callable[[str], None] | None = None,
     effects: tuple[str, ...] = EFFECTS,
+    given: list[str] | None = None,
 ) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
 
@@ -537,6 +594,9 @@ def diagnose(
     progress : callable or None
         Called with a short message at every stage.
     effects : candidate effects to try (default: all of :data:`EFFECTS`).
+    given : list of ``NAME[:LOCATION]`` or None
+        Fit these effects (together when several) instead of searching: the result reports
+        them, significant or not, with the gap they leave (:func:`parse_effect`).
 
     Returns
     -------
@@ -545,31 +605,30 @@ def diagnose(
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     clock = time.perf_counter()
+    named = None if given is None else [parse_effect(g, rec.n, boundary) for g in given]
     st = _prepare(rec, boundary, progress)
     P, lin, denom = st.P, st.lin, st.denom
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
     gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))
-    scored = _candidates(st, effects, progress)
     ctx = _context(st)
-    combo = _combination(st, ctx, scored)
+    scored = _candidates(st, effects, progress) if named is None else [_given(st, ctx, named, progress)]
+    combo = _combination(st, ctx, scored) if named is None else None
     st.timings["candidates"] = time.perf_counter() - clock - st.timings["linear"]
 
     _progress(progress, "locating the gap")
     natural = natural_frequencies(lin, boundary)
     where = locate(P, lin, natural, st.floor)
-    N = P.y.shape[0]
-    floor_rel_full = float(np.sqrt(np.sum(st.floor**2) * N / denom))
-    floor_rel = float(np.sqrt(np.sum(st.floor_band**2) * N / denom))
-    best = next((s for s in scored if s.significant), None)
-    if gap_before < GAP_RESOLUTION:
+    floor_rel_full = float(np.sqrt(np.sum(st.floor**2) * P.y.shape[0] / denom))
+    best = scored[0] if named is not None else next((s for s in scored if s.significant), None)
+    if gap_before < GAP_RESOLUTION and named is None:
         best = None
-    floor_rel = max(floor_rel, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
-    floor_white = floor_rel
-    # the noise of the final residual may be coloured (1/f sensor noise): its in-band floor
-    # with a 1/f part fitted robustly to that residual (:func:`coloured_floor`)
     final = lin.resid if best is None else detrend(P, raw_residual(ctx, best.fit)).reshape(lin.resid.shape)
-    floor_rel = max(floor_rel, float(np.sqrt(coloured_floor(P, final).sum() / denom)))
-    verdict = _verdict(gap_before, gap_before_full, floor_rel, best, st.model, floor_white)
+    floor_white, floor_rel = relative_floors(st, final)
+    verdict = (
+        _verdict(gap_before, gap_before_full, floor_rel, best, st.model, floor_white)
+        if named is None
+        else {"effect": best.fit.effect, "best": best, "explained": _explained(gap_before, best.gap_after, floor_rel)}
+    )
     effect, best, explained = verdict["effect"], verdict["best"], verdict["explained"]
     gap_after = best.gap_after if best is not None else gap_before
     gap_after_full = best.gap_after_full if best is not None else gap_before_full
@@ -604,11 +663,22 @@ def diagnose(
             "form": P.form,
             "combination": combo if best is not None else None,
             "mains_hz": st.hum,
+            "given": named is not None,
         },
         units=diagnosis_units(rec.units, recording_motion(rec)[0]),
         recording_units=dict(rec.units),
         recording_notes=list(rec.notes),
     )
+
+
+def relative_floors(st: Setup, resid: np.ndarray) -> tuple[float, float]:
+    """The in-band noise floor relative to the targets (the scale of the withheld gap): white
+    (from the noise model, at least :data:`GAP_RESOLUTION` / :data:`UNKNOWN_FLOOR_RATIO`),
+    and with the 1/f part of the detrended equation errors ``resid`` (N, n) of the final
+    model (:func:`coloured_floor`: the noise of a sensor may be coloured)."""
+    white = float(np.sqrt(np.sum(st.floor_band**2) * st.P.y.shape[0] / st.denom))
+    white = max(white, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
+    return white, max(white, float(np.sqrt(coloured_floor(st.P, resid).sum() / st.denom)))
 
 
 def coloured_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
@@ -654,12 +724,11 @@ def _verdict(
     and the record has no more modes than the chain (:mod:`.model`); else ``unknown``."""
     if model.verdict == "no_force_response":  # nothing to explain an effect of
         return {"effect": "unknown", "best": None, "explained": 0.0}
-    excess = gap_before**2 - floor_rel**2
     if best is None:
-        at_floor = gap_before <= UNKNOWN_FLOOR_RATIO * floor_rel
+        at_floor = gap_before <= FIT_FLOOR_RATIO * floor_rel
         fits = model.admissible and model.verdict != "more_modes_than_dof"
         return {"effect": "none" if at_floor and fits else "unknown", "best": None, "explained": 0.0}
-    explained = float((gap_before**2 - best.gap_after**2) / excess) if excess > 0 else 1.0
+    explained = _explained(gap_before, best.gap_after, floor_rel)
     if best.gap_after > UNKNOWN_FLOOR_RATIO * floor_rel and explained < MIN_EXPLAINED:
         return {"effect": "unknown", "best": None, "explained": explained}
     white = floor_rel if floor_white is None else floor_white
@@ -668,6 +737,12 @@ def _verdict(
         # that brings it to the white noise floor is an explanation
         return {"effect": "unknown", "best": None, "explained": explained}
     return {"effect": best.fit.effect, "best": best, "explained": explained}
+
+
+def _explained(gap_before: float, gap_after: float, floor_rel: float) -> float:
+    """Share of the gap's excess over the noise floor that an effect removes."""
+    excess = gap_before**2 - floor_rel**2
+    return float((gap_before**2 - gap_after**2) / excess) if excess > 0 else 1.0
 
 
 def natural_frequencies(lin: LinearFit, boundary: str) -> np.ndarray:

@@ -209,9 +209,11 @@ def solve_gram(G: np.ndarray) -> np.ndarray:
 
 def sse(G: np.ndarray, theta: np.ndarray, extended: bool = False) -> np.ndarray:
     """Squared error of ``theta`` under Gram(s) ``G`` (..., P+1, P+1) -> (...);
-    ``extended``: ``theta`` already ends with the target's -1."""
+    ``extended``: ``theta`` already ends with the target's -1. At least 0: the quadratic
+    form of a Gram is, but rounding makes it slightly negative where the fit is exact
+    (noise-free records)."""
     th = theta if extended else np.append(theta, -1.0)
-    return np.einsum("...i,i->...", np.einsum("...ij,j->...i", G, th), th)
+    return np.maximum(np.einsum("...i,i->...", np.einsum("...ij,j->...i", G, th), th), 0.0)
 
 
 @dataclass

@@ -1,9 +1,10 @@
-"""``algid identify RECORDING [--json OUT|-] [--trace CSV] [--plots DIR] [--estimator auto|window|continuous]``.
+"""``algid identify RECORDING [--json OUT|-] [--trace CSV] [--plots DIR] [--estimator ...] [--effect NAME[:LOC] ...]``.
 
 Estimates every mass, damping and spring of the chain in a recording with one standard
 deviation each, says of every estimate whether it is valid and, if not, why
 (:func:`algid.identify`), and gives the modes of the estimated chain (natural frequency and
-damping ratio with one standard deviation, :mod:`algid.modal`). The table goes to stdout
+damping ratio with one standard deviation, :mod:`algid.modal`); with ``--effect``, the
+chain and the effect's parameters estimated together (:mod:`.augmented`). The table goes to stdout
 (to stderr with ``--json -``, which puts the JSON on stdout), one line per invalid estimate
 and the progress to stderr. Exit codes: 0 when something was identified (invalid entries
 carry their reasons), 3 when nothing in the recording is identifiable, 2 on bad input.
@@ -77,6 +78,15 @@ def add_parser(sub) -> None:
         default=REPLICATES,
         help=f"bootstrap replicates for the uncertainties (default {REPLICATES})",
     )
+    p.add_argument(
+        "--effect",
+        action="append",
+        default=[],
+        metavar="NAME[:LOCATION]",
+        help="estimate this unmodelled effect with the chain (repeatable; the names and locations of "
+        "`algid diagnose`: coulomb_friction:1 is dry friction at DOF 1, cubic_stiffness:2 a cubic spring "
+        "2); 'auto' takes the effect the diagnosis reports",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     add_recording_options(p)
     p.set_defaults(func=run)
@@ -103,7 +113,9 @@ def run(args) -> int:
         rec = load_recording(args.recording, **recording_options(args))
         print_notes(rec, "identify", args.quiet)
         try:
-            result = identify(rec, args.boundary, args.estimator, replicates=args.replicates, progress=progress)
+            result = identify(
+                rec, args.boundary, args.estimator, replicates=args.replicates, progress=progress, effects=args.effect
+            )
         except ValueError as err:  # e.g. a configuration the estimator rejects
             raise IdentifyError(str(err)) from err
         finally:

@@ -16,11 +16,17 @@ verdicts, in stages, each entered once:
 5. Uncertainty (:mod:`.uncertainty`): the weak-form windows' own covariance, or a parametric
    bootstrap for the algebraic windows; the method's own error; the window results' scatter
    beyond what noise explains.
-6. Verdicts per parameter and DOF (:mod:`.verdicts`).
+6. Fit check (:func:`.augmented.fit_check`): the diagnosis's verdict on the record; unless
+   it is ``none``, the linear chain's determined estimates are ``model_misfit``.
+7. Verdicts per parameter and DOF (:mod:`.verdicts`).
+
+With ``effects``, stages 3-6 are the diagnosis's fit of eq. 1 with the effects and its check
+(:mod:`.augmented`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Callable, Optional
 
 import numpy as np
@@ -28,6 +34,7 @@ import numpy as np
 from ..noise import analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, parameter_units
 from ..recording import motion as recording_motion
+from .augmented import fit_check, fit_with_effects
 from .motion import equation_error_fit
 from .plan import make_plan, natural_frequencies_hz
 from .result import Identification
@@ -45,6 +52,45 @@ def _progress(cb: ProgressFn, stage: str, fraction: float) -> None:
         cb(stage, fraction)
 
 
+def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress):
+    """Stages 3-5: the plan, its run over the record and the run's uncertainty."""
+    duration, forced = rec.t.size * rec.dt, np.any(rec.u != 0.0, axis=0)
+    first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), rec.n, boundary)
+    plan = make_plan(nm, duration, estimator, first)
+    _progress(progress, "estimate", 0.0)
+    if plan.method == "algebraic":
+        plan, run = select_window(
+            a,
+            rec.u,
+            motion,
+            nm,
+            plan,
+            boundary,
+            forced,
+            duration,
+            seed,
+            missing,
+            lambda f: _progress(progress, "estimate", f),
+        )
+    else:
+        run = run_plan(a, rec.u, float(rec.dt), boundary, plan, missing=missing)
+    _progress(progress, "estimate", 1.0)
+    unc = estimate_uncertainty(
+        run,
+        motion,
+        nm,
+        plan,
+        boundary,
+        forced,
+        int(replicates),
+        seed,
+        DEFAULT_DIFF_POINTS,
+        missing,
+        progress=lambda f: _progress(progress, "uncertainty", f),
+    )
+    return plan, run, unc
+
+
 def identify(
     rec: Recording,
     boundary: str = "fixed",
@@ -52,6 +98,7 @@ def identify(
     replicates: int = REPLICATES,
     seed: int = 0,
     progress: ProgressFn = None,
+    effects: Sequence[str] = (),
 ) -> Identification:
     """Identify the chain of a whole recording, with one standard deviation per parameter
     and a verdict on each.
@@ -71,6 +118,11 @@ def identify(
         Seed of the surrogates' noise (the result is reproducible).
     progress : callable ``(stage, fraction)`` or None
         Called as the work proceeds.
+    effects : sequence of ``NAME[:LOCATION]``, or ``["auto"]``
+        Unmodelled effects to estimate with eq. 1 (:mod:`.augmented`): ``coulomb_friction:1``,
+        ``cubic_stiffness:2``...; ``auto`` takes the effect the diagnosis reports. The
+        estimator is then the diagnosis's integral equations, and ``estimator`` and
+        ``replicates`` do not apply.
 
     Returns
     -------
@@ -80,6 +132,8 @@ def identify(
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     if int(replicates) < 2:
         raise ValueError(f"replicates must be >= 2, got {replicates}")
+    if isinstance(effects, str):
+        effects = [effects]
     rec, screened = screen(rec, reach=0 if rec.a is not None else DEFAULT_DIFF_POINTS // 2)
     missing = screened.rows
     rec, hum = without_hum(rec)
@@ -87,53 +141,39 @@ def identify(
     a = accelerations(rec, DEFAULT_DIFF_POINTS)
     kind, motion = recording_motion(rec)
     nm = analyse(rec.u, motion, dt, kind)
-    duration = rec.t.size * dt
     forced = np.any(rec.u != 0.0, axis=0)
-    first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), n, boundary)
-    plan = make_plan(nm, duration, estimator, first)
-    _progress(progress, "estimate", 0.0)
-    if plan.method == "algebraic":
-        plan, run = select_window(
-            a,
-            rec.u,
-            motion,
-            nm,
-            plan,
-            boundary,
-            forced,
-            duration,
-            seed,
-            missing,
-            lambda f: _progress(progress, "estimate", f),
-        )
-    else:
-        run = run_plan(a, rec.u, dt, boundary, plan, missing=missing)
-    _progress(progress, "estimate", 1.0)
-    unc = estimate_uncertainty(
-        run,
-        motion,
-        nm,
-        plan,
-        boundary,
-        forced,
-        int(replicates),
-        seed,
-        DEFAULT_DIFF_POINTS,
-        missing,
-        progress=lambda f: _progress(progress, "uncertainty", f),
-    )
-    joint = plan.estimator == "continuous" and plan.method == "weak_form"
-    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, unc.excess, joint)
-    # no value at all where the record has no scale for it (an unforced DOF) or the
-    # estimator's systems were singular
-    blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])
-    return Identification(
+    common = dict(
         n=n,
         boundary=boundary,
         dt=dt,
         samples=int(rec.t.size),
-        plan=plan,
         noise=nm,
+        motion=kind,
+        path=rec.path,
+        hum_hz=tuple(hum),
+        units=parameter_units(rec),
+        recording_notes=tuple(rec.notes),
+        screened=screened,
+    )
+    effect_note = ""
+    if effects:
+        _progress(progress, "diagnose", None)
+        fitted, effect_note = fit_with_effects(rec, motion, kind, nm, boundary, effects)
+        if fitted is not None:
+            return Identification(**common, **fitted)
+    plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress)
+    joint = plan.estimator == "continuous" and plan.method == "weak_form"
+    _progress(progress, "withheld-window test", None)
+    check = fit_check(rec, boundary)
+    verdicts = judge(
+        unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, unc.excess, joint, check.pop("misfit")
+    )
+    # no value at all where the record has no scale for it (an unforced DOF) or the
+    # estimator's systems were singular
+    blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])
+    return Identification(
+        **common,
+        plan=plan,
         theta=np.where(blank, np.nan, unc.theta),
         sigma=np.where(blank, np.nan, unc.sigma),
         raw=run.theta,
@@ -145,10 +185,5 @@ def identify(
         history_sigma=unc.history_sigma,
         windows=run.windows,
         replicates=unc.replicates,
-        motion=kind,
-        path=rec.path,
-        hum_hz=tuple(hum),
-        units=parameter_units(rec),
-        recording_notes=tuple(rec.notes),
-        screened=screened,
+        model_fit={**check, **({"source": effect_note} if effect_note else {})},
     )

@@ -66,6 +66,12 @@ class Identification(PackedParameters):
     recording_notes: tuple = ()  #: what the reader did (columns ignored, units converted)
     #: samples taken out as far outside their channel's range (:mod:`.screen`)
     screened: Screened = field(default_factory=Screened)
+    #: effects estimated with eq. 1 (:mod:`.augmented`): ``effect, location, params,
+    #: params_std, units, valid, reason`` each
+    effects: list = field(default_factory=list)
+    #: the withheld-window test of the fitted model (``gap``, ``noise_floor``,
+    #: ``explains_record``) and where any effects came from (``source``)
+    model_fit: dict = field(default_factory=dict)
 
     # ---- views -------------------------------------------------------------------------
     @property
@@ -100,8 +106,8 @@ class Identification(PackedParameters):
 
     @property
     def valid(self) -> bool:
-        """Every DOF valid."""
-        return bool(np.all(self.valid_dof))
+        """Every DOF and every effect estimated with them valid."""
+        return bool(np.all(self.valid_dof)) and all(e["valid"] for e in self.effects)
 
     @property
     def identified_any(self) -> bool:
@@ -112,7 +118,8 @@ class Identification(PackedParameters):
     @property
     def reasons(self) -> list[str]:
         """One line per parameter that is not ``ok`` (``"k3: ..."``)."""
-        return [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
+        lines = [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
+        return lines + [f"{e['effect']}: {e['reason']}" for e in self.effects if e["reason"]]
 
     def modes(self):
         """``(ModalAnalysis, "")`` of the estimated chain with uncertainties from ``sigma``
@@ -193,7 +200,10 @@ class Identification(PackedParameters):
             "units": dict(self.units),
             "recording_notes": list(self.recording_notes),
             "screened": self.screened.to_json(),
+            "effects": [{k: v for k, v in e.items()} for e in self.effects],
         }
+        if self.model_fit:
+            doc["model_fit"] = dict(self.model_fit)
         modal, why = self.modes()
         doc["modes"] = modal.to_json() if modal is not None else None
         if modal is None:
@@ -255,9 +265,23 @@ class Identification(PackedParameters):
             sd = "" if not math.isfinite(sg) else f" +- {sg:.2g}"
             flag = "" if v.status == "ok" else f"  [{v.status}]"
             lines.append(f"  {v.name:>4} = {txt}{sd} {units[v.name[0]]}{flag}")
+        lines += effect_lines(self.effects, self.model_fit.get("source", ""))
         lines.append(f"valid: {self.valid} (DOF: {', '.join(str(bool(x)) for x in self.valid_dof)})")
         modal, why = self.modes()
         if modal is not None and not self.valid:
             lines.append("modes of the estimates as they are (not every estimate is valid):")
         lines.append(modal.table() if modal is not None else f"modes: n/a ({why})")
         return "\n".join(lines)
+
+
+def effect_lines(effects: list[dict], source: str) -> list[str]:
+    """The table lines of the effects estimated with the chain, after where they came from."""
+    lines = [f"  {source}"] if source else []
+    for e in effects:
+        where = ", ".join(f"{'DOF' if k == 'dof' else 'spring'} {v}" for k, v in e["location"].items())
+        for k, value in e["params"].items():
+            sd = e["params_std"].get(k, math.nan)
+            flag = "" if e["valid"] else "  [not valid]"
+            txt = f"{value:10.5g}" + (f" +- {sd:.2g}" if math.isfinite(sd) else "")
+            lines.append(f"  {e['effect']} ({where}) {k} = {txt} {e['units'].get(k, '')}{flag}")
+    return lines

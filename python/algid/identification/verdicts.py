@@ -170,11 +170,14 @@ def judge(
     nm: NoiseModel,
     excess: np.ndarray | None = None,
     joint: bool = False,
+    misfit: str = "",
 ) -> list[Verdict]:
     """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``; ``excess``
     (3n+1,): window-result scatter of the record over its surrogates' (1 if not given);
     ``joint``: the DOFs were solved together, so an unforced DOF takes its scale from its
-    springs (:func:`scaled_dofs`)."""
+    springs (:func:`scaled_dofs`); ``misfit``: why the fitted model does not explain the
+    record to its noise (the withheld-window test), which makes every determined estimate
+    ``model_misfit``."""
     excess = np.ones(theta.shape) if excess is None else np.asarray(excess, dtype=float)
     scaled = scaled_dofs(forced, n, joint)
     ratio, dofs = scales(n, boundary, mo, u, forced, theta, scaled)
@@ -206,7 +209,9 @@ def judge(
                 nm,
                 joint,
             )
-            if v.status in ("ok", "negligible", "inadmissible") and excess[p] > EXCESS_MAX:
+            if v.status in ("ok", "negligible", "inadmissible") and misfit:
+                v = Verdict(name, "model_misfit", f"{_WHAT[fam]} biased: {misfit}", v.share, v.sigma_share)
+            elif v.status in ("ok", "negligible", "inadmissible") and excess[p] > EXCESS_MAX:
                 v = Verdict(
                     name,
                     "model_misfit",
