@@ -11,6 +11,11 @@ Sections (all through the Python entry point the command line calls):
 * ``slow``: the positioning axis of :func:`algid.scenarios.positioning_axis` (5 kg, 25 N s/m,
   no spring, bang-bang moves under a saturated PID, 1 um encoder only, 20 s), seeds 0..S-1:
   mass and damping errors, the spring's verdict, valid negative parameters.
+* ``friction``: positioning axes with Coulomb friction (mass 2-20 kg, viscous 10-60 N s/m,
+  Coulomb level 3-15 % of the drive's force limit, encoder step 1-10 um, 20 s, four axes
+  per seed drawn from the seed): the linear fit's verdict, and ``--effect auto`` and
+  ``--effect coulomb_friction:1``: relative errors of mass, viscous coefficient and Coulomb
+  level, their |error| / sigma, validity.
 * ``calibration``: the continuous benchmark's records (``bench/crlb.py``: Table 1 and the
   random 5-DOF chain, 20 Hz band-limited white forcing on every DOF, exact simulation), 10 s
   and 60 s, SNR 20-60 dB on the accelerations ("accel") or on both channels, seeds
@@ -61,7 +66,7 @@ FS = 1000.0
 SNRS = (20, 30, 40, 50, 60)
 #: Record length of the blind diagnosis check's cases [s] (its default).
 BLIND_DURATION_S = 10.0
-SECTIONS = ("accuracy", "short", "slow", "calibration", "one_force", "suites")
+SECTIONS = ("accuracy", "short", "slow", "friction", "calibration", "one_force", "suites")
 
 
 def accuracy_systems() -> dict[str, Chain]:
@@ -179,6 +184,56 @@ def section_slow(seeds: int) -> dict:
             flush=True,
         )
     return {"runs": rows}
+
+
+def friction_axes(seeds: int):
+    """(label, truth, recording) of the ``friction`` section's axes."""
+    for seed in range(seeds):
+        rng = np.random.default_rng(1000 + seed)
+        for k in range(4):
+            m, c = float(rng.uniform(2.0, 20.0)), float(rng.uniform(10.0, 60.0))
+            level = float(rng.uniform(0.03, 0.15)) * 12.0 * m  # of the drive's force limit
+            q = float(np.exp(rng.uniform(np.log(1e-6), np.log(1e-5))))
+            friction = {"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": level}}
+            sc = positioning_axis(
+                seed=4 * seed + k, duration_s=20.0, mass_kg=m, viscous_ns_m=c, encoder_m=q, effects=[friction]
+            )
+            yield f"seed {seed} axis {k}", {"m": m, "c": c, "force": level, "encoder_m": q}, sc.recording
+
+
+def section_friction(seeds: int) -> dict:
+    rows = []
+    for label, truth, rec in friction_axes(seeds):
+        row = {"case": label, **truth, "linear_valid": algid.identify(rec, boundary="free").valid}
+        for spec in ("auto", "coulomb_friction:1"):
+            res = algid.identify(rec, boundary="free", effects=[spec])
+            e = res.effects[0] if res.effects else None
+            est = {"m": res.mass[0], "c": res.damping[0], "force": e["params"]["force"] if e else np.nan}
+            sd = {"m": res.sigma_mass[0], "c": res.sigma_damping[0], "force": e["params_std"]["force"] if e else np.nan}
+            row[spec] = {
+                "valid": res.valid,
+                "effect": e["effect"] if e else None,
+                **{f"{k}_rel_error": float(est[k] / truth[k] - 1) for k in est},
+                **{f"{k}_z": float((est[k] - truth[k]) / sd[k]) for k in est},
+            }
+        rows.append(row)
+        a = row["auto"]
+        print(
+            f"friction {label}: linear valid {row['linear_valid']}; auto {a['effect']}: m {100 * a['m_rel_error']:+.2f} %,"
+            f" c {100 * a['c_rel_error']:+.2f} %, F {100 * a['force_rel_error']:+.2f} %, valid {a['valid']}",
+            flush=True,
+        )
+    worst = {
+        spec: {k: float(np.nanmax([abs(r[spec][f"{k}_rel_error"]) for r in rows])) for k in ("m", "c", "force")}
+        for spec in ("auto", "coulomb_friction:1")
+    }
+    return {
+        "runs": rows,
+        "worst_rel_error": worst,
+        "valid": {spec: sum(r[spec]["valid"] for r in rows) for spec in ("auto", "coulomb_friction:1")},
+        "linear_valid": sum(r["linear_valid"] for r in rows),
+        "cases": len(rows),
+    }
 
 
 def calibration_records(seeds: int, duration: float):
@@ -378,6 +433,8 @@ def main(argv=None) -> int:
         doc["short"] = section_short()
     if "slow" in only:
         doc["slow"] = section_slow(args.seeds)
+    if "friction" in only:
+        doc["friction"] = section_friction(args.seeds)
     calib_rows: list = []
     if "calibration" in only:
         doc["calibration"], calib_rows = section_calibration(args.seeds)

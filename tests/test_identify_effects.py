@@ -116,7 +116,10 @@ def test_cli_effect_option(tmp_path, capsys):
     rec = _record([CUBIC], seed=1)
     path = tmp_path / "cubic.csv"
     np.savetxt(path, np.column_stack([rec.t, rec.u, rec.a]), delimiter=",", header="t,u1,u2,a1,a2", comments="")
-    assert main(["identify", str(path), "--effect", "cubic_stiffness:1", "--json", "-", "--quiet"]) == 0
+    plots = tmp_path / "plots"
+    args = ["identify", str(path), "--effect", "cubic_stiffness:1", "--json", "-", "--quiet", "--plots", str(plots)]
+    assert main(args) == 0
+    assert sorted(p.name for p in plots.iterdir()) == ["frf.png", "prediction.png"]
     doc = json.loads(capsys.readouterr().out)
     assert doc["valid"] and doc["estimator"] == "augmented"
     assert doc["effects"][0]["effect"] == "cubic_stiffness" and doc["effects"][0]["params"]["k_cubic"] > 0

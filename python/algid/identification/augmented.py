@@ -172,5 +172,6 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
         "replicates": 0,
         "effects": _effect_verdicts(cm["effects"], misfit, d.units),
         "model_fit": fit,
+        "diagnosis": d,
     }
     return fields, source

@@ -58,7 +58,8 @@ def add_parser(sub) -> None:
         "--plots",
         type=Path,
         metavar="DIR",
-        help="write estimates.png (histories with one-sigma bands) and frf.png (model vs H1 of the recording)",
+        help="write estimates.png (histories with one-sigma bands; with --effect, prediction.png: the chain with "
+        "the effect against the linear one and the data) and frf.png (model vs H1 of the recording)",
     )
     p.add_argument(
         "--boundary",

@@ -72,6 +72,8 @@ class Identification(PackedParameters):
     #: the withheld-window test of the fitted model (``gap``, ``noise_floor``,
     #: ``explains_record``) and where any effects came from (``source``)
     model_fit: dict = field(default_factory=dict)
+    #: the diagnosis that fitted the effects (its figures), None without effects
+    diagnosis: object = field(default=None, repr=False, compare=False)
 
     # ---- views -------------------------------------------------------------------------
     @property

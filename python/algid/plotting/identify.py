@@ -66,9 +66,15 @@ def _limits(ax):
 
 
 def save_figures(res, folder) -> list[Path]:
-    """Write ``estimates.png`` into ``folder`` (created); returns the paths written."""
+    """Write ``estimates.png`` into ``folder`` (created); with effects (one estimate, no
+    history), the diagnosis's ``prediction.png`` instead: the chain with the effects against
+    the linear one and the data. Returns the paths written."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    if res.diagnosis is not None:
+        from .diagnosis import save_figures as save_diagnosis
+
+        return save_diagnosis(res.diagnosis, folder, which=("prediction.png",))
     path = folder / "estimates.png"
     estimates_figure(res).savefig(path)
     return [path]
