@@ -12,7 +12,7 @@ the wall time per diagnosis. The default (30 seeds, 0:30) is a quick look; it wr
 For every seed: a random chain (n = 1..4, parameters from ``Chain.random``, right end
 free with probability 0.2 for n >= 2), broadband forcing on every DOF (independent
 random-phase multisines, flat 0.5-50 Hz, 10 N RMS), a hidden effect drawn at random
-(``none`` with probability 0.2, each of the 8 effects with 0.1) at a random location, a
+(``none`` with probability 0.2, each of the 8 effects of ``EFFECTS`` with 0.1) at a random location, a
 random size and a random accelerometer SNR of 40-60 dB. The recording (``t, u1..un,
 a1..an``, nothing else) goes to ``WORK/recordings/``, the label to ``WORK/labels/``; the
 diagnosis is run on the recording alone through the code path of ``algid diagnose``
@@ -30,7 +30,7 @@ parameter is solved for it: linearly for ``force``, ``c2``, ``k3`` (random sign;
 softening spring capped at 30 % of k at 3 RMS deformations), the clearance ``stiffness``
 (its ``gap`` uniform in [0.3, 1.5] RMS deformations) and ``rel_change`` (random sign,
 clipped to +-0.5); by bisection for ``delay`` (<= 50 ms) and ``cutoff_hz``
-(<= 0.45 fs); ``|bias| = rho`` times the noise RMS. The visible part is capped at 30 % of
+(low-pass <= 0.45 fs, high-pass 0.02-10 Hz, drawn by the realistic check only); ``|bias| = rho`` times the noise RMS. The visible part is capped at 30 % of
 the DOF's acceleration RMS. ``rho = 0.5``: invisible in a plot of the signals, only
 statistics over the record can see it; ``rho = 50``: obvious.
 
@@ -68,6 +68,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.diagnosis.candidates import MAIN_PARAM  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402
 
 EFFECTS = (
@@ -80,27 +81,21 @@ EFFECTS = (
     "sensor_lowpass",
     "parameter_drift",
 )
-#: Effects the generator can also draw (the realistic check, bench/realistic_blind.py).
-MORE_EFFECTS = ("stribeck_friction", "amplitude_damping")
+#: Effects the generator can also draw (the realistic check, bench/realistic_blind.py); kept
+#: out of EFFECTS so that the blind check's seeds draw the cases they always drew.
+MORE_EFFECTS = ("stribeck_friction", "amplitude_damping", "sensor_highpass")
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
-MAIN = {
-    "coulomb_friction": "force",
-    "quadratic_damping": "c_quadratic",
-    "cubic_stiffness": "k_cubic",
-    "clearance": "gap",
-    "input_delay": "delay",
-    "sensor_bias": "bias",
-    "sensor_lowpass": "cutoff_hz",
-    "parameter_drift": "rel_change",
-    "stribeck_friction": "force",
-    "amplitude_damping": "c_amp",
-}
+#: Main parameter of every effect: the diagnosis's own table.
+MAIN = dict(MAIN_PARAM)
 CLASSES = ("none",) + EFFECTS + MORE_EFFECTS + ("unknown",)
 P_NONE = 0.2
 #: Visibility range of the hidden effect ("barely visible" to "strong"), see draw_case.
 RHO_MIN = 0.5
 RHO_MAX = 50.0
 F_BAND_HZ = (0.5, 50.0)
+#: Highest cut-off of a drawn AC-coupled accelerometer [Hz] (IEPE sensors and charge
+#: amplifiers: 0.1 to a few Hz).
+HIGHPASS_MAX_HZ = 10.0
 FORCE_RMS_N = 10.0
 
 
@@ -164,6 +159,13 @@ def _lowpass(x: np.ndarray, fc: float, fs: float) -> np.ndarray:
     """First-order low-pass in the frequency domain (steady state of a periodic signal)."""
     f = np.fft.rfftfreq(x.size, 1 / fs)
     return np.fft.irfft(np.fft.rfft(x) / (1 + 1j * f / fc), n=x.size)
+
+
+def _highpass(x: np.ndarray, fc: float, fs: float) -> np.ndarray:
+    """First-order high-pass in the frequency domain (steady state of a periodic signal)."""
+    f = np.fft.rfftfreq(x.size, 1 / fs)
+    h = 1j * f / fc
+    return np.fft.irfft(np.fft.rfft(x) * h / (1 + h), n=x.size)
 
 
 def _delayed(x: np.ndarray, d: float, fs: float) -> np.ndarray:
@@ -340,6 +342,12 @@ def draw_case(seed: int, duration: float, fs: float, effects: tuple = EFFECTS) -
                 return {i: np.full(len(u), p["bias"])}
 
             params = {"bias": float(sign * min(rho * sigma[i], 0.3 * a_rms[i]))}
+        elif effect == "sensor_highpass":  # the error of the sensor, HP(a) - a, in equation i
+
+            def errors(p):
+                return {i: _highpass(ai, p["cutoff_hz"], fs) - ai}
+
+            params = {"cutoff_hz": solve_nonlinear(lambda c: errors({"cutoff_hz": c}), 0.02, HIGHPASS_MAX_HZ, dofs)}
         else:  # sensor_lowpass: the error of the sensor, LP(a) - a, in equation i
 
             def errors(p):
@@ -561,6 +569,7 @@ def confusion_table(conf: dict) -> str:
         "input_delay": "delay",
         "sensor_bias": "bias",
         "sensor_lowpass": "lowp",
+        "sensor_highpass": "highp",
         "parameter_drift": "drift",
         "stribeck_friction": "strib",
         "amplitude_damping": "ampd",

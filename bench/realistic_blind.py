@@ -18,7 +18,8 @@ Rigs (probabilities 0.5 / 0.25 / 0.25):
 
 * ``shaker``: the blind check's chain and broadband forcing (``blind_diagnosis.draw_case``,
   n = 1..4, effect size by visibility 0.5-50, accelerometer SNR 40-60 dB), with any of
-  the ten effects or none, recorded by accelerometers (or, with probability 0.2, a laser
+  the eleven effects (``sensor_highpass`` among them: an AC-coupled accelerometer) or none,
+  recorded by accelerometers (or, with probability 0.2, a laser
   vibrometer: velocities) and force sensors, with nuisances each drawn with its own
   probability: white force-sensor noise (always, 40-60 dB); a force-sensor offset (0.5;
   5-50 % of the force RMS); coloured (1/f) sensor noise as strong as the white (0.4);
@@ -182,7 +183,7 @@ def shaker_case(seed: int, rng) -> tuple[Recording, dict]:
     u_full[:, :n] = case["u"]
     r = simulate(plant, u_full, DURATION, FS, effects=case["effects"])
     # a vibrometer only where the hidden effect is not the accelerometer's own
-    velocity = rng.uniform() < 0.2 and lab["effect"] not in ("sensor_bias", "sensor_lowpass")
+    velocity = rng.uniform() < 0.2 and lab["effect"] not in ("sensor_bias", "sensor_lowpass", "sensor_highpass")
     y = (r.v if velocity else r.a)[:, :n]
     u, y = sensor_chain(r.t, r.u[:, :n], y, rng, lab["snr_db"], info)
     info["motion"] = "velocity" if velocity else "acceleration"

@@ -349,3 +349,35 @@ def test_effect_names_are_the_simulators():
     # a constant force on a mass is annihilated with the initial conditions by the windowed
     # equations (as by the algebraic estimator): no gap to diagnose
     assert set(EFFECTS) == set(EFFECT_NAMES) - {"force_offset"}
+
+
+def _two_dof_record(effects, seed: int = 0) -> Recording:
+    """A 2-DOF chain under independent broadband multisines (0.5-50 Hz, period of the
+    10 s record), accelerometers at 50 dB."""
+    from algid.simulator import simulate as sim
+
+    chain = Chain([2.0, 2.5], [5.5, 5.0], [1000.0, 900.0, 700.0])
+    rng = np.random.default_rng(seed)
+    T = 10000
+    k = np.arange(5, 501)
+    U = np.zeros((T // 2 + 1, 2), dtype=complex)
+    U[k] = np.exp(2j * np.pi * rng.uniform(size=(k.size, 2)))
+    u = np.fft.irfft(U, n=T, axis=0)
+    r = sim(chain, u * 10.0 / u.std(axis=0), 10.0, 1000.0, effects=effects, noise_db=50, seed=seed)
+    return Recording(t=r.t, u=r.u, a=r.a)
+
+
+@pytest.mark.parametrize("fc", [0.5, 2.0])
+def test_ac_coupled_accelerometer_is_a_sensor_highpass(fc):
+    hp = {"name": "sensor_highpass", "location": {"dof": 2}, "params": {"cutoff_hz": fc}}
+    d = diagnose(_two_dof_record([hp]))
+    assert (d.effect, d.location) == ("sensor_highpass", {"dof": 2})
+    assert d.params["cutoff_hz"] == pytest.approx(fc, rel=0.2)
+    assert d.gap_after < 0.2 * d.gap_before
+
+
+def test_no_highpass_without_one():
+    assert diagnose(_two_dof_record([])).effect == "none"
+    lp = {"name": "sensor_lowpass", "location": {"dof": 2}, "params": {"cutoff_hz": 60.0}}
+    d = diagnose(_two_dof_record([lp], seed=1))
+    assert (d.effect, d.location) == ("sensor_lowpass", {"dof": 2})

@@ -174,6 +174,25 @@ def test_smooth_effects_match_solve_ivp():
     assert np.array_equal(res.a[:, [0, 2]], res.a_true[:, [0, 2]])
 
 
+def test_highpass_accelerometer_is_the_truth_less_its_integrated_reading():
+    """``a_meas = a - z``, ``z' = w_c a_meas``, ``z(0) = 0``: the truth is the reading plus
+    ``w_c`` times its integral (Simpson's cumulative rule, independent of the simulator)."""
+    from scipy.integrate import cumulative_simpson
+
+    fc = 0.8
+    eff = [Effect("sensor_highpass", {"dof": 2}, {"cutoff_hz": fc})]
+    res = simulate(TABLE1, multisine(3, seed=4), 4.0, 1000.0, effects=eff)
+    ref = simulate(TABLE1, multisine(3, seed=4), 4.0, 1000.0)
+    a_m = res.a[:, 1]
+    back = a_m + 2 * np.pi * fc * cumulative_simpson(a_m, dx=1e-3, initial=0.0)
+    assert np.max(np.abs(back - res.a_true[:, 1])) < 1e-6 * np.max(np.abs(res.a_true[:, 1]))
+    assert np.max(np.abs(a_m - res.a_true[:, 1])) > 0.05 * np.max(np.abs(res.a_true[:, 1]))  # it does filter
+    assert np.array_equal(res.a[:, [0, 2]], res.a_true[:, [0, 2]])
+    assert np.array_equal(res.x, ref.x) and np.array_equal(res.x_meas, ref.x_meas)  # only the accelerometer
+    with pytest.raises(ValueError, match="same accelerometer"):
+        simulate(TABLE1, None, 0.1, effects=eff + [Effect("sensor_lowpass", {"dof": 2}, {"cutoff_hz": 50.0})])
+
+
 def test_steep_effects_match_solve_ivp_and_converge_with_substeps():
     """Dry friction and a clearance contact switch within a step: fourth order is lost at
     the switches, the error is still small and shrinks with sub-steps."""
@@ -365,6 +384,7 @@ def test_effect_locations_are_checked_against_the_chain():
         "input_delay",
         "sensor_bias",
         "sensor_lowpass",
+        "sensor_highpass",
         "parameter_drift",
         "force_offset",
         "stribeck_friction",

@@ -21,7 +21,9 @@ Per channel (every force, and every measured acceleration or displacement):
   the share of the spectrum the forces do not explain.
 * **Encoder resolution** of a displacement channel: the largest ``q`` such that every
   reading is a whole multiple of ``q`` (to 1e-6 q) with at least 3 distinct counts; 0 when
-  the readings are not quantised. Quantisation adds white noise of variance ``q^2 / 12``.
+  the readings are not quantised. Quantisation adds white noise of variance ``q^2 / 12``:
+  the floor of a quantised channel is at least ``q^2 / 12 / (fs / 2)``
+  (:func:`quantisation_psd`), whatever its upper third shows.
 
 The **signal band** of the record is ``[0, f_hi]`` with ``f_hi`` the largest ``f_hi`` of the
 forces and, where accelerations are measured, of the accelerations. Accelerations derived
@@ -168,6 +170,19 @@ def encoder_quantum(x: np.ndarray) -> float:
     return q
 
 
+def quantisation_psd(x: np.ndarray, dt: float) -> float:
+    """One-sided PSD [unit^2/Hz] of the quantisation noise of readings ``x`` in encoder counts,
+    ``q^2 / 12 / (fs / 2)`` with ``q`` their :func:`encoder_quantum` (0 when not quantised).
+
+    Quantisation error is uniform on ``[-q/2, q/2]`` (variance ``q^2 / 12``) and white up to
+    the Nyquist rate while the motion crosses many counts per sample; a slower motion leaves
+    an error correlated with the signal whose spectrum need not reach the upper third where
+    :func:`white_floor` reads the floor, so the floor of a quantised channel is at least this.
+    """
+    q = encoder_quantum(x)
+    return float(q * q / 12.0 * 2.0 * dt)
+
+
 #: A tenth of the spectrum this many times below the tenth under it is an anti-alias roll-off.
 ROLL_OFF = 2.0
 
@@ -208,6 +223,8 @@ def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False, incohe
     x = np.asarray(x, dtype=float)
     f, S = psd(x, dt)
     floor = float(white_floor(f, S if incoherent is None else S * incoherent))
+    q = encoder_quantum(x) if quantised else 0.0
+    floor = max(floor, q * q / 12.0 * 2.0 * dt)  # encoder counts: at least their quantisation noise
     above = np.where(S > DETECT * floor, S - floor, 0.0)
     total = float(above.sum())
     if total > 0:
@@ -219,7 +236,6 @@ def channel(name: str, x: np.ndarray, dt: float, quantised: bool = False, incohe
         snr = 10 * np.log10(total * (f[1] - f[0]) / noise) if noise > 0 else np.inf
     else:
         f_hi = f_mid = f_low = snr = float("nan")
-    q = encoder_quantum(x) if quantised else 0.0
     return Channel(
         name=name,
         floor_psd=floor,

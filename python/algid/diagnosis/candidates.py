@@ -16,6 +16,7 @@ The definitions are those of the simulator (the names are part of the interface)
 | input_delay | dof i | eq. i is driven by ``u_i(t - delay)`` | delay [s] |
 | sensor_bias | dof i | true acceleration is ``a_i - bias`` | bias [m/s^2] |
 | sensor_lowpass | dof i | measured ``a_i`` is the first-order low-pass of the true one | cutoff_hz [Hz] |
+| sensor_highpass | dof i | measured ``a_i`` is the first-order high-pass (AC coupling) of the truth | cutoff_hz |
 | parameter_drift | spring j | ``k_j(t) = k_j (1 + rel_change (t - t_0) / duration)`` | rel_change [-] |
 
 How each enters the least-squares problem (everything else as in :mod:`.core`): an
@@ -38,7 +39,11 @@ parameter either way:
   shifted by cubic-spline interpolation), sensor low-pass (``cutoff``: log grid; equation
   i is filtered by the same low-pass — ``m a + c v + k (x_i - LP x_other) = LP u`` holds
   exactly for the measured ``a_i`` — and the true ``x_i = x_meas + v_meas / (2 pi fc)`` in
-  the neighbouring equations, so no measured signal is differentiated);
+  the neighbouring equations, so no measured signal is differentiated), sensor high-pass
+  (``cutoff``: log grid; the inverse filter ``1 + w_c / s`` recovers the truth from the
+  measured signal and its integrals, ``a_i = a + w_c A1``, ``v_i = A1 + w_c A2``,
+  ``x_i = A2 + w_c A3`` with ``A3`` the third integral, all from the first sample: the
+  high-pass is taken settled at rest there, its state zero, as the simulator starts it);
 * sensor bias: the true ``x_i`` is ``x_meas - bias t^2 / 2``, which leaves
   ``-bias t^2/2 * (sum of the springs of eq. i)`` and ``+bias t^2/2 * k_j`` in the
   neighbours (the rest is a per-window line, removed anyway); the stiffnesses are taken
@@ -57,6 +62,7 @@ from scipy.signal import lfilter, lfilter_zi
 from ..chain import spring_columns, spring_deformation, spring_sides, springs
 from .equations import base_design, effect_column, linear_design, target, to_physical
 from .gram import CVResult, EqSpec, cross_validate, jackknife_std, score_walk, walk_grid, window_stats
+from .integrals import integrals
 from .linear import LinearFit
 from .windows import Prepared
 
@@ -70,6 +76,7 @@ EFFECTS = (
     "input_delay",
     "sensor_bias",
     "sensor_lowpass",
+    "sensor_highpass",
     "parameter_drift",
 )
 
@@ -84,6 +91,7 @@ MAIN_PARAM = {
     "input_delay": "delay",
     "sensor_bias": "bias",
     "sensor_lowpass": "cutoff_hz",
+    "sensor_highpass": "cutoff_hz",
     "parameter_drift": "rel_change",
 }
 
@@ -99,6 +107,7 @@ PHYSICAL = {
     "clearance": lambda p: p["gap"] > 0 and p["k_contact"] > 0,
     "input_delay": lambda p: p["delay"] > 0,
     "sensor_lowpass": lambda p: p["cutoff_hz"] > 0,
+    "sensor_highpass": lambda p: p["cutoff_hz"] > 0,
 }
 
 
@@ -540,6 +549,37 @@ def fit_lowpass(ctx: Context, i: int) -> CandidateFit:
     return _fit_grid(ctx, "sensor_lowpass", {"dof": i + 1}, build, grid, np.exp, ["cutoff_hz"], [])
 
 
+#: Cut-off range of the high-pass candidate: from this many cycles over the record (a slower
+#: high-pass bends the record's motion less than the per-window lines absorb) to a tenth of
+#: the Nyquist rate [Hz].
+HIGHPASS_CYCLES = 0.3
+HIGHPASS_TOP = 0.1
+
+
+def fit_highpass(ctx: Context, i: int) -> CandidateFit:
+    """First-order accelerometer high-pass (AC coupling) at DOF i: the truth recovered by the
+    inverse filter (module docstring) in equation i and in the equations its position enters."""
+    P = ctx.P
+    sl = P.sl
+    nyq = 0.5 / P.dt
+    grid = np.log(np.geomspace(max(HIGHPASS_CYCLES / P.duration, 1e-4 * nyq), HIGHPASS_TOP * nyq, N_GRID))
+    A3 = integrals(P.A1_full[:, i : i + 1], P.dt)[1][sl, 0]  # int int int a_i from the first sample
+    others = [e for e, _ in coupled(P, i)]
+
+    def build(lg):
+        wc = 2 * np.pi * np.exp(lg)
+        a = P.a[:, i] + wc * P.A1[:, i]
+        v, x = P.A1.copy(), P.A2.copy()
+        v[:, i] = P.A1[:, i] + wc * P.A2[:, i]
+        x[:, i] = P.A2[:, i] + wc * A3
+        specs = [EqSpec(e=i, X=base_design(P, i, v, x, a=a), y=target(P, i, a=a), E=None)]
+        for e in others:
+            specs.append(EqSpec(e=e, X=base_design(P, e, v, x), y=target(P, e), E=None))
+        return specs
+
+    return _fit_grid(ctx, "sensor_highpass", {"dof": i + 1}, build, grid, np.exp, ["cutoff_hz"], [])
+
+
 def all_candidates(P: Prepared) -> list[tuple[str, int]]:
     """Every (effect, location) pair to try: DOF effects at every DOF, spring effects on
     every spring that exists and can be told apart."""
@@ -564,6 +604,7 @@ def fit_candidate(ctx: Context, effect: str, loc: int) -> CandidateFit:
         "input_delay": fit_delay,
         "sensor_bias": fit_bias,
         "sensor_lowpass": fit_lowpass,
+        "sensor_highpass": fit_highpass,
         "quadratic_damping": lambda c, i: fit_dof_force(c, effect, i),
         "cubic_stiffness": lambda c, j: fit_spring_linear(c, effect, j),
         "parameter_drift": lambda c, j: fit_spring_linear(c, effect, j),

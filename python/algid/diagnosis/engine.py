@@ -368,34 +368,77 @@ def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: 
 
     Measured accelerations: the white floor of the equation errors (:func:`.locate.noise_floor`),
     its band share ``band_fraction`` in band. Derived accelerations: the motion's white floor
-    (median PSD of its upper third) differentiated ``order`` times, ``floor (2 pi f)^(2 order)``,
-    integrated over the band; a force-form equation adds the force sensor's white floor and
-    counts the acceleration noise times its mass."""
+    (read on the derived accelerations' PSD divided by the derivative stencil's gain, where
+    differentiation has lifted the noise far above the leakage of a large slow motion; for
+    encoder counts at least the quantisation floor
+    ``q^2 / 12 / (fs / 2)``, :func:`algid.noise.quantisation_psd`) carried through the
+    analysis itself: white noise of that level on every motion channel, differentiated
+    ``order`` times as the recording's accelerations were, integrated, put into each
+    equation with the linear fit's parameters, detrended and projected on the band of every
+    window (fixed seed; enough draws for about :data:`FLOOR_DOF` in-band degrees of freedom).
+    On short windows the noise differentiated twice, rising like ``f^4`` to the Nyquist rate,
+    leaks into a window's few in-band bins far beyond its in-band integral. The force sensor's
+    white floor adds ``(theta_u^2) S_u f_hi`` to a forced equation (``theta_u`` = 1/m in the
+    acceleration form, 1 in the force form)."""
     floor = noise_floor(P, lin.resid)
     band = floor * np.sqrt(P.band_fraction)
     if motion is None and P.form != "force":
         return floor, band
     from scipy.signal import welch
 
+    from ..noise import quantisation_psd
+    from ..recording.derivatives import DEFAULT_DIFF_POINTS, derivative_weights
+    from .equations import base_design
+    from .windows import band_filter
+
     fs = 1.0 / P.dt
+    n = P.n
     f_hi = P.band_hz if P.band_hz is not None else 0.5 * fs
     f, S = welch(
         np.column_stack([P.u_full] + ([motion] if motion is not None else [])), fs=fs, nperseg=min(P.L, 1024), axis=0
     )
     white = white_floor(f, S)
-    n = P.n
-    acc_band = (
-        np.sqrt(white[n:] * (2 * np.pi) ** (2 * order) * f_hi ** (2 * order + 1) / (2 * order + 1))
-        if motion is not None
-        else band
-    )
+    power = band**2 if motion is None else np.zeros(n)
+    if motion is not None:
+        # the motion's floor read where the derivative has lifted its noise far above the
+        # leakage of the signal (short segments leak a large, slow motion into the upper
+        # third of its own spectrum): the recording's accelerations' PSD over the stencil's gain
+        _, Sa = welch(P.a_full, fs=fs, nperseg=min(P.L, 1024), axis=0)
+        w_st = derivative_weights(DEFAULT_DIFF_POINTS, order, DEFAULT_DIFF_POINTS // 2)
+        lags = np.arange(DEFAULT_DIFF_POINTS) - DEFAULT_DIFF_POINTS // 2
+        gain = np.abs(np.exp(2j * np.pi * np.outer(f * P.dt, lags)) @ w_st) / P.dt**order
+        Sm = S[:, n:].copy()
+        Sm[1:] = Sa[1:] / np.maximum(gain[1:, None] ** 2, 1e-300)
+        white[n:] = white_floor(f, Sm)
+        if order == 2:  # encoder counts: at least their quantisation noise
+            white[n:] = np.maximum(white[n:], [quantisation_psd(motion[:, i], P.dt) for i in range(n)])
+        sigma = np.sqrt(white[n:] * 0.5 * fs)
+        dof = P.nw * max(int(np.sum(P.band_mask)), 1)
+        draws = int(np.clip(np.ceil(FLOOR_DOF / dof), 1, 8))
+        rng = np.random.default_rng(0)
+        N, sl = P.y.shape[0], P.sl
+        for _ in range(draws):
+            w = rng.standard_normal(P.a_full.shape) * sigma
+            a_n = derivative(w, P.dt, order)
+            A1n, A2n = integrals(a_n, P.dt)
+            a_n, A1n, A2n = a_n[sl], A1n[sl], A2n[sl]
+            for e in range(n):
+                X = base_design(P, e, A1n, A2n, u=np.zeros(N), a=a_n[:, e])
+                y = np.zeros(N) if force_form(P, e) else a_n[:, e]
+                Z = band_filter(P, detrend(P, y - X @ lin.theta_a[e]))
+                power[e] += float(np.sum(Z**2)) / N / draws
     for e in range(n):
-        if motion is not None and not force_form(P, e):
-            band[e] = acc_band[e]
-        elif force_form(P, e):
-            m = float(lin.theta[e][0])
-            band[e] = np.sqrt(white[e] * f_hi + (m * acc_band[e]) ** 2)
+        if P.forced[e]:
+            theta_u = 1.0 if force_form(P, e) else float(lin.theta_a[e][0])
+            band[e] = np.sqrt(power[e] + theta_u**2 * white[e] * f_hi)
+        else:
+            band[e] = np.sqrt(power[e])
     return floor, band
+
+
+#: In-band degrees of freedom (windows times band bins) of the simulated noise of
+#: :func:`noise_floors` (a few percent on the floor's RMS).
+FLOOR_DOF = 2000
 
 
 def _context(st: Setup) -> Context:

@@ -111,8 +111,8 @@ class ClosedLoop:
             rec_r = cmd_r
         a_r = (app_r + base) * plant.minv
         if k == 0:
-            if lay.n_lp:  # the low-pass accelerometers start settled on a(0+)
-                s[lay.o_lp : lay.o_w] = a_r[lay.lp_idx]
+            if lay.n_lp:  # low-pass accelerometers settled on a(0+), high-pass ones on rest
+                s[lay.o_lp : lay.o_w] = np.where(lay.lp_high, 0.0, a_r[lay.lp_idx])
             self.left_rec, self.left_app = rec_r, app_r
         a_l = (self.left_app + base) * plant.minv
         self._record(k, x, v, (a_l, a_r, self.left_rec, rec_r, self.left_app, app_r))
@@ -149,8 +149,10 @@ class ClosedLoop:
         """Accelerometers (low-pass, bias, noise) [m/s^2] and force sensors (noise) [N] at ``t_k``."""
         lay, out, s = self.run.layout, self.out, self.s
         am = out.a_true[k].copy()
-        if lay.n_lp:
-            am[lay.lp_idx] = s[lay.o_lp : lay.o_w]
+        if lay.n_lp:  # a low-pass reads its state z, a high-pass a - z
+            z, high = s[lay.o_lp : lay.o_w], lay.lp_high
+            am[lay.lp_idx[~high]] = z[~high]
+            am[lay.lp_idx[high]] -= z[high]
         am += self.run.bias
         out.a_clean[k] = am
         if "accel" in self.noise_scale:

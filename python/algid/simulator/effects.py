@@ -26,6 +26,7 @@ _EFFECT_SPECS: dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]] = {
     "input_delay": ("dof", ("delay",), ()),
     "sensor_bias": ("dof", ("bias",), ()),
     "sensor_lowpass": ("dof", ("cutoff_hz",), ()),
+    "sensor_highpass": ("dof", ("cutoff_hz",), ()),
     "parameter_drift": ("spring", ("rel_change",), ()),
     "force_offset": ("dof", ("offset",), ()),
     "stribeck_friction": ("dof", ("force", "static", "v_stribeck"), ("v_eps",)),
@@ -69,6 +70,12 @@ class Effect:
         ``sensor_lowpass``  ``{"dof": i}``, ``{"cutoff_hz": [Hz]}``: accelerometer i is a
             first-order low-pass ``a_meas' = 2 pi f_c (a - a_meas)``, starting settled
             (``a_meas(0) = a(0+)``).
+        ``sensor_highpass``  ``{"dof": i}``, ``{"cutoff_hz": [Hz]}``: accelerometer i is AC
+            coupled (an IEPE sensor, a charge amplifier), the first-order high-pass
+            ``a_meas = a - z``, ``z' = 2 pi f_c (a - z)``, settled on the structure at rest
+            before the record (``z(0) = 0``, ``a_meas(0) = a(0+)``). Only the accelerometer
+            reads it: the positions and velocities of a result are the plant's. Not together
+            with ``sensor_lowpass`` on the same DOF.
         ``parameter_drift``  ``{"spring": j}``, ``{"rel_change": r}``: stiffness of spring j
             becomes ``k_j (1 + r t / duration)`` (linear over the record).
         ``force_offset``  ``{"dof": i}``, ``{"offset": [N]}``: a constant force on mass i

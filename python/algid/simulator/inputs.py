@@ -163,10 +163,14 @@ def _checked_effects(chain: Chain, effects: Sequence[Effect | Mapping[str, Any]]
     effs = tuple(as_effect(e) for e in effects)
     for e in effs:
         e.check(chain)
-    for kind in ("input_delay", "sensor_lowpass"):
+    for kind in ("input_delay", "sensor_lowpass", "sensor_highpass"):
         dofs = [e.dof for e in effs if e.name == kind]
         if len(dofs) != len(set(dofs)):
             raise ValueError(f"effect {kind!r} given twice for the same dof")
+    low = {e.dof for e in effs if e.name == "sensor_lowpass"}
+    both = sorted(e.dof + 1 for e in effs if e.name == "sensor_highpass" and e.dof in low)
+    if both:
+        raise ValueError(f"sensor_lowpass and sensor_highpass on the same accelerometer (dof {both}) are not supported")
     return effs
 
 

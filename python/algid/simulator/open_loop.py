@@ -49,12 +49,14 @@ def _input_terms(P: list[Propagator], app: np.ndarray, nonlinear: bool) -> tuple
 
 
 def _settle_lowpass(run: Run, s: np.ndarray, u0: np.ndarray) -> None:
-    """Start the low-pass accelerometers settled on ``a(0+)`` (``u0``: the applied force at 0+)."""
+    """Start the low-pass accelerometers settled on ``a(0+)`` (``u0``: the applied force at 0+);
+    the high-pass ones at ``z = 0`` (settled on the structure at rest before the record: they
+    read ``a(0+)``)."""
     n, lay, plant = run.inputs.n, run.layout, run.plant
     f0 = (s[lay.o_w : lay.o_z] if lay.n_w else u0) - plant.c * s[n : 2 * n] - plant.K @ s[:n]
     if plant.nonlinear:
         f0 = f0 + plant.effect_force(0.0, s[:n], s[n : 2 * n])
-    s[lay.o_lp : lay.o_w] = (f0 * plant.minv)[lay.lp_idx]
+    s[lay.o_lp : lay.o_w] = np.where(lay.lp_high, 0.0, (f0 * plant.minv)[lay.lp_idx])
 
 
 def _integrate(
@@ -105,8 +107,10 @@ def _samples(run: Run, S: np.ndarray, rec: np.ndarray, app_l: np.ndarray, app_r:
     lim = {name: np.array(v) for name, v in zip(LIMIT_NAMES, values)}
     A_true = 0.5 * (lim["a_minus"] + lim["a_plus"])
     A_clean = A_true.copy()
-    if lay.n_lp:
-        A_clean[:, lay.lp_idx] = S[:, lay.o_lp : lay.o_w]
+    if lay.n_lp:  # a low-pass reads its state z, a high-pass a - z
+        Z, high = S[:, lay.o_lp : lay.o_w], lay.lp_high
+        A_clean[:, lay.lp_idx[~high]] = Z[:, ~high]
+        A_clean[:, lay.lp_idx[high]] -= Z[:, high]
     A_clean += run.bias
     return Samples(
         x=X.copy(),

@@ -91,14 +91,17 @@ class Propagator:
 
 @dataclass(frozen=True)
 class StateLayout:
-    """Where each part of the state ``[x, v, low-pass states, actuator states, controller
-    states]`` sits: ``n`` DOF, low-pass accelerometers on the DOFs ``lp_idx`` with cut-offs
-    ``lp_wc`` [rad/s], ``n_w`` actuator states (``n`` with a lag, else 0) and ``n_z``
-    controller states."""
+    """Where each part of the state ``[x, v, sensor filter states, actuator states, controller
+    states]`` sits: ``n`` DOF, first-order accelerometer filters on the DOFs ``lp_idx`` with
+    cut-offs ``lp_wc`` [rad/s], each a state ``z' = w_c (a - z)`` that the accelerometer reads
+    (``sensor_lowpass``) or subtracts (``sensor_highpass``, where ``lp_high``: it reads
+    ``a - z``, the first-order high-pass ``s / (s + w_c)``), ``n_w`` actuator states (``n`` with
+    a lag, else 0) and ``n_z`` controller states."""
 
     n: int
     lp_idx: np.ndarray
     lp_wc: np.ndarray
+    lp_high: np.ndarray
     n_w: int
     n_z: int
 
@@ -128,11 +131,16 @@ class StateLayout:
 
 def state_layout(inp: RunInputs, n_z: int) -> StateLayout:
     """The layout of a run with ``n_z`` controller states."""
-    lp = sorted((e.dof, 2 * np.pi * e.params["cutoff_hz"]) for e in inp.effects if e.name == "sensor_lowpass")
+    lp = sorted(
+        (e.dof, 2 * np.pi * e.params["cutoff_hz"], e.name == "sensor_highpass")
+        for e in inp.effects
+        if e.name in ("sensor_lowpass", "sensor_highpass")
+    )
     return StateLayout(
         n=inp.n,
-        lp_idx=np.array([i for i, _ in lp], dtype=int),
-        lp_wc=np.array([w for _, w in lp]),
+        lp_idx=np.array([i for i, _, _ in lp], dtype=int),
+        lp_wc=np.array([w for _, w, _ in lp]),
+        lp_high=np.array([h for _, _, h in lp], dtype=bool),
         n_w=inp.n if inp.actuator_lag_s > 0 else 0,
         n_z=n_z,
     )
