@@ -195,17 +195,18 @@ def test_plan_single_window_for_short_clean_records_else_continuous():
     assert natural_frequencies_hz(np.r_[-1.0, TABLE1.identifiable()[1:]], 3, "fixed").size == 0
 
 
-def _judge(theta, sigma, u_scale=1.0, excess=None):
+def _judge(theta, sigma, u_scale=1.0, misfit=""):
     """Verdicts for one DOF between walls whose regressors all have unit spread."""
     T = 1000
     rng = np.random.default_rng(3)
     mo = Motion(*(rng.standard_normal((T, 1)) for _ in range(3)))
     u = u_scale * rng.standard_normal((T, 1))
     nm = analyse(u, mo.a, DT)
-    ex = None if excess is None else np.array(excess, dtype=float)
     return {
         v.name: v
-        for v in judge(np.array(theta, float), np.array(sigma, float), 1, "fixed", mo, u, np.array([True]), nm, ex)
+        for v in judge(
+            np.array(theta, float), np.array(sigma, float), 1, "fixed", mo, u, np.array([True]), nm, misfit=misfit
+        )
     }
 
 
@@ -222,8 +223,9 @@ def test_verdicts_of_impossible_undetermined_and_negligible_estimates():
     assert v["k1"].status == "not_identifiable"  # consistent with zero, but 3 sigma is 30 % of the force
     v = _judge([0.5, 0.1, 0.5, np.nan], [0.01, 0.01, 0.01, np.nan])
     assert all(v[k].status == "ok" for k in ("m1", "c1", "k1")) and v["k2"].status == "not_separable"
-    v = _judge([0.5, 0.1, 0.5, np.nan], [0.01, 0.01, 0.01, np.nan], excess=[1, 1, 12, 1])
-    assert v["k1"].status == "model_misfit" and not v["k1"].valid and v["m1"].status == "ok"
+    v = _judge([0.5, 0.1, 0.5, np.nan], [0.01, 0.01, 0.01, np.nan], misfit="the gap is 4x the floor")
+    assert all(v[k].status == "model_misfit" and not v[k].valid for k in ("m1", "c1", "k1"))
+    assert v["k1"].reason == "stiffness biased: the gap is 4x the floor" and v["k2"].status == "not_separable"
 
 
 # ---- whole records ---------------------------------------------------------------------------

@@ -165,9 +165,7 @@ def identify(
     joint = plan.estimator == "continuous" and plan.method == "weak_form"
     _progress(progress, "withheld-window test", None)
     check = fit_check(rec, boundary)
-    verdicts = judge(
-        unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, unc.excess, joint, check.pop("misfit")
-    )
+    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint, check.pop("misfit"))
     # no value at all where the record has no scale for it (an unforced DOF) or the
     # estimator's systems were singular
     blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])

@@ -22,10 +22,11 @@ joins). Statuses, in the order they are tested:
   acceleration lost in the noise).
 * ``inadmissible``: a mass below zero by three sigma, or a damping or spring below zero by
   three sigma, that is not negligible: eq. 1 does not fit the record.
-* ``model_misfit``: the recording's window results scatter more than :data:`EXCESS_MAX`
-  times as much as its surrogates' (``excess``, see :mod:`.engine`): the record varies in a
-  way eq. 1 with its noise cannot explain, and the estimate depends on how the record is
-  cut into windows.
+* ``model_misfit``: the fitted model does not explain the record to its noise (``misfit``,
+  the diagnosis's withheld-window test, :func:`.augmented.fit_check`): the estimate is
+  biased by what the model leaves out. (The window results' scatter beyond the noise
+  scales the standard deviations up, :mod:`.uncertainty`; it is no verdict of its own:
+  coloured sensor noise scatters them too.)
 * ``negligible``: the share plus three uncertainty shares stays below :data:`NEGLIGIBLE`,
   or a damping or spring is consistent with zero within :data:`ZERO_BOUND` of the force:
   the term does not matter in this record (the spring of an axis without one); valid.
@@ -54,9 +55,6 @@ NEGLIGIBLE = 0.01
 #: A damping or spring consistent with zero is determined (as zero) when three sigma of it
 #: stand for at most this share of the force.
 ZERO_BOUND = 0.05
-#: Window-result scatter of the recording over that of its surrogates above which the
-#: linear chain is taken not to fit (the cubic spring of the Silverbox gives 1.5-2.5).
-EXCESS_MAX = 5.0
 #: In-band acceleration over its in-band noise below which inertia is lost in the noise.
 ACCEL_SNR = 3.0
 
@@ -168,17 +166,14 @@ def judge(
     u: np.ndarray,
     forced: np.ndarray,
     nm: NoiseModel,
-    excess: np.ndarray | None = None,
     joint: bool = False,
     misfit: str = "",
 ) -> list[Verdict]:
-    """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``; ``excess``
-    (3n+1,): window-result scatter of the record over its surrogates' (1 if not given);
-    ``joint``: the DOFs were solved together, so an unforced DOF takes its scale from its
-    springs (:func:`scaled_dofs`); ``misfit``: why the fitted model does not explain the
+    """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``; ``joint``:
+    the DOFs were solved together, so an unforced DOF takes its scale from its springs
+    (:func:`scaled_dofs`); ``misfit``: why the fitted model does not explain the
     record to its noise (the withheld-window test), which makes every determined estimate
     ``model_misfit``."""
-    excess = np.ones(theta.shape) if excess is None else np.asarray(excess, dtype=float)
     scaled = scaled_dofs(forced, n, joint)
     ratio, dofs = scales(n, boundary, mo, u, forced, theta, scaled)
     out: list[Verdict] = []
@@ -211,16 +206,6 @@ def judge(
             )
             if v.status in ("ok", "negligible", "inadmissible") and misfit:
                 v = Verdict(name, "model_misfit", f"{_WHAT[fam]} biased: {misfit}", v.share, v.sigma_share)
-            elif v.status in ("ok", "negligible", "inadmissible") and excess[p] > EXCESS_MAX:
-                v = Verdict(
-                    name,
-                    "model_misfit",
-                    f"{_WHAT[fam]} not determined: the record's window results scatter "
-                    f"{excess[p]:.3g}x more than its noise explains (an effect outside eq. 1, or noise that "
-                    "is not white); run `algid diagnose`",
-                    v.share,
-                    v.sigma_share,
-                )
             out.append(v)
     return out
 
