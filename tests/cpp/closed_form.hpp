@@ -136,9 +136,12 @@ struct OneForceChainN {
     build(gen);
   }
   /// Given parameters (e.g. the paper's Table 1).
-  OneForceChainN(std::vector<double> mass, std::vector<double> damping, std::vector<double> stiffness,
-                 int forced_dof, unsigned seed)
-      : n(static_cast<int>(mass.size())), forced(forced_dof), m(std::move(mass)), c(std::move(damping)),
+  OneForceChainN(std::vector<double> mass, std::vector<double> damping, std::vector<double> stiffness, int forced_dof,
+                 unsigned seed)
+      : n(static_cast<int>(mass.size())),
+        forced(forced_dof),
+        m(std::move(mass)),
+        c(std::move(damping)),
         k(std::move(stiffness)) {
     std::mt19937 gen(seed);
     build(gen);

@@ -55,7 +55,8 @@ double run_exact(const OneForceChainN& truth, algid::Boundary boundary, const ch
                     rel(est.theta(i)(0), truth.m[a_]), rel(est.theta(i)(2), truth.k[a_])});
     CHECK(est.forced(i) == (i == truth.forced));
   }
-  for (int j = 0; j < (free_end ? n : n + 1); ++j) err = std::max(err, rel(est.stiffness()(j), truth.k[static_cast<std::size_t>(j)]));
+  for (int j = 0; j < (free_end ? n : n + 1); ++j)
+    err = std::max(err, rel(est.stiffness()(j), truth.k[static_cast<std::size_t>(j)]));
   if (free_end) CHECK(est.stiffness()(n) == 0.0);
   CHECK(est.all_valid());
   // The springs the scale passed through: both DOF's estimates are the same number (the
@@ -65,8 +66,8 @@ double run_exact(const OneForceChainN& truth, algid::Boundary boundary, const ch
     if (j <= truth.forced) CHECK(rel(est.theta(j - 1)(3), est.theta(j)(2)) < 1e-14);
   }
   std::printf("%s %s n=%d force on DOF %d only (%s): every parameter within %.2e after %.2f s\n",
-              Est::kDofs == Dynamic ? "Dynamic" : "fixed", name, n, truth.forced + 1, free_end ? "free" : "fixed",
-              err, (samples - Est::kDelay) * cfg.dt);
+              Est::kDofs == Dynamic ? "Dynamic" : "fixed", name, n, truth.forced + 1, free_end ? "free" : "fixed", err,
+              (samples - Est::kDelay) * cfg.dt);
   return err;
 }
 

@@ -34,8 +34,9 @@ struct Record {
   // well-conditioned near t = 0 only): the homogeneous systems and the scale carried along the
   // chain run in every sample
   Record(int dofs, long samples, unsigned seed, bool one_force = false) : n(dofs), T(samples) {
-    const algid_test::Samples s = one_force ? algid_test::Samples(algid_test::OneForceChainN(dofs, 0, seed), samples, 1e-4)
-                                            : algid_test::Samples(algid_test::SineChainN(dofs, seed), samples, 1e-3);
+    const algid_test::Samples s = one_force
+                                      ? algid_test::Samples(algid_test::OneForceChainN(dofs, 0, seed), samples, 1e-4)
+                                      : algid_test::Samples(algid_test::SineChainN(dofs, seed), samples, 1e-3);
     accel.assign(s.accel.begin(), s.accel.end());
     force.assign(s.force.begin(), s.force.end());
   }

@@ -1,7 +1,8 @@
 #pragma once
 /// @file chain_estimator.hpp
 /// On-line algebraic estimator of every mass, damper and spring of an n-DOF chain (eq. 1)
-/// from sampled accelerations y_i and forces u_i only (eqs. 2-7).
+/// from sampled accelerations y_i and forces u_i only (eqs. 2-7), with a force on every DOF or
+/// on one DOF only (below, "One force").
 ///
 /// Two phases. Construction validates the configuration (and throws std::invalid_argument,
 /// or aborts when built without exceptions; call `validate()` first there) and, for a chain
@@ -42,6 +43,24 @@
 /// DOF carry zero signals and are never valid. run() and record() are update() sample by
 /// sample: the lanes already hold the DOF side by side.
 ///
+/// One force. A DOF is *forced* from the first sample since t0 at which its force is not zero
+/// (before it every integral of its force is zero); reseed() forgets it. The equation of a DOF
+/// without force is homogeneous and determines only the ratios c_i / m_i, k_i / m_i,
+/// k_{i+1} / m_i: its lane solves the same 4x4 layout with its last row replaced by m_i = 1
+/// (row 3; row 2 for the 3x3 DOF of a free end) and no force, i.e. rows 0-2 of eq. 5 in the
+/// columns c_i, k_i, k_{i+1} with the mass column on the right side, and eq. 7 averages those
+/// ratios, weighted by the determinant of that system (tau^14 |det S|, tau^8 at a free end:
+/// homogeneous_decay). A DOF whose force appears later restarts its eq. 7 then. The scale
+/// then passes along the springs: a neighbour with a scale estimates the spring they share, so
+/// m_i = k_shared / (k_shared / m_i), and c_i, the other spring follow; from each forced DOF
+/// outwards both ways, each DOF taking the scale of the nearest forced DOF (equally near ones:
+/// the mean of the two masses). The lanes of eq. 7 then hold the scaled estimates. A spring
+/// between a DOF and the neighbour that took its scale through it is the scaled side's number
+/// (the other's is the same number); between two DOF that carry their own scale, the mean. A
+/// DOF that no forced DOF reaches through valid estimates (no force at all, a spring estimated
+/// as 0 on the way, n = 1) is NaN and not valid. This runs per sample after eq. 7 (O(n)) only
+/// while some DOF is without force.
+///
 /// Interface:
 ///   - `static ConfigError validate(const Config&, int n = N)`,
 ///     `explicit ChainEstimator(const Config&, int n = N)` (n: the DOF, any n >= 1 for
@@ -53,8 +72,10 @@
 ///   - `mass()`, `damping()` (n), `stiffness()` (n + 1: k_1 .. k_{n+1}, an interior spring the
 ///     mean of its two DOF's estimates; k_1 = k_1 + k_2 and k_2 NaN for n = 1 with walls,
 ///     k_{n+1} = 0 at a free end), `valid()` (n flags), `all_valid()`;
-///   - per DOF i (0-based): `theta(i)` = eq. 7 [m_i, c_i, k_i, k_{i+1}], `theta_instant(i)`
-///     (the Cramer solution of the last sample), `hadamard(i)`, `instant_valid(i)`;
+///   - per DOF i (0-based): `theta(i)` = eq. 7 [m_i, c_i, k_i, k_{i+1}] (scaled as above for a DOF
+///     without force), `theta_instant(i)` (the Cramer solution of the last sample: the ratios
+///     [1, c_i / m_i, k_i / m_i, k_{i+1} / m_i] for a DOF without force), `hadamard(i)`,
+///     `instant_valid(i)`, `forced(i)`;
 ///   - `dofs()`, `samples()`, `window()` [s], `config()`, `kDelay`, `kDofs`.
 
 #include "algid/algebraic_system.hpp"
@@ -255,14 +276,15 @@ class ChainEstimator {
   /// True when every DOF is valid.
   bool all_valid() const noexcept { return valid().all(); }
 
-  /// Eq. 7 estimate [m_i, c_i, k_i, k_{i+1}] of DOF i (0-based); NaN while not valid, and in
-  /// slot 3 of a 3x3 DOF.
+  /// Eq. 7 estimate [m_i, c_i, k_i, k_{i+1}] of DOF i (0-based), scaled through its springs for
+  /// a DOF without force; NaN while not valid, and in slot 3 of a 3x3 DOF.
   Vector<Scalar, 4> theta(int i) const noexcept {
     Vector<Scalar, 4> out;
     for (int j = 0; j < 4; ++j) out(j) = lane(estimate_[j], i);
     return out;
   }
-  /// Instantaneous Cramer solution of eq. 5 for DOF i (0-based), same layout as theta().
+  /// Instantaneous Cramer solution of eq. 5 for DOF i (0-based), same layout as theta(); for a
+  /// DOF without force, the ratios to its mass [1, c_i / m_i, k_i / m_i, k_{i+1} / m_i].
   Vector<Scalar, 4> theta_instant(int i) const noexcept {
     const Scalar det = lane(det_, i);
     Vector<Scalar, 4> out = Vector<Scalar, 4>::Constant(std::numeric_limits<Scalar>::quiet_NaN());

@@ -7,7 +7,8 @@
 /// the instantaneous Cramer solutions; for the positive parameters of eq. 1 it equals the
 /// paper's ratio, and it stays unbiased for a parameter that is zero or negative.
 ///
-/// Scaling: |Delta| of the physical system grows like tau^q (q = 19 for 4x4, 12 for 3x3), which
+/// Scaling: |Delta| of the physical system grows like tau^q (q = 19 for 4x4, 12 for 3x3; 14 and
+/// 8 for the homogeneous system of a DOF without force, see ChainEstimator), which
 /// spans hundreds of decades over a window and overflows single precision. The double
 /// integrals are therefore kept multiplied by tau^-q; a common factor cancels in the ratio, so
 /// the weights fed in are the determinants of the time-scaled system (order one), and each
