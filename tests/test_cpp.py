@@ -25,6 +25,7 @@ BINARIES = [
     "test_cramer",
     "test_lanes",
     "test_estimator",
+    "test_one_force",
     "test_sizes",
     "test_realtime",
     "test_no_exceptions",

@@ -333,3 +333,62 @@ def test_isa_builds_agree_and_selection():
         for key in ("mass", "damping", "stiffness"):
             rel = np.abs(out[key][late] / outs[0][key][late] - 1)
             assert np.nanmax(rel) < 1e-9, key
+
+
+def _one_force_record(dof: int, duration_s: float = 0.5):
+    """Table 1 under the multisine on DOF ``dof`` alone (the other forces exactly 0)."""
+    force = multisine(3)
+    t, a, u, _ = simulate_chain(TABLE1, lambda t: np.where(np.arange(3) == dof, force(t), 0.0), duration_s)
+    assert np.all(u[:, np.arange(3) != dof] == 0.0)
+    return t, a, u
+
+
+@pytest.mark.parametrize("dof", [0, 1], ids=["dof1", "dof2"])
+def test_one_force_scales_the_whole_chain(dof):
+    """Issue 35, item 3: one force, every parameter. An unforced DOF's eq. 7 gives the ratios to
+    its mass, the shared springs carry the forced DOF's scale (noise-free: as exact as a force
+    on every DOF, test_table1_accuracy_figures)."""
+    t, a, u = _one_force_record(dof, 0.5 + 0.006)
+    est = algid.ChainEstimator(3, 1e-3)
+    out = est.run(a, u)
+    assert est.forced.tolist() == [i == dof for i in range(3)] and est.ready
+    err = relative_errors(TABLE1, out["mass"][-1], out["damping"][-1], out["stiffness"][-1])
+    assert err.max() < 1e-6, err
+    # the spring that carried the scale is one number on both sides (not averaged with itself)
+    for i in range(dof, 2):  # springs k_{i+2} right of the forced DOF
+        assert est.theta(i)[3] == pytest.approx(est.theta(i + 1)[2], rel=1e-14)
+    # an unforced DOF's instantaneous solution is the ratios to its mass
+    other = 2 if dof != 2 else 0
+    inst = est.theta_instant(other)
+    m, c, k = TABLE1.mass[other], TABLE1.damping[other], TABLE1.stiffness
+    np.testing.assert_allclose(inst[1:] * m, [c, k[other], k[other + 1]], rtol=1e-5)
+    assert inst[0] == pytest.approx(1.0, rel=1e-15)  # det * (1 / det)
+
+
+def test_no_force_has_no_scale():
+    t, a, u = _one_force_record(0, 0.2)
+    est = algid.ChainEstimator(3, 1e-3)
+    out = est.run(a, np.zeros_like(u))
+    assert not est.forced.any() and not est.valid.any()
+    assert np.isnan(out["mass"][-1]).all() and np.isnan(out["stiffness"][-1]).all()
+
+
+def test_one_force_window_of_identify():
+    """algid.identify's single window returns every parameter of a clean short record with one
+    force (``raw``: the verdicts' scale rule is applied by the engine)."""
+    t, a, u = _one_force_record(1, 1.0)
+    res = algid.identify(algid.Recording(t=t, u=u, a=a), estimator="window", replicates=2)
+    assert res.plan.estimator == "window"
+    truth = TABLE1.identifiable()
+    assert np.max(np.abs(res.raw / truth - 1)) < 1e-6
+
+
+def test_one_force_algebraic_windows_of_the_continuous_estimator():
+    """The algebraic windows of ContinuousEstimator are ChainEstimators: one force scales every
+    window result, so the running estimate has every parameter."""
+    t, a, u = _one_force_record(0, 4.0)
+    est = algid.ContinuousEstimator(3, 1e-3, method="algebraic")
+    out = est.run(a, u)
+    last = np.concatenate([out["mass"][-1], out["damping"][-1], out["stiffness"][-1]])
+    err = np.abs(last / TABLE1.identifiable() - 1)
+    assert np.isfinite(last).all() and err.max() < 1e-3, err

@@ -215,6 +215,13 @@ void bind_chain(py::module_& m, const char* name, bool module_local) {
                                std::copy(e.valid().data(), e.valid().data() + e.dofs(), out.mutable_data());
                                return out;
                              })
+      .def_property_readonly("forced",
+                             [](const Est& e) {
+                               idle(e);
+                               py::array_t<bool> out(e.dofs());
+                               for (int i = 0; i < e.dofs(); ++i) out.mutable_data()[i] = e.forced(i);
+                               return out;
+                             })
       .def_property_readonly("window", [](const Est& e) { return idle(e).window(); })
       .def(
           "theta",

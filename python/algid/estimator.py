@@ -255,6 +255,14 @@ class ChainEstimator(Displayed):
         return np.asarray(self._impl.valid, dtype=bool)
 
     @property
+    def forced(self) -> np.ndarray:
+        """(n,) per DOF: a non-zero force sample has arrived since t0. A DOF without force
+        solves its equation for the ratios to its mass and takes its scale from the spring it
+        shares with the nearest forced DOF, so one force gives every parameter of the chain
+        (NaN and not :attr:`valid` while no forced DOF reaches it)."""
+        return np.asarray(self._impl.forced, dtype=bool)
+
+    @property
     def ready(self) -> bool:
         """Every DOF :attr:`valid`."""
         return bool(self.valid.all())

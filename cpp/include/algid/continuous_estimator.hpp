@@ -23,7 +23,9 @@
 ///      start-up transient has decayed to 1e-6 (115 ms at 50 Hz).
 ///   1. Windows. K (`stagger`) ChainEstimators run side by side on windows of M samples
 ///      (`window_s`), started M/K samples apart; each is reseeded when its window is full,
-///      so a window result arrives every M/K samples (K = 4, 0.3 s: every 75 ms).
+///      so a window result arrives every M/K samples (K = 4, 0.3 s: every 75 ms). With a
+///      force on some DOF only, a window scales the DOF without force through their springs
+///      (ChainEstimator, "One force"): the prefilter keeps a force that is 0 exactly 0.
 ///   2. Aggregation, per parameter (m_1..m_n, c_1..c_n, k_1..k_{n+1}; interior springs fused
 ///      as in ChainEstimator). A window result is heavy-tailed (a ratio of random
 ///      determinants), so it goes through a median first: the last `block` results form a

@@ -7,7 +7,8 @@
 /// the instantaneous Cramer solutions; for the positive parameters of eq. 1 it equals the
 /// paper's ratio, and it stays unbiased for a parameter that is zero or negative.
 ///
-/// Scaling: |Delta| of the physical system grows like tau^q (q = 19 for 4x4, 12 for 3x3), which
+/// Scaling: |Delta| of the physical system grows like tau^q (q = 19 for 4x4, 12 for 3x3; 14 and
+/// 8 for the homogeneous system of a DOF without force, see ChainEstimator), which
 /// spans hundreds of decades over a window and overflows single precision. The double
 /// integrals are therefore kept multiplied by tau^-q; a common factor cancels in the ratio, so
 /// the weights fed in are the determinants of the time-scaled system (order one), and each
@@ -24,17 +25,22 @@ namespace algid {
 template <int M>
 inline constexpr int kTimeExponent = M == 4 ? 19 : 12;
 
-/// Factor (prev_tau / tau)^q, q = kTimeExponent<M>, that carries the tau^-q-scaled states of eq.
-/// 7 from prev_tau to tau (0 from prev_tau = 0, i.e. at the first sample of a window). The same
-/// for every DOF of a chain: computed once per sample. @realtime no allocation, no throw
-template <int M, class T>
-inline T ratio_decay(const T& prev_tau, const T& tau) noexcept {
-  static_assert(M == 3 || M == 4, "eq. 5 systems are 3x3 or 4x4");
+/// The same power for the homogeneous system of a DOF without force (ChainEstimator), whose
+/// equation determines only ratios to its mass: rows 0-2 of eq. 5, columns c_i, k_i, k_{i+1}
+/// (14, in a DOF of a 4x4 system), or rows 0-1 and columns c_n, k_n (8, the last DOF at a free
+/// end, a 3x3 system).
+template <int M>
+inline constexpr int kRatioTimeExponent = M == 4 ? 14 : 8;
+
+/// (prev_tau / tau)^Q by repeated squaring (0 from prev_tau = 0). @realtime no allocation, no throw
+template <int Q, class T>
+inline T decay_power(const T& prev_tau, const T& tau) noexcept {
+  static_assert(Q >= 1, "a positive power");
   T ratio = prev_tau / tau;
-  // ratio^q by repeated squaring; the first factor is taken as it is (1 * x == x exactly).
+  // the first factor is taken as it is (1 * x == x exactly)
   T rho = ratio;
   bool first = true;
-  for (int e = kTimeExponent<M>; e > 0; e >>= 1) {
+  for (int e = Q; e > 0; e >>= 1) {
     if (e & 1) {
       rho = first ? ratio : T(rho * ratio);
       first = false;
@@ -42,6 +48,23 @@ inline T ratio_decay(const T& prev_tau, const T& tau) noexcept {
     ratio = ratio * ratio;
   }
   return rho;
+}
+
+/// Factor (prev_tau / tau)^q, q = kTimeExponent<M>, that carries the tau^-q-scaled states of eq.
+/// 7 from prev_tau to tau (0 from prev_tau = 0, i.e. at the first sample of a window). The same
+/// for every DOF of a chain: computed once per sample. @realtime no allocation, no throw
+template <int M, class T>
+inline T ratio_decay(const T& prev_tau, const T& tau) noexcept {
+  static_assert(M == 3 || M == 4, "eq. 5 systems are 3x3 or 4x4");
+  return decay_power<kTimeExponent<M>>(prev_tau, tau);
+}
+
+/// The factor of ratio_decay for the homogeneous system of a DOF without force,
+/// q = kRatioTimeExponent<M>. @realtime no allocation, no throw
+template <int M, class T>
+inline T homogeneous_decay(const T& prev_tau, const T& tau) noexcept {
+  static_assert(M == 3 || M == 4, "eq. 5 systems are 3x3 or 4x4");
+  return decay_power<kRatioTimeExponent<M>>(prev_tau, tau);
 }
 
 /// Eq. 7 of W DOF side by side, one per SIMD lane (the layout of ChainEstimator), for the M
@@ -75,6 +98,18 @@ class RatioLanes {
       i2_[j] = Ops::madd(rho, Ops::madd(h, i1_[j], i2_[j]), half * i1);
       i1_[j] = i1;
       prev_[j] = x;
+    }
+  }
+
+  /// Start a new window in the lanes where `mask` > 0 (a DOF whose force has just appeared:
+  /// its system changes). @realtime no allocation, no throw
+  void restart(const L& mask) noexcept {
+    using Ops = detail::LaneOps<Scalar, W>;
+    const L zero = L::Zero();
+    for (int j = 0; j < kIntegrals; ++j) {
+      i1_[j] = Ops::if_less(zero, mask, zero, i1_[j]);
+      i2_[j] = Ops::if_less(zero, mask, zero, i2_[j]);
+      prev_[j] = Ops::if_less(zero, mask, zero, prev_[j]);
     }
   }
 

@@ -10,10 +10,12 @@ joins). Statuses, in the order they are tested:
 * ``known``: a spring fixed by the model (free right end: 0); ``not_separable``: k2 of one
   DOF between walls (only k1 + k2 is identifiable; it is reported as k1).
 * ``not_identifiable``: the DOF has no scale (only ratios of its parameters are determined):
-  it carries no force and, when the DOFs are solved jointly (the weak form's joint solve),
-  no interior spring joins it to a DOF that has one (:func:`scaled_dofs`: a spring estimated
-  in both equations it enters passes the scale on, so one force scales a whole chain; its
-  force scale ``F`` is then the largest in-band term of its equation); the estimator
+  it carries no force and, when the estimator carries the scale along the springs (the weak
+  form's joint solve; the single window and the algebraic windows, whose DOF without force
+  take their mass from the spring they share with a scaled neighbour), no interior spring
+  joins it to a DOF that has one (:func:`scaled_dofs`: a spring estimated in both equations
+  it enters passes the scale on, so one force scales a whole chain; its force scale ``F`` is
+  then the largest in-band term of its equation); the estimator
   returned no value; the uncertainty share exceeds :data:`UNDETERMINED`; a damping or spring
   consistent with zero (within three sigma) whose three sigma stand for more than
   :data:`ZERO_BOUND` of the force. A mass is not identifiable unless it is above zero by
@@ -102,8 +104,9 @@ def _mass_reason(m: float, share: float, snr: float) -> str:
 
 
 def scaled_dofs(forced: np.ndarray, n: int, joint: bool) -> np.ndarray:
-    """(n,) DOFs whose equation has a scale: the forced ones and, when the DOFs are solved
-    jointly (the weak form's joint solve), every DOF joined to one of them by interior
+    """(n,) DOFs whose equation has a scale: the forced ones and, when the estimator carries
+    the scale along the springs (``joint``: the weak form's joint solve, and the single window
+    and algebraic windows of ChainEstimator), every DOF joined to one of them by interior
     springs: a spring estimated in both equations it enters carries the scale across."""
     scaled = np.asarray(forced, dtype=bool).copy()
     while joint:
@@ -170,8 +173,8 @@ def judge(
     misfit: str = "",
 ) -> list[Verdict]:
     """One :class:`Verdict` per packed parameter ``m1..mn, c1..cn, k1..k{n+1}``; ``joint``:
-    the DOFs were solved together, so an unforced DOF takes its scale from its springs
-    (:func:`scaled_dofs`); ``misfit``: why the fitted model does not explain the
+    the estimator carries the scale along the springs, so an unforced DOF takes its scale
+    from them (:func:`scaled_dofs`); ``misfit``: why the fitted model does not explain the
     record to its noise (the withheld-window test), which makes every determined estimate
     ``model_misfit``."""
     scaled = scaled_dofs(forced, n, joint)
@@ -217,11 +220,7 @@ def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm, joint) -> Verdict:
     what = _WHAT[fam]
     if not dofs_f:
         where = " and ".join(str(i + 1) for i in dofs)
-        how = (
-            "nor a spring path to a forced DOF"
-            if joint
-            else "and its equation is solved alone (the algebraic windows), so it has no scale"
-        )
+        how = "nor a spring path to a forced DOF" if joint else "and its equation is solved alone, so it has no scale"
         return Verdict(
             name,
             "not_identifiable",
