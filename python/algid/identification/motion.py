@@ -9,7 +9,9 @@
   integral ``-A / w^2`` on the bins above ``2 / duration`` (below, the integral of noise
   would wander off). The verdicts measure every parameter against its regressor in this
   motion, and the surrogates of :mod:`.surrogate` move along it.
-* :func:`chain_forces`: eq. 1 read from left to right, ``M a + C v + K x``.
+* :func:`chain_forces`: eq. 1 read from left to right, ``M a + C v + K x``;
+  :func:`unforced_consistent`: the motion of the DOFs without force made to hold eq. 1
+  with zero force.
 * :func:`equation_error_fit`: eq. 1 fitted by least squares on the DFT bins of the signal
   band, every DOF's equation at once (its springs shared with its neighbours). Noise in the
   motion biases it (errors in variables) and leakage blurs the lowest bins, so it is only the
@@ -102,6 +104,38 @@ def chain_forces(theta: np.ndarray, n: int, boundary: str, mo: Motion) -> np.nda
     th = np.nan_to_num(np.asarray(theta, dtype=float))
     K = stiffness_matrix(packed_springs(th, n, boundary))
     return mo.a * th[:n] + mo.v * th[n : 2 * n] + mo.x @ K.T
+
+
+def unforced_consistent(mo: Motion, theta: np.ndarray, n: int, boundary: str, forced: np.ndarray, dt: float) -> Motion:
+    """``mo`` with the motion of the DOFs without force replaced by the one eq. 1 gives them
+    with zero force, driven by the forced DOFs' motion through the springs (a surrogate of a
+    one-shaker record must hold ``M a + C v + K x = 0`` on those DOFs, or their ratio
+    systems see a force that is not there). The residual force ``r`` of the unforced DOFs
+    is cancelled by a correction ``d`` of their motion, ``M_uu d'' + C_uu d' + K_uu d = -r``:
+    the line through ``r``'s ends by a polynomial ``d``, the rest bin by bin in the frequency
+    domain. Unchanged when some parameter of those DOFs is not finite."""
+    th = np.asarray(theta, dtype=float)
+    u = ~np.asarray(forced, dtype=bool)
+    K = stiffness_matrix(packed_springs(th, n, boundary))
+    m, c = th[:n], th[n : 2 * n]
+    if not u.any() or not (np.all(np.isfinite(m[u])) and np.all(np.isfinite(c[u]))):
+        return mo
+    Mu, Cu, Ku = np.diag(m[u]), np.diag(c[u]), K[np.ix_(u, u)]
+    r = chain_forces(th, n, boundary, mo)[:, u]
+    T = r.shape[0]
+    t = np.arange(T) * dt
+    r1 = (r[-1] - r[0]) / (t[-1] - t[0])
+    p1 = -np.linalg.solve(Ku, r1)  # d = p0 + p1 t cancels r0 + r1 t
+    p0 = np.linalg.solve(Ku, -r[0] - Cu @ p1)
+    w = 2 * np.pi * np.fft.rfftfreq(T, dt)
+    R = np.fft.rfft(r - r[0] - t[:, None] * r1, axis=0)
+    Z = -(w**2)[:, None, None] * Mu + 1j * w[:, None, None] * Cu + Ku
+    D = -np.linalg.solve(Z, R[:, :, None])[:, :, 0]
+    x, v, a = mo.x.copy(), mo.v.copy(), mo.a.copy()
+    x[:, u] += p0 + t[:, None] * p1 + np.fft.irfft(D, T, axis=0)
+    v[:, u] += p1 + np.fft.irfft(1j * w[:, None] * D, T, axis=0)
+    a[:, u] += np.fft.irfft(-(w**2)[:, None] * D, T, axis=0)
+    return Motion(x, v, a)
 
 
 def _stands_out(Z: np.ndarray, channels, dt: float, T: int) -> np.ndarray:

@@ -7,7 +7,9 @@ sensor noise, so that the estimator's error on it is known:
    or integrals there (:func:`.motion.band_limited_motion`).
 2. **Forces** of the identified chain along that motion, eq. 1 read from left to right:
    ``u_s = M a_s + C v_s + K x_s``. The motion is prescribed, so no simulation runs and an
-   unstable or inadmissible estimate gives a surrogate all the same.
+   unstable or inadmissible estimate gives a surrogate all the same. A DOF without force
+   keeps none: its motion is the one the chain gives it with zero force, driven by its
+   neighbours through the springs (:func:`.motion.unforced_consistent`).
 3. **Sensors**, drawn afresh for every replicate from the recording's noise model
    (:mod:`algid.noise`): white noise of each channel's floor on forces and measured
    accelerations; white noise on velocities, then differentiated like the recording's;
@@ -40,7 +42,7 @@ import numpy as np
 from ..noise import NoiseModel
 from ..parallel import parallel_map
 from ..recording import derivative, second_derivative
-from .motion import Motion, band_limited_motion, chain_forces
+from .motion import Motion, band_limited_motion, chain_forces, unforced_consistent
 from .plan import Plan, natural_frequencies_hz, window_candidates, window_limits
 from .runner import Run, run_plan
 
@@ -122,7 +124,9 @@ def bootstrap(
     ``missing``: (T,) instants every run sees as not a number, as the recording's did.
     """
     n = motion_rec.shape[1]
-    mo = band_limited_motion(motion_rec, nm.motion, nm.dt, f_cut)
+    mo = unforced_consistent(
+        band_limited_motion(motion_rec, nm.motion, nm.dt, f_cut), theta, n, boundary, forced, nm.dt
+    )
     u_s = chain_forces(theta, n, boundary, mo) * forced
     a0 = {
         "acceleration": lambda: mo.a,
