@@ -21,6 +21,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -133,7 +134,10 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
             "its noise floor: it does not explain this record; run `algid diagnose`"
         )
     mo = band_limited_motion(motion, kind, nm.dt, surrogate_band(nm, np.nan_to_num(theta), n, boundary))
-    verdicts = judge(theta, sigma, n, boundary, mo, rec.u, forced, nm, misfit=misfit)
+    verdicts = [
+        replace(v, reason=v.reason.replace("the linear chain does not fit", f"the chain with {label} does not fit"))
+        for v in judge(theta, sigma, n, boundary, mo, rec.u, forced, nm, misfit=misfit)
+    ]
     source = (
         f"effect from the diagnosis (`--effect auto`): {label}, z = {d.best.z:.3g}"
         if auto
