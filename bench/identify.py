@@ -29,7 +29,9 @@ Sections (all through the Python entry point the command line calls):
 * ``suites``: every record of the accuracy suite (``bench/accuracy.py``), of the calibration
   section and of the blind diagnosis check (``bench/blind_diagnosis.py``, seeds given by
   ``--blind-seeds``): how many produce a valid mass that is not positive, and a valid
-  damping or spring below zero by more than three sigma.
+  damping or spring below zero by more than three sigma; on the blind cases, the fit
+  check's figures: effect cases with any valid estimate, ``none`` cases with every estimate
+  valid, and the largest |error| / sigma of a valid estimate on those.
 
 The default (one seed, blind seeds 0:10) runs every section on fewer records and writes to
 the temporary folder; the published figures (docs/identify.md, README.md) take three seeds
@@ -361,6 +363,23 @@ def _suite_row(label: str, res) -> dict:
     return {"record": label, "valid_nonpositive_mass": bad_mass, "valid_negative": bad_neg}
 
 
+def _fit_check_row(res, chain: Chain, effect: str) -> dict:
+    """What the fit check makes of a blind case: the estimates called valid (``ok`` or
+    ``negligible``, not the springs fixed by the model), all of them where they could be, and
+    the largest |error| / sigma of a valid one against the simulated chain."""
+    truth = chain.identifiable()
+    estimated = [v for v in res.verdicts if v.status not in ("known", "not_separable")]
+    valid = [p for p, v in enumerate(res.verdicts) if v.status in ("ok", "negligible")]
+    z = [abs(res.theta[p] - truth[p]) / res.sigma[p] for p in valid if np.isfinite(res.sigma[p]) and res.sigma[p] > 0]
+    return {
+        "effect": effect,
+        "valid_estimates": len(valid),
+        "estimates": len(estimated),
+        "max_abs_z_valid": float(max(z, default=0.0)),
+        "fit_check": res.model_fit.get("diagnosis"),
+    }
+
+
 def section_suites(blind_seeds: list[int], calib_rows: list) -> dict:
     import accuracy
     import blind_diagnosis as B
@@ -380,6 +399,7 @@ def section_suites(blind_seeds: list[int], calib_rows: list) -> dict:
             t, a, u, _ = simulate_chain(chain, force, 0.5, FS, breaks=breaks)
             res = algid.identify(Recording(t=t, u=u, a=a), boundary=chain.boundary)
             rows.append(_suite_row(f"accuracy/{name}/{fname}", res))
+    checks = []
     for seed in blind_seeds:
         case = B.draw_case(seed, BLIND_DURATION_S, FS)
         lab = case["label"]
@@ -395,14 +415,33 @@ def section_suites(blind_seeds: list[int], calib_rows: list) -> dict:
         )
         res = algid.identify(Recording(t=r.t, u=r.u, a=r.a), boundary=lab["boundary"])
         rows.append(_suite_row(f"blind/{seed}/{lab['effect']}", res))
+        checks.append(_fit_check_row(res, case["chain"], lab["effect"]))
     nonpos = [r for r in rows if r["valid_nonpositive_mass"]]
     neg = [r for r in rows if r["valid_negative"]]
+    effect = [c for c in checks if c["effect"] != "none"]
+    none = [c for c in checks if c["effect"] == "none"]
+    fit_check = {
+        "effect_cases": len(effect),
+        "effect_cases_with_a_valid_estimate": sum(c["valid_estimates"] > 0 for c in effect),
+        "none_cases": len(none),
+        "none_cases_all_valid": sum(c["valid_estimates"] == c["estimates"] for c in none),
+        "none_max_abs_z_valid": max((c["max_abs_z_valid"] for c in none), default=0.0),
+        "cases": checks,
+    }
     print(
         f"suites   {len(rows)} records: {len(nonpos)} with a valid mass <= 0, {len(neg)} with a valid damping or "
-        f"spring below -3 sigma",
+        f"spring below -3 sigma; blind effect cases with a valid estimate {fit_check['effect_cases_with_a_valid_estimate']}"
+        f"/{len(effect)}, none cases all valid {fit_check['none_cases_all_valid']}/{len(none)} (largest |error| / "
+        f"sigma of a valid estimate {fit_check['none_max_abs_z_valid']:.2f})",
         flush=True,
     )
-    return {"records": len(rows), "valid_nonpositive_mass": nonpos, "valid_negative": neg, "rows": rows}
+    return {
+        "records": len(rows),
+        "valid_nonpositive_mass": nonpos,
+        "valid_negative": neg,
+        "fit_check": fit_check,
+        "rows": rows,
+    }
 
 
 def _seeds(text: str) -> list[int]:
