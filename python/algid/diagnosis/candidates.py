@@ -128,7 +128,10 @@ STRIBECK_Z = 4.0
 STRIBECK_SIGN = 0.05
 #: Longest input delay searched [samples]; the analysis skips at least this many samples.
 MAX_DELAY_SAMPLES = 100
+#: Points of a candidate's grid (:func:`_fit_grid`), and of the quick grid (no refinement)
+#: that :func:`algid.identify`'s fit check searches.
 N_GRID = 24
+QUICK_GRID = 8
 #: Refinement factor of the second grid stage.
 FINE = 4
 
@@ -143,6 +146,9 @@ class Context:
     v: np.ndarray
     #: what one candidate's fit tells another (the Coulomb velocity scale of each DOF)
     shared: dict = field(default_factory=dict)
+    #: points of every grid search, and whether the second stage refines it
+    grid: int = N_GRID
+    refine: bool = True
 
     @property
     def mass(self) -> np.ndarray:
@@ -294,7 +300,7 @@ def fit_coulomb(ctx: Context, i: int) -> CandidateFit:
     keeps the velocity noise of a resting axis from flipping a sign)."""
     P = ctx.P
     v = ctx.v[:, i]
-    grid = np.log(np.sqrt(np.mean(v**2)) * np.geomspace(1e-4, 0.3, N_GRID))
+    grid = np.log(np.sqrt(np.mean(v**2)) * np.geomspace(1e-4, 0.3, ctx.grid))
 
     def build(lg):
         col = effect_column(P, i, np.tanh(v / np.exp(lg)), ctx.mass)
@@ -313,7 +319,7 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
     P = ctx.P
     v = ctx.v[:, i]
     rms = np.sqrt(np.mean(v**2))
-    grid = np.log(rms * np.geomspace(1e-3, 1.0, N_GRID))
+    grid = np.log(rms * np.geomspace(1e-3, 1.0, ctx.grid))
 
     v_sign = ctx.shared.get(("v_scale", i))  # the Coulomb fit's: the velocity noise around rest
     # the friction's sign fades in as the Coulomb candidate found, or well inside the zone
@@ -411,7 +417,7 @@ def _fit_grid(
 
     walk = walk_grid(P, stats_of, grid)
     lo, hi = max(min(walk.pick) - 1, 0), min(max(walk.pick) + 1, len(grid) - 1)
-    if hi > lo:
+    if hi > lo and ctx.refine:
         fine = np.interp(np.arange(FINE * (hi - lo) + 1) / FINE, np.arange(hi - lo + 1), grid[lo : hi + 1])
         walk = walk_grid(P, stats_of, fine)
     cv = score_walk(P, stats_of, walk)
@@ -448,7 +454,7 @@ def fit_clearance(ctx: Context, j: int) -> CandidateFit:
     P = ctx.P
     d = spring_deformation(ctx.x, j, P.n)
     ad = np.abs(d)
-    grid = np.quantile(ad, np.linspace(0.05, 0.95, N_GRID))
+    grid = np.quantile(ad, np.linspace(0.05, 0.95, ctx.grid))
     grid = np.unique(grid[grid > 0])
     sides = spring_sides(P.n, j)
     base = {e: linear_design(P, e) for e, _ in sides}
@@ -470,7 +476,7 @@ def fit_delay(ctx: Context, i: int) -> CandidateFit:
     spline = CubicSpline(tf, P.u_full[:, i])
     t = P.t
     hi = min(MAX_DELAY_SAMPLES, P.skip) * P.dt
-    grid = np.log(np.geomspace(0.02 * P.dt, hi, N_GRID))
+    grid = np.log(np.geomspace(0.02 * P.dt, hi, ctx.grid))
 
     def build(lg):
         u = spline(t - np.exp(lg))
@@ -525,7 +531,7 @@ def fit_lowpass(ctx: Context, i: int) -> CandidateFit:
     nyq = 0.5 / P.dt
     # The filter must settle within the skipped lead-in: 3 time constants.
     lo = max(3.0 / (2 * np.pi * max(P.skip, 1) * P.dt), 1e-3 * nyq)
-    grid = np.log(np.geomspace(lo, nyq, N_GRID))
+    grid = np.log(np.geomspace(lo, nyq, ctx.grid))
     others = coupled(P, i)
     cols_i = spring_columns(P.n, P.boundary)[i]
 
@@ -562,7 +568,7 @@ def fit_highpass(ctx: Context, i: int) -> CandidateFit:
     P = ctx.P
     sl = P.sl
     nyq = 0.5 / P.dt
-    grid = np.log(np.geomspace(max(HIGHPASS_CYCLES / P.duration, 1e-4 * nyq), HIGHPASS_TOP * nyq, N_GRID))
+    grid = np.log(np.geomspace(max(HIGHPASS_CYCLES / P.duration, 1e-4 * nyq), HIGHPASS_TOP * nyq, ctx.grid))
     A3 = integrals(P.A1_full[:, i : i + 1], P.dt)[1][sl, 0]  # int int int a_i from the first sample
     others = [e for e, _ in coupled(P, i)]
 

@@ -72,19 +72,18 @@ def _effect_verdicts(effects: list[dict], misfit: str, units: dict) -> list[dict
 
 
 #: The candidates the fit check of the linear chain tries (:func:`fit_check`): every effect of
-#: the diagnosis but those nested in another (a Stribeck peak in Coulomb friction, a
-#: clearance's contact in a cubic spring), which cost the most to fit.
-CHECKED_EFFECTS = tuple(e for e in EFFECTS if e not in ("stribeck_friction", "clearance"))
+#: the diagnosis but Stribeck friction, whose Coulomb part stands out wherever it does.
+CHECKED_EFFECTS = tuple(e for e in EFFECTS if e != "stribeck_friction")
 
 
 def fit_check(rec, boundary: str) -> dict:
     """Does the linear chain explain the record to its noise? The diagnosis's verdict
-    (:func:`algid.diagnose` over :data:`CHECKED_EFFECTS`): ``none`` (no candidate beyond
+    (:func:`algid.diagnose` over :data:`CHECKED_EFFECTS`, on its quick grids): ``none`` (no candidate beyond
     noise, the withheld gap within :data:`FIT_FLOOR_RATIO` of the noise floor) or not.
     Returns ``gap``, ``noise_floor``, ``explains_record``, ``diagnosis`` (the effect and
     location it finds, or ``unknown``) and ``misfit``: the reason that makes the linear
     chain's determined estimates ``model_misfit`` ("" when it explains the record)."""
-    d = diagnose(rec, boundary, effects=CHECKED_EFFECTS)
+    d = diagnose(rec, boundary, effects=CHECKED_EFFECTS, quick=True)
     out = {"gap": d.gap_before, "noise_floor": float(d.extra["noise_floor"]), "explains_record": d.effect == "none"}
     if d.effect == "none":
         return {**out, "diagnosis": "none", "misfit": ""}
