@@ -66,11 +66,9 @@ class Identification(PackedParameters):
     recording_notes: tuple = ()  #: what the reader did (columns ignored, units converted)
     #: samples taken out as far outside their channel's range (:mod:`.screen`)
     screened: Screened = field(default_factory=Screened)
-    #: effects estimated with eq. 1 (:mod:`.augmented`): ``effect, location, params,
-    #: params_std, units, valid, reason`` each
+    #: effects estimated with eq. 1 (:mod:`.augmented`): ``effect, location, params, params_std, units, valid, reason``
     effects: list = field(default_factory=list)
-    #: the withheld-window test of the fitted model (``gap``, ``noise_floor``,
-    #: ``explains_record``) and where any effects came from (``source``)
+    #: the fit check (``gap``, ``noise_floor``, ``explains_record``) and where effects came from (``source``)
     model_fit: dict = field(default_factory=dict)
     #: the diagnosis that fitted the effects (its figures), None without effects
     diagnosis: object = field(default=None, repr=False, compare=False)
