@@ -354,25 +354,32 @@ def _skewed(x: np.ndarray, dt: float, delay: float) -> np.ndarray:
     return CubicSpline(t, x, axis=0, extrapolate=True)(t + delay)
 
 
-def _decimated(x: np.ndarray, R: int, kind: str, rng, info: dict) -> np.ndarray:
-    """The columns of ``x`` resampled to R times their rate (FFT), filtered by a decimation
-    filter of ``kind`` ("fir" or "cic") and decimated by R (module docstring)."""
-    from scipy.signal import firwin, resample
+def _decimation_filter(R: int, kind: str, rng, info: dict) -> np.ndarray:
+    """Taps, at R times the output rate, of a decimation filter of ``kind``: a linear-phase
+    FIR ("fir") or a cascade of moving averages ("cic") (module docstring); one filter for
+    every channel of the converter."""
+    from scipy.signal import firwin
 
-    T = x.shape[0]
-    hi = resample(x, R * T, axis=0)
     if kind == "fir":
         taps = int(rng.integers(8 * R, 16 * R + 1)) | 1
         cut = float(rng.uniform(0.4, 0.5))
-        h = firwin(taps, cut / R, window="hamming")  # cutoff as a share of the high rate's Nyquist
         info.update({"filter": "fir", "taps": taps, "cutoff_of_output_nyquist": cut})
-    else:
-        stages = int(rng.integers(3, 6))
-        h = np.ones(1)
-        for _ in range(stages):
-            h = np.convolve(h, np.ones(R) / R)
-        info.update({"filter": "cic", "stages": stages})
-    return lfilter(h, [1.0], hi, axis=0)[::R][:T]
+        return firwin(taps, cut / R, window="hamming")  # cutoff as a share of the high rate's Nyquist
+    stages = int(rng.integers(3, 6))
+    h = np.ones(1)
+    for _ in range(stages):
+        h = np.convolve(h, np.ones(R) / R)
+    info.update({"filter": "cic", "stages": stages})
+    return h
+
+
+def _decimated(x: np.ndarray, R: int, h: np.ndarray) -> np.ndarray:
+    """The columns of ``x`` resampled to R times their rate (FFT), filtered by the taps
+    ``h`` and decimated by R."""
+    from scipy.signal import resample
+
+    T = x.shape[0]
+    return lfilter(h, [1.0], resample(x, R * T, axis=0), axis=0)[::R][:T]
 
 
 def fresh_acquisition(rec: Recording, lab: dict, seed: int) -> tuple[Recording, dict]:
@@ -461,9 +468,8 @@ def fresh_acquisition(rec: Recording, lab: dict, seed: int) -> tuple[Recording, 
     if rng.uniform() < 0.3 and channels():
         R = int(rng.integers(2, 9))
         info = {"factor": R}
-        kind_f = str(rng.choice(["fir", "cic"]))
-        dec_rng = np.random.default_rng([seed, 35, 1])
-        apply(lambda x: _decimated(x, R, kind_f, dec_rng, info))
+        h = _decimation_filter(R, str(rng.choice(["fir", "cic"])), np.random.default_rng([seed, 35, 1]), info)
+        apply(lambda x: _decimated(x, R, h))
         fresh["decimation"] = info
     if rng.uniform() < 0.3 and kind == "displacement":
         ratio = float(np.exp(rng.uniform(np.log(300.0), np.log(8000.0))))
