@@ -43,6 +43,37 @@ Rigs (probabilities 0.5 / 0.25 / 0.25):
 Effect sizes on the axis and the device: the effect's force is a share r of the force RMS
 drawn log-uniformly in [0.03, 0.3] (a Stribeck peak 1.5-3 times its Coulomb level).
 
+Fresh acquisitions (``--fresh``, issue 35 item 4): on top of its rig's own, every case
+draws acquisition nuisances the default run does not generate and nobody tunes on, each
+with its own probability, from its own random stream (``[seed, 35]``: the rig, the effect
+and the rig's nuisances are those of the default run). The analog channels are the
+shaker's forces and accelerations (or velocities) and the device's force and displacement;
+the axis's force is the drive's command and its position an encoder, so of these the axis
+draws only the encoder steps. In the order of the signal path:
+
+* ``pink`` (0.4): 1/f sensor noise on every analog channel (as the default run's
+  :func:`pink`, but with a corner): PSD ``S_w f_c / f``, ``S_w`` the channel's white noise
+  PSD (its SNR of the label), corner ``f_c`` 0.5-50 Hz log-uniform.
+* ``drift`` (0.3): load-cell baseline drift on every force channel, a linear drift or a
+  random walk (0.5 each) reaching 1-10 % of the channel's RMS over the record.
+* ``antialias`` (0.3): an anti-alias filter of another family than the default run's
+  Butterworth on every analog channel: Chebyshev I (0.5-3 dB ripple), elliptic (0.5-2 dB
+  ripple, 40-80 dB stop band) or Bessel; order 2-8, cutoff 0.25-0.45 fs, causal.
+* ``skew`` (0.3): a multiplexed ADC: the analog channels, in a random order, sampled
+  ``k dt / n_channels`` late (k = 0 .. n_channels - 1; cubic-spline interpolation).
+* ``adc16`` (0.3): a 16-bit converter on every analog channel, full scale 1.2-4 times the
+  channel's peak (one draw per channel).
+* ``decimation`` (0.3): an oversampling converter: every analog channel resampled to R fs
+  (R = 2..8, FFT interpolation of the record: the rig is not re-simulated at the higher
+  rate), filtered by a linear-phase FIR (Hamming, 8 R to 16 R taps, cutoff 0.4-0.5 of the
+  output rate) or a CIC-like cascade of 3-5 moving averages of R samples, and decimated by
+  R: the filter's droop, delay and stop band at the output rate.
+* ``encoder`` (0.3): positions (the axis and the device) counted by an encoder whose step
+  is 1/300 to 1/8000 (log-uniform) of the motion's RMS.
+
+The label's ``fresh`` lists what was drawn, with its parameters; the summary adds
+``per_nuisance`` (the scores of the cases that drew each one, and of those that drew none).
+
 Scores (issue 16): as the blind check (top-1, location, main parameter within 20 %, in-band
 gap shrink) plus the share of effect cases answered ``none`` and the share of ``none``
 answers on an inadmissible linear fit.
@@ -51,6 +82,8 @@ answers on an inadmissible linear fit.
     python bench/realistic_blind.py --seeds 0:150 --work /tmp/realistic          # tuning seeds
     python bench/realistic_blind.py --seeds 20000:20300 --work /tmp/realistic-20k \
         --results bench/results/realistic_blind.json                             # the report
+    python bench/realistic_blind.py --seeds 50000:50150 --fresh --work /tmp/fresh-50k \
+        --results bench/results/realistic_blind_fresh.json                       # fresh acquisitions
 """
 
 from __future__ import annotations
@@ -70,6 +103,7 @@ import blind_diagnosis as B  # noqa: E402
 
 from algid.chain import Chain  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402
+from algid.recording import motion as recording_motion  # noqa: E402
 from algid.scenarios import displacement_driven, positioning_axis  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
 
@@ -290,22 +324,172 @@ def _label(seed, effect, loc, params, chain, snr, info) -> dict:
     return lab
 
 
-def draw(seed: int) -> tuple[Recording, dict]:
-    """The recording and label of one case (deterministic in ``seed``)."""
+def draw(seed: int, fresh: bool = False) -> tuple[Recording, dict]:
+    """The recording and label of one case (deterministic in ``seed``); ``fresh``: with the
+    fresh acquisition nuisances (:func:`fresh_acquisition`)."""
     rng = np.random.default_rng([seed, 16])
     rig = rng.choice(["shaker", "shaker", "axis", "device"])
-    return {"shaker": shaker_case, "axis": axis_case, "device": device_case}[str(rig)](seed, rng)
+    rec, lab = {"shaker": shaker_case, "axis": axis_case, "device": device_case}[str(rig)](seed, rng)
+    return fresh_acquisition(rec, lab, seed) if fresh else (rec, lab)
+
+
+# ------------------------------------------------------------------------ fresh acquisitions
+
+FRESH_NUISANCES = ("pink", "drift", "antialias", "skew", "adc16", "decimation", "encoder")
+
+
+def pink_corner(T: int, n: int, dt: float, f_corner: float, rng) -> np.ndarray:
+    """(T, n) 1/f noise of PSD ``S_w f_corner / f`` for a unit-variance white ``S_w``
+    (``2 dt``); below the record's first bin it stays at that bin's level, no DC."""
+    f = np.fft.rfftfreq(T, dt)
+    g = np.where(f > 0, np.sqrt(f_corner / np.maximum(f, f[1])), 0.0)
+    return np.fft.irfft(np.fft.rfft(rng.standard_normal((T, n)), axis=0) * g[:, None], T, axis=0)
+
+
+def _skewed(x: np.ndarray, dt: float, delay: float) -> np.ndarray:
+    """The columns of ``x`` sampled ``delay`` [s] late (cubic spline, extrapolated at the end)."""
+    from scipy.interpolate import CubicSpline
+
+    t = np.arange(x.shape[0]) * dt
+    return CubicSpline(t, x, axis=0, extrapolate=True)(t + delay)
+
+
+def _decimation_filter(R: int, kind: str, rng, info: dict) -> np.ndarray:
+    """Taps, at R times the output rate, of a decimation filter of ``kind``: a linear-phase
+    FIR ("fir") or a cascade of moving averages ("cic") (module docstring); one filter for
+    every channel of the converter."""
+    from scipy.signal import firwin
+
+    if kind == "fir":
+        taps = int(rng.integers(8 * R, 16 * R + 1)) | 1
+        cut = float(rng.uniform(0.4, 0.5))
+        info.update({"filter": "fir", "taps": taps, "cutoff_of_output_nyquist": cut})
+        return firwin(taps, cut / R, window="hamming")  # cutoff as a share of the high rate's Nyquist
+    stages = int(rng.integers(3, 6))
+    h = np.ones(1)
+    for _ in range(stages):
+        h = np.convolve(h, np.ones(R) / R)
+    info.update({"filter": "cic", "stages": stages})
+    return h
+
+
+def _decimated(x: np.ndarray, R: int, h: np.ndarray) -> np.ndarray:
+    """The columns of ``x`` resampled to R times their rate (FFT), filtered by the taps
+    ``h`` and decimated by R."""
+    from scipy.signal import resample
+
+    T = x.shape[0]
+    return lfilter(h, [1.0], resample(x, R * T, axis=0), axis=0)[::R][:T]
+
+
+def fresh_acquisition(rec: Recording, lab: dict, seed: int) -> tuple[Recording, dict]:
+    """The record with the fresh acquisition nuisances drawn for ``seed`` (module
+    docstring); ``lab["fresh"]`` lists them."""
+    from scipy.signal import bessel, cheby1, ellip, sosfilt
+
+    rng = np.random.default_rng([seed, 35])
+    dt = float(rec.dt)
+    kind, y = recording_motion(rec)
+    u = np.array(rec.u, dtype=float)
+    y = np.array(y, dtype=float)
+    T, n = u.shape
+    forced = np.any(u != 0, axis=0)
+    analog_y = lab["rig"] != "axis"  # the axis: a commanded force and an encoder
+    analog_u = lab["rig"] != "axis"
+    fresh: dict = {}
+    snr_y = float(lab.get("snr_db", 50.0))
+    snr_u = float(lab.get("force_snr_db", snr_y))
+
+    def channels() -> list[tuple[str, int]]:
+        return ([("u", i) for i in range(n) if forced[i]] if analog_u else []) + (
+            [("y", i) for i in range(n)] if analog_y else []
+        )
+
+    def apply(fn) -> None:
+        nonlocal u, y
+        if analog_u:
+            u[:, forced] = fn(u[:, forced])
+        if analog_y:
+            y = fn(y)
+
+    if rng.uniform() < 0.4 and channels():
+        fc = float(np.exp(rng.uniform(np.log(0.5), np.log(50.0))))
+        if analog_y:
+            y = y + 10 ** (-snr_y / 20) * y.std(axis=0) * pink_corner(T, n, dt, fc, rng)
+        if analog_u:
+            u = u + np.where(forced, 10 ** (-snr_u / 20) * u.std(axis=0), 0.0) * pink_corner(T, n, dt, fc, rng)
+        fresh["pink"] = {"corner_hz": fc}
+    if rng.uniform() < 0.3 and analog_u and forced.any():
+        share = float(rng.uniform(0.01, 0.1))
+        shape = str(rng.choice(["linear", "random_walk"]))
+        if shape == "linear":
+            d = np.linspace(0.0, 1.0, T)[:, None] * rng.choice([-1.0, 1.0], n)
+        else:
+            d = np.cumsum(rng.standard_normal((T, n)), axis=0)
+            d /= np.max(np.abs(d), axis=0)
+        u = u + np.where(forced, share * np.sqrt(np.mean(u**2, axis=0)), 0.0) * d
+        fresh["drift"] = {"shape": shape, "of_force_rms": share}
+    if rng.uniform() < 0.3 and channels():
+        family = str(rng.choice(["cheby1", "ellip", "bessel"]))
+        order, fc = int(rng.integers(2, 9)), float(rng.uniform(0.25, 0.45))
+        info = {"family": family, "order": order, "cutoff_of_fs": fc}
+        if family == "cheby1":
+            info["ripple_db"] = float(rng.uniform(0.5, 3.0))
+            sos = cheby1(order, info["ripple_db"], 2 * fc, output="sos")
+        elif family == "ellip":
+            info["ripple_db"], info["stop_db"] = float(rng.uniform(0.5, 2.0)), float(rng.uniform(40.0, 80.0))
+            sos = ellip(order, info["ripple_db"], info["stop_db"], 2 * fc, output="sos")
+        else:
+            sos = bessel(order, 2 * fc, output="sos", norm="phase")
+        apply(lambda x: sosfilt(sos, x, axis=0))
+        fresh["antialias"] = info
+    if rng.uniform() < 0.3 and len(channels()) > 1:
+        chans = channels()
+        order = rng.permutation(len(chans))
+        for k, (which, i) in zip(order, chans):
+            delay = k * dt / len(chans)
+            if which == "u":
+                u[:, i] = _skewed(u[:, i : i + 1], dt, delay)[:, 0]
+            else:
+                y[:, i] = _skewed(y[:, i : i + 1], dt, delay)[:, 0]
+        fresh["skew"] = {
+            "channels": len(chans),
+            "delays_of_dt": {f"{w}{i + 1}": int(k) / len(chans) for k, (w, i) in zip(order, chans)},
+        }
+    if rng.uniform() < 0.3 and channels():
+        scales = {}
+        for which, i in channels():
+            x = u if which == "u" else y
+            g = float(rng.uniform(1.2, 4.0))
+            step = 2.0 * g * float(np.max(np.abs(x[:, i]))) / 2**16
+            x[:, i] = np.round(x[:, i] / step) * step
+            scales[f"{which}{i + 1}"] = g
+        fresh["adc16"] = {"full_scale_of_peak": scales}
+    if rng.uniform() < 0.3 and channels():
+        R = int(rng.integers(2, 9))
+        info = {"factor": R}
+        h = _decimation_filter(R, str(rng.choice(["fir", "cic"])), np.random.default_rng([seed, 35, 1]), info)
+        apply(lambda x: _decimated(x, R, h))
+        fresh["decimation"] = info
+    if rng.uniform() < 0.3 and kind == "displacement":
+        ratio = float(np.exp(rng.uniform(np.log(300.0), np.log(8000.0))))
+        step = float(np.sqrt(np.mean((y - y.mean(axis=0)) ** 2))) / ratio
+        y = np.round(y / step) * step
+        fresh["encoder"] = {"motion_rms_over_step": ratio, "step_m": step}
+    lab = dict(lab, fresh=fresh)
+    field = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
+    return Recording(t=rec.t, u=u, **{field: y}), lab
 
 
 # ------------------------------------------------------------------------------ stages
 
 
-def generate(seed: int, work: Path) -> None:
+def generate(seed: int, work: Path, fresh: bool = False) -> None:
     rec_path = work / "recordings" / f"case{seed:05d}.npz"
     lab_path = work / "labels" / f"case{seed:05d}.json"
     if rec_path.exists() and lab_path.exists():
         return
-    rec, lab = draw(seed)
+    rec, lab = draw(seed, fresh)
     rec_path.parent.mkdir(parents=True, exist_ok=True)
     lab_path.parent.mkdir(parents=True, exist_ok=True)
     save_recording(rec_path, rec)
@@ -318,7 +502,27 @@ def score(lab: dict, res: dict) -> dict:
     model = res.get("model") or {}
     row["model"] = model.get("verdict")
     row["none_on_inadmissible"] = bool(res["effect"] == "none" and not model.get("admissible", True))
+    if "fresh" in lab:
+        row["fresh"] = sorted(lab["fresh"])
     return row
+
+
+SPLIT_KEYS = (
+    "cases",
+    "top1_accuracy",
+    "location_accuracy_among_correct",
+    "param_within_20pct_among_correct",
+    "median_gap_shrink_real",
+    "false_alarm_rate_none",
+)
+
+
+def _split(rows: list[dict]) -> dict:
+    s = B.summarize(rows)
+    out = {k: s[k] for k in SPLIT_KEYS}
+    real = [r for r in rows if r["truth"] != "none"]
+    out["false_none_on_effect"] = float(np.mean([r["pred"] == "none" for r in real])) if real else None
+    return out
 
 
 def summarize(rows: list[dict]) -> dict:
@@ -330,18 +534,13 @@ def summarize(rows: list[dict]) -> dict:
     for rig in ("shaker", "axis", "device"):
         rs = [r for r in rows if r["rig"] == rig]
         if rs:
-            s = B.summarize(rs)
-            out["per_rig"][rig] = {
-                k: s[k]
-                for k in (
-                    "cases",
-                    "top1_accuracy",
-                    "location_accuracy_among_correct",
-                    "param_within_20pct_among_correct",
-                    "median_gap_shrink_real",
-                    "false_alarm_rate_none",
-                )
-            }
+            out["per_rig"][rig] = _split(rs)
+    if any("fresh" in r for r in rows):
+        out["per_nuisance"] = {}
+        for name in FRESH_NUISANCES + ("nothing",):
+            rs = [r for r in rows if (name in r["fresh"] if name != "nothing" else not r["fresh"])]
+            if rs:
+                out["per_nuisance"][name] = _split(rs)
     return out
 
 
@@ -350,6 +549,11 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", default="0:30", help="seed list, e.g. 0:150 or 3,7,11:20 (default: 0:30)")
     ap.add_argument("--work", type=Path, default=Path("/tmp/algid-realistic"))
     ap.add_argument("--stage", choices=("all", "generate", "diagnose", "score"), default="all")
+    ap.add_argument(
+        "--fresh",
+        action="store_true",
+        help="add the fresh acquisition nuisances (module docstring); use a WORK of its own",
+    )
     ap.add_argument(
         "--results",
         type=Path,
@@ -365,7 +569,7 @@ def main(argv=None) -> int:
     if args.stage in ("all", "generate"):
         for k, seed in enumerate(seeds):
             t0 = time.perf_counter()
-            generate(seed, work)
+            generate(seed, work, args.fresh)
             print(
                 f"[generate {k + 1}/{len(seeds)}] seed {seed} ({time.perf_counter() - t0:.1f} s)",
                 file=sys.stderr,
@@ -402,8 +606,12 @@ def main(argv=None) -> int:
             print(f"{key:36s} {summary[key]}")
         for rig, s in summary["per_rig"].items():
             print(f"{rig:8s} {s}")
+        for name, s in summary.get("per_nuisance", {}).items():
+            print(f"{name:10s} {s}")
         args.results.parent.mkdir(parents=True, exist_ok=True)
-        args.results.write_text(json.dumps({"seeds": args.seeds, "summary": summary, "cases": rows}, indent=1))
+        args.results.write_text(
+            json.dumps({"seeds": args.seeds, "fresh": args.fresh, "summary": summary, "cases": rows}, indent=1)
+        )
         B.confusion_png(
             summary["confusion"],
             args.results.with_suffix(".png"),

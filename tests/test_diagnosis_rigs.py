@@ -141,3 +141,27 @@ def test_dry_friction_in_encoder_counts_is_still_found():
     d = diagnose(_slow_encoder_record(5e-6, [_coulomb(1.0)]))
     assert d.effect == "coulomb_friction" and d.location == {"dof": 1}
     assert d.params["force"] == pytest.approx(1.0, rel=0.2)
+
+
+@pytest.mark.parametrize("q_m", [5e-6, 20e-6])
+def test_closed_loop_axis_in_encoder_counts_is_none(q_m):
+    # the counts enter the force through the controller and bias the linear fit into a
+    # significant negative spring (tens to thousands of N/m); held at zero, the spring-less
+    # chain still explains the record to its noise, so the fit is admissible and the
+    # diagnosis none
+    sc = positioning_axis(seed=0, encoder_m=q_m, stroke_m=0.01)
+    d = diagnose(sc.recording)
+    model = d.extra["model"]
+    assert d.effect == "none" and model.verdict == "chain"
+    k1, sigma = float(d.lin.theta[0][2]), float(model.evidence["parameters_sigma"][0][2])
+    assert k1 < -3 * sigma  # the biased spring is there, and is not taken as evidence
+    bound = model.evidence["at_bound"]
+    assert not bound["needed"] and bound["gap_at_bound"] <= bound["noise_gap"]
+
+
+def test_closed_loop_axis_in_encoder_counts_with_dry_friction():
+    u_rms = float(np.sqrt(np.mean(positioning_axis(seed=0, encoder_m=5e-6, stroke_m=0.01).recording.u ** 2)))
+    effects = [{"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": 0.3 * u_rms}}]
+    d = diagnose(positioning_axis(seed=0, encoder_m=5e-6, stroke_m=0.01, effects=effects).recording)
+    assert (d.effect, d.location) == ("coulomb_friction", {"dof": 1})
+    assert d.params["force"] == pytest.approx(0.3 * u_rms, rel=0.2)

@@ -339,14 +339,17 @@ def _prepare(rec: Recording, boundary: str, progress) -> Setup:
         xb = band_limited(rec.x, dt, band.f_hi)
         measured = (xb[P.sl], derivative(xb, dt, 1)[P.sl])
     states = measured if measured is not None else (lin.x, lin.v)
+    denom = float(np.sum(P.y**2))
+    # the gap the noise explains, as the verdict's ``none`` reads it on the linear fit
+    noise_gap = FIT_FLOOR_RATIO * relative_floors(P, floor_band, denom, lin.resid)[1]
     return Setup(
         P=P,
         lin=lin,
         band=band,
-        denom=float(np.sum(P.y**2)),
+        denom=denom,
         floor=floor,
         floor_band=floor_band,
-        model=model_verdict(P, lin, band.f_hi, states),
+        model=model_verdict(P, lin, band.f_hi, states, noise_gap=noise_gap, denom=denom),
         timings={"linear": time.perf_counter() - clock},
         measured=measured,
         hum=hum,
@@ -671,7 +674,7 @@ def diagnose(
     if gap_before < GAP_RESOLUTION and named is None:
         best = None
     final = lin.resid if best is None else detrend(P, raw_residual(ctx, best.fit)).reshape(lin.resid.shape)
-    floor_white, floor_rel = relative_floors(st, final)
+    floor_white, floor_rel = relative_floors(P, st.floor_band, denom, final)
     verdict = (
         _verdict(gap_before, gap_before_full, floor_rel, best, st.model, floor_white)
         if named is None
@@ -719,14 +722,15 @@ def diagnose(
     )
 
 
-def relative_floors(st: Setup, resid: np.ndarray) -> tuple[float, float]:
-    """The in-band noise floor relative to the targets (the scale of the withheld gap): white
-    (from the noise model, at least :data:`GAP_RESOLUTION` / :data:`UNKNOWN_FLOOR_RATIO`),
-    and with the 1/f part of the detrended equation errors ``resid`` (N, n) of the final
-    model (:func:`coloured_floor`: the noise of a sensor may be coloured)."""
-    white = float(np.sqrt(np.sum(st.floor_band**2) * st.P.y.shape[0] / st.denom))
+def relative_floors(P: Prepared, floor_band: np.ndarray, denom: float, resid: np.ndarray) -> tuple[float, float]:
+    """The in-band noise floor relative to the targets (the scale of the withheld gap,
+    ``denom`` their squared sum): white (from the noise model's in-band ``floor_band``, at
+    least :data:`GAP_RESOLUTION` / :data:`UNKNOWN_FLOOR_RATIO`), and with the 1/f part of the
+    detrended equation errors ``resid`` (N, n) of the final model (:func:`coloured_floor`:
+    the noise of a sensor may be coloured)."""
+    white = float(np.sqrt(np.sum(floor_band**2) * P.y.shape[0] / denom))
     white = max(white, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
-    return white, max(white, float(np.sqrt(coloured_floor(st.P, resid).sum() / st.denom)))
+    return white, max(white, float(np.sqrt(coloured_floor(P, resid).sum() / denom)))
 
 
 def coloured_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:

@@ -19,7 +19,14 @@ recording and of the linear fit, and reports the first that fails with its evide
    above :data:`PEAK_COHERENCE` (a structure measured at fewer points than it has modes).
 3. ``not_a_chain``: the linear fit is not physical: a mass, a damping or a spring below
    zero by more than three jackknife sigma (a mass that is not positive within that is
-   question 1's), unless its force is under :data:`NEGLIGIBLE` of the force.
+   question 1's), unless its force is under :data:`NEGLIGIBLE` of the force, or unless the
+   record does not need it: refitted with its negative dampings and springs at zero (their
+   bound), the chain explains the record to its noise (withheld in-band gap within the gap
+   noise explains, the bound ``none`` itself uses). The jackknife sigma measures the spread
+   of an estimate, not its bias: noise in the regressors biases a fit (the encoder's counts
+   of a closed-loop axis enter its force through the controller, and its fit trades mass
+   for a negative spring), and a parameter the noise can trade is no evidence of a
+   structure the chain lacks.
 
 Otherwise ``chain``. ``admissible`` (question 3 alone) is reported too; the diagnosis
 never says ``none`` (nothing to explain) unless the fit is admissible and the record has
@@ -33,8 +40,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..chain import spring_columns
-from .equations import to_physical
-from .gram import jackknife_std
+from .equations import linear_design, target, to_physical
+from .gram import EqSpec, cross_validate, jackknife_std, window_stats
 from .linear import LinearFit
 from .windows import Prepared
 
@@ -218,20 +225,29 @@ def resonances(P: Prepared, f_hi: float) -> dict:
 
 
 def admissibility(
-    P: Prepared, lin: LinearFit, sd: list[np.ndarray], f_hi: float, states: tuple[np.ndarray, np.ndarray]
-) -> list[str]:
+    P: Prepared,
+    lin: LinearFit,
+    sd: list[np.ndarray],
+    f_hi: float,
+    states: tuple[np.ndarray, np.ndarray],
+    noise_gap: float | None = None,
+    denom: float | None = None,
+) -> tuple[list[str], dict]:
     """Physically impossible parameters of the linear fit (question 3), one line each: below
     zero by three sigma and standing for at least :data:`NEGLIGIBLE` of the force in the
     band (a spring of -0.4 N/m on an axis that moves 50 mm under tens of newtons is no
-    evidence against the chain); ``states = (x, v)`` on the analysed samples."""
+    evidence against the chain); ``states = (x, v)`` on the analysed samples. With
+    ``noise_gap`` (the largest relative withheld gap the noise explains) and ``denom`` (the
+    targets' squared sum, the gap's scale), negative dampings and springs the record does not
+    need are dropped too (:func:`bound_gap`), and the second value says what was tried."""
     u_rms = band_rms(P.u, P.dt, f_hi)
     x, v = states
     v_rms = band_rms(v, P.dt, f_hi)
-    bad = []
+    bad: list[tuple[int, int | None, str]] = []  # (equation, column at its bound or None, line)
     for e in range(P.n):
         th, s = lin.theta[e], sd[e]
         if P.forced[e] and th[0] < -3 * s[0]:
-            bad.append(f"DOF {e + 1}: mass {th[0]:.4g} +- {s[0]:.2g} is negative")
+            bad.append((e, None, f"DOF {e + 1}: mass {th[0]:.4g} +- {s[0]:.2g} is negative"))
         force = u_rms[e] if P.forced[e] else np.nan
         for q, (name, val, sg) in enumerate(zip(lin.names[e][1:], th[1:], s[1:])):
             if not val < -3 * sg:
@@ -245,13 +261,48 @@ def admissibility(
             if np.isfinite(force) and abs(val) * reg < NEGLIGIBLE * force:
                 continue
             what = "damping" if name == "c" else f"spring {name[1:]}"
-            bad.append(f"DOF {e + 1}: {what} {val:.4g} +- {sg:.2g} is negative")
-    return bad
+            col = q + 1 if P.forced[e] else q  # the unforced equation has no mass column
+            bad.append((e, col, f"DOF {e + 1}: {what} {val:.4g} +- {sg:.2g} is negative"))
+    bound: dict = {}
+    at_bound = {}
+    for e, col, _ in bad:
+        if col is not None:
+            at_bound.setdefault(e, []).append(col)
+    if at_bound and noise_gap is not None and denom:
+        gap = bound_gap(P, lin, at_bound, denom)
+        bound = {"gap_at_bound": gap, "noise_gap": float(noise_gap), "needed": bool(gap > noise_gap)}
+        if not bound["needed"]:
+            bad = [b for b in bad if b[1] is None]
+    return [line for _, _, line in bad], bound
 
 
-def model_verdict(P: Prepared, lin: LinearFit, f_hi: float, states: tuple | None = None) -> ModelVerdict:
+def bound_gap(P: Prepared, lin: LinearFit, at_bound: dict[int, list[int]], denom: float) -> float:
+    """Relative withheld in-band gap of the linear chain with the columns ``at_bound[e]`` of
+    equation ``e`` (negative dampings and springs) held at zero, the other equations as
+    fitted: cross-validated as the linear fit is."""
+    sse_eq = lin.cv.test_sse_eq.sum(axis=0).copy()
+    for e, cols in at_bound.items():
+        X = linear_design(P, e)
+        keep = [i for i in range(X.shape[1]) if i not in cols]
+        if not keep:
+            continue
+        spec = EqSpec(e=e, X=np.ascontiguousarray(X[:, keep]), y=target(P, e), E=None)
+        sse_eq[e] = float(cross_validate(P, window_stats(P, [spec])).test_sse.sum())
+    return float(np.sqrt(sse_eq.sum() / denom))
+
+
+def model_verdict(
+    P: Prepared,
+    lin: LinearFit,
+    f_hi: float,
+    states: tuple | None = None,
+    noise_gap: float | None = None,
+    denom: float | None = None,
+) -> ModelVerdict:
     """The three questions of the module docstring, in order; ``states = (x, v)`` measured
-    or reconstructed on the analysed samples (default: the linear fit's reconstruction)."""
+    or reconstructed on the analysed samples (default: the linear fit's reconstruction);
+    ``noise_gap`` and ``denom`` as :func:`admissibility` takes them (without them every
+    significant negative damping or spring counts)."""
     response = force_response(P, f_hi)
     if not response["related"]:
         evidence = {"force_response": response}
@@ -260,7 +311,9 @@ def model_verdict(P: Prepared, lin: LinearFit, f_hi: float, states: tuple | None
     sd = physical_uncertainty(P, lin)
     ine = inertia(P, lin, sd, f_hi)
     res = resonances(P, f_hi)
-    bad = admissibility(P, lin, sd, f_hi, states if states is not None else (lin.x, lin.v))
+    bad, bound = admissibility(
+        P, lin, sd, f_hi, states if states is not None else (lin.x, lin.v), noise_gap=noise_gap, denom=denom
+    )
     reasons = []
     for dof, d in ine.items():
         if not d["determined"]:
@@ -289,6 +342,7 @@ def model_verdict(P: Prepared, lin: LinearFit, f_hi: float, states: tuple | None
         "inertia": ine,
         "resonances": res,
         "inadmissible": bad,
+        "at_bound": bound,
         "parameters_sigma": [s.tolist() for s in sd],
     }
     return ModelVerdict(verdict=verdict, reasons=reasons, admissible=not bad, evidence=evidence)
