@@ -591,18 +591,7 @@ def main(argv=None) -> int:
         rows = B.score_all(work, seeds, score)
         summary = summarize(rows)
         print(B.confusion_table(summary["confusion"]))
-        for key in (
-            "cases",
-            "top1_accuracy",
-            "location_accuracy_among_correct",
-            "param_within_20pct_among_correct",
-            "median_gap_shrink_real",
-            "false_alarm_rate_none",
-            "false_none_on_effect",
-            "none_on_inadmissible",
-            "wall_s_median",
-            "wall_s_max",
-        ):
+        for key in SPLIT_KEYS + ("false_none_on_effect", "none_on_inadmissible", "wall_s_median", "wall_s_max"):
             print(f"{key:36s} {summary[key]}")
         for rig, s in summary["per_rig"].items():
             print(f"{rig:8s} {s}")

@@ -19,6 +19,17 @@
 
 namespace algid_test {
 
+/// Derivative of order `order` at `t` of the degree-5 polynomial sum c[d] t^d.
+inline double poly_derivative(const std::array<double, 6>& c, int order, double t) {
+  double v = 0;
+  for (int d = order; d < 6; ++d) {
+    double f = 1;
+    for (int q = 0; q < order; ++q) f *= d - q;
+    v += c[static_cast<std::size_t>(d)] * f * std::pow(t, d - order);
+  }
+  return v;
+}
+
 struct PolynomialChainN {
   int n;
   std::vector<double> m, c, k;               // n, n, n + 1
@@ -41,13 +52,7 @@ struct PolynomialChainN {
     if (free_end) k.back() = 0.0;
   }
   double deriv(int i, int order, double t) const {
-    double v = 0;
-    for (int d = order; d < 6; ++d) {
-      double f = 1;
-      for (int q = 0; q < order; ++q) f *= d - q;
-      v += coef[static_cast<std::size_t>(i)][static_cast<std::size_t>(d)] * f * std::pow(t, d - order);
-    }
-    return v;
+    return poly_derivative(coef[static_cast<std::size_t>(i)], order, t);
   }
   double x(int i, double t) const { return (i < 0 || i >= n) ? 0.0 : deriv(i, 0, t); }
   double accel(int i, double t) const { return deriv(i, 2, t); }
@@ -148,14 +153,7 @@ struct OneForceChainN {
   }
 
   double deriv(int i, int order, double t) const {
-    if (i < 0 || i >= n) return 0.0;
-    double v = 0;
-    for (int d = order; d < 6; ++d) {
-      double f = 1;
-      for (int q = 0; q < order; ++q) f *= d - q;
-      v += coef[static_cast<std::size_t>(i)][static_cast<std::size_t>(d)] * f * std::pow(t, d - order);
-    }
-    return v;
+    return (i < 0 || i >= n) ? 0.0 : poly_derivative(coef[static_cast<std::size_t>(i)], order, t);
   }
   double accel(int i, double t) const { return deriv(i, 2, t); }
   double force(int i, double t) const {
