@@ -103,6 +103,26 @@ def test_csv_errors_are_one_line_and_name_the_problem(tmp_path, text, needle):
     assert isinstance(info.value, ValueError)
 
 
+def test_timestamps_as_loggers_write_them(tmp_path):
+    """A 2048 Hz record whose time column is rounded to microseconds is uniform at 2048 Hz,
+    with a note; timestamps jittered by 5 % of a step too; a missing sample is not, and the
+    message says what to do; --dt replaces the column."""
+    T = 200
+    rows = lambda t: "t,u1,a1\n" + "".join(f"{x},1,2\n" for x in t)  # noqa: E731
+    rec = load_recording(_write(tmp_path, rows(np.round(np.arange(T) / 2048, 6))))
+    assert rec.fs_hz == pytest.approx(2048, rel=1e-6)
+    assert rec.t[5] == pytest.approx(5 / 2048, abs=1e-7)  # the timestamps hold +-0.5 us
+    assert any("taken as uniform at 2048" in n for n in rec.notes), rec.notes
+    jitter = 0.05 * np.random.default_rng(0).uniform(-1, 1, T) / 1000
+    rec = load_recording(_write(tmp_path, rows(np.arange(T) / 1000 + jitter), "j.csv"))
+    assert rec.fs_hz == pytest.approx(1000, rel=1e-3)
+    gap = np.delete(np.arange(T + 1), 50) / 1000
+    with pytest.raises(RecordingError, match="non-uniform time.*resample.*--rate HZ"):
+        load_recording(_write(tmp_path, rows(gap), "g.csv"))
+    rec = load_recording(_write(tmp_path, rows(gap), "g.csv"), dt=1e-3)
+    assert rec.dt == pytest.approx(1e-3) and any("replaced" in n for n in rec.notes)
+
+
 def test_file_level_errors(tmp_path):
     with pytest.raises(RecordingError, match="unknown extension '.json'"):
         load_recording(_write(tmp_path, "t,u1,a1\n", "r.json"))

@@ -41,8 +41,10 @@ the problem and, where it has one, the offending line / column):
 * no NaN or inf anywhere;
 * at least :data:`MIN_SAMPLES` samples; time strictly increasing and uniform:
   ``max |t[k+1] - t[k] - dt| <= UNIFORM_RTOL * dt`` with ``dt = (t[-1] - t[0]) / (T - 1)``
-  (0.1 %: enough for times printed with 6 significant digits, far below any real
-  sampling jitter that would matter to the estimator).
+  (0.1 %). A file's time column whose steps vary by up to
+  :data:`~.core.TIMESTAMP_JITTER` of a step (timestamps rounded to microseconds at 2048 Hz,
+  a logger's jitter) is replaced by the straight line through it, with a note giving the
+  rate; ``--rate``/``--dt`` replace any time column (:func:`.core.file_time`).
 """
 
 from __future__ import annotations

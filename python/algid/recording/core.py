@@ -15,6 +15,10 @@ from .units import ROLES, SI_UNITS
 MIN_SAMPLES = 8
 #: Tolerated relative deviation of every sample interval from the mean interval.
 UNIFORM_RTOL = 1e-3
+#: A time column read from a file whose steps deviate from their mean by at most this share of
+#: it (a logger's rounding of its timestamps, or their jitter) is taken as uniform at the mean
+#: step, with a note; beyond it the record is not uniform.
+TIMESTAMP_JITTER = 0.1
 #: Sampling intervals a recording may have [s]: 1 ns (1 GHz) to 1 h.
 DT_RANGE_S = (1e-9, 3600.0)
 #: Motion signals a recording may carry, in the order the estimator prefers them.
@@ -182,6 +186,47 @@ def check_finite(name: str, arr: np.ndarray, lines: np.ndarray | None = None) ->
         column = name if name == "t" else f"{name}{col + 1}"
         where = f"line {lines[row]}" if lines is not None else f"sample {row}"
         raise RecordingError(f"column {column} has {what} at {where} ({int(bad.sum())} non-finite values)")
+
+
+def file_time(
+    t: np.ndarray | None, dt: float | None, T: int, lines: np.ndarray | None = None
+) -> tuple[np.ndarray, str]:
+    """The uniform time grid of a file's record and the note that says how it was made: from
+    ``dt`` [s] when given (``--rate``/``--dt``, over any time column: ``t0 + k dt``); from a
+    time column whose steps vary by at most :data:`TIMESTAMP_JITTER` of their mean (rounding,
+    timestamp jitter: the straight line through the timestamps); the column itself when it is uniform. Raises
+    on a really non-uniform column, saying what to do."""
+    if dt is not None:
+        t0 = 0.0 if t is None else float(t[0])
+        grid = t0 + float(dt) * np.arange(T)
+        if t is None:
+            return grid, f"no time column: t = k * {float(dt):.9g} s"
+        mean = float((t[-1] - t[0]) / (T - 1)) if T > 1 else float("nan")
+        return grid, f"time column replaced by t = t0 + k * {float(dt):.9g} s as given (its mean step {mean:.9g} s)"
+    if t is None:
+        raise RecordingError("no time column and no sampling interval given (--rate HZ or --dt S)")
+    try:
+        check_time(t, lines)
+        return t, ""
+    except RecordingError as err:
+        if "non-uniform" not in str(err):
+            raise
+    step = float((t[-1] - t[0]) / (T - 1))
+    dev = float(np.max(np.abs(np.diff(t) - step)))
+    if dev > TIMESTAMP_JITTER * step:
+        k = int(np.argmax(np.abs(np.diff(t) - step)))
+        where = f"line {lines[k + 1]}" if lines is not None else f"sample {k + 1}"
+        raise RecordingError(
+            f"non-uniform time: step {t[k + 1] - t[k]:.9g} s at {where} is {100 * dev / step:.3g} % off the mean "
+            f"step {step:.9g} s: resample the record to a uniform grid, or give --rate HZ (--dt S) to take its "
+            "samples as uniform at that rate"
+        )
+    k = np.arange(T)
+    step, t0 = np.polyfit(k, t - t[0], 1)  # the line through every timestamp
+    return t[0] + t0 + step * k, (
+        f"time steps vary by up to {100 * dev / step:.2g} % of their mean (rounded or jittered timestamps): "
+        f"taken as uniform at {1.0 / step:.6g} Hz"
+    )
 
 
 def check_time(t: np.ndarray, lines: np.ndarray | None = None) -> float:

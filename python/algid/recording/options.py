@@ -41,8 +41,12 @@ def add_recording_options(parser) -> None:
         "mm, um, g, kN, ms and the like are converted to SI, other units (V, counts) kept as labels",
     )
     rate = g.add_mutually_exclusive_group()
-    rate.add_argument("--rate", type=float, metavar="HZ", help="sampling rate, for a file without a time column")
-    rate.add_argument("--dt", type=float, metavar="S", help="sampling interval, for a file without a time column")
+    rate.add_argument(
+        "--rate", type=float, metavar="HZ", help="sampling rate, for a file without a time column or to replace it"
+    )
+    rate.add_argument(
+        "--dt", type=float, metavar="S", help="sampling interval, for a file without a time column or to replace it"
+    )
     g.add_argument("--group", metavar="NAME", help="HDF5 group holding the datasets (default: the root)")
 
 

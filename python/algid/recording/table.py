@@ -10,7 +10,7 @@ import numpy as np
 
 from ..messages import quote
 from .columns import ROLE_KEYS, Layout
-from .core import Recording, RecordingError, check_finite, check_time
+from .core import Recording, RecordingError, check_finite, file_time
 from .units import ROLES, conversion_note, to_si
 
 
@@ -58,7 +58,7 @@ def assemble(
     """The recording in ``data`` (T, len(layout.positions())), columns in position order.
 
     ``units`` (role -> label) overrides the units the columns declare; ``dt`` [s] gives the
-    time when the file has no time column (and must agree with it when it has one)."""
+    time and replaces a time column (:func:`.core.file_time`)."""
     given = role_units(units)
     order = {p: j for j, p in enumerate(layout.positions())}
     notes = layout.notes()
@@ -73,15 +73,9 @@ def assemble(
             raise RecordingError(f"{source}: {err}") from None
         labels[ROLES[key]] = _convert(key, arr, declared, source, notes)
         parts[key] = arr
-    if "t" in parts:
-        t = parts["t"][:, 0]
-    else:
-        if dt is None:
-            raise RecordingError(f"{source}: no time column and no sampling interval given")
-        t = float(dt) * np.arange(data.shape[0])
-        notes.append(f"no time column: t = k * {float(dt):.9g} s")
     try:
-        check_time(t, lines)
+        t, note = file_time(parts["t"][:, 0] if "t" in parts else None, dt, data.shape[0], lines)
+        notes += [note] if note else []
         return Recording(
             t=t,
             u=parts["u"],
