@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 
 import numpy as np
 import pytest
@@ -77,7 +78,9 @@ def test_cli_writes_table_figures_and_json(tmp_path, capsys):
     )
     assert args.func(args) == 0
     out = capsys.readouterr().out
-    assert "est @ switch" in out and "tracking error after 1 s" in out
+    assert "est @ switch" in out and "tracking error after the switch" in out
+    assert not re.search(r"\bnan\b", out, re.IGNORECASE), out  # a figure not there yet is n/a
+    assert demo._percent(float("nan"), 2) == "      n/a" and demo._percent(0.0123, 3) == "    1.23%"
     for name in ("estimates.png", "positions.png", "forces.png", "estimation_error.png"):
         data = (tmp_path / name).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000

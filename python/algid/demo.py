@@ -527,12 +527,21 @@ def format_summary(s: dict[str, Any]) -> str:
             if not np.isfinite(s["all_stay_within_1pct_s"])
             else f"and all stay within 1 % from {s['all_stay_within_1pct_s']:.3f} s on; "
         )
-        + f"largest error after 1 s {100 * s['max_rel_err_after_1s']:.3g} %",
+        + (
+            f"largest error after 1 s {100 * s['max_rel_err_after_1s']:.3g} %"
+            if np.isfinite(s["max_rel_err_after_1s"])
+            else "the record ends before 1 s"
+        ),
         f"tracking error after the switch: peak {1e6 * tr['peak_after_switch_m']:.3g} um "
         f"({tr['peak_after_switch_pct_stroke']:.3g} % of the {1e3 * s['stroke_m']:.0f} mm stroke), "
         f"RMS {1e6 * tr['rms_after_switch_m']:.3g} um",
-        f"tracking error after 1 s: peak {1e6 * tr['peak_after_1s_m']:.3g} um "
-        f"({tr['peak_after_1s_pct_stroke']:.3g} % of stroke), RMS {1e6 * tr['rms_after_1s_m']:.3g} um",
+    ]
+    if np.isfinite(tr["peak_after_1s_m"]):
+        lines.append(
+            f"tracking error after 1 s: peak {1e6 * tr['peak_after_1s_m']:.3g} um "
+            f"({tr['peak_after_1s_pct_stroke']:.3g} % of stroke), RMS {1e6 * tr['rms_after_1s_m']:.3g} um"
+        )
+    lines += [
         f"substitution: force jump {', '.join(f'{j:.3g}' for j in sb['force_jump_N'])} N; "
         f"peak deviation from the exact-model force within 0.2 s {sb['peak_force_deviation_N']:.3g} N "
         f"({sb['peak_force_deviation_pct']:.3g} % of its peak {sb['peak_exact_model_force_N']:.3g} N); "
@@ -545,11 +554,17 @@ def format_summary(s: dict[str, Any]) -> str:
             "",
             "largest relative error of the estimates, both estimators open loop on the recorded samples:",
             f"{'t [s]':>8} " + " ".join(f"{t:>9g}" for t in d["times_s"]),
-            f"{'single':>8} " + " ".join(f"{100 * e:>8.3g}%" for e in d["single"]),
-            f"{'contin.':>8} " + " ".join(f"{100 * e:>8.3g}%" for e in d["continuous"]),
-            f"{'(sigma)':>8} " + " ".join(f"{100 * e:>8.2g}%" for e in d["continuous_rel_sigma"]),
+            f"{'single':>8} " + " ".join(_percent(e, 3) for e in d["single"]),
+            f"{'contin.':>8} " + " ".join(_percent(e, 3) for e in d["continuous"]),
+            f"{'(sigma)':>8} " + " ".join(_percent(e, 2) for e in d["continuous_rel_sigma"]),
         ]
     return "\n".join(lines)
+
+
+def _percent(fraction: float, digits: int) -> str:
+    """A table cell of 9 characters: the percentage, or ``n/a`` where there is none yet (the
+    continuous estimator's sigma before its first window results)."""
+    return f"{100 * fraction:>8.{digits}g}%" if np.isfinite(fraction) else f"{'n/a':>9}"
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
