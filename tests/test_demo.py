@@ -158,3 +158,22 @@ def test_noisy_demo_tracks_and_reports_the_drift(noisy):
     k1 = 999
     assert d["continuous"][2] == pytest.approx(np.max(logged[k1]))
     assert d["continuous"][2] < 0.1 and d["continuous"][2] < d["single"][2]
+
+
+def test_the_readme_states_what_the_default_demo_prints():
+    """The README's figures of `algid demo` are the ones the default run prints (issue 37)."""
+    pytest.importorskip("algid._core")
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    row = re.search(
+        r"\| `algid demo` \(continuous mode, noise-free\) \| ([0-9.]+) s; all stay within 1 % from ([0-9.]+) s "
+        r"\| ([0-9.]+) % of the 5 mm stroke \|",
+        readme,
+    )
+    assert row, "the README's demo row"
+    _, s = demo.run_scenario(drift=False)
+    printed = (s["all_first_within_1pct_s"], s["all_stay_within_1pct_s"], s["tracking"]["peak_after_1s_pct_stroke"])
+    for text, value in zip(row.groups(), printed):
+        half_digit = 0.5 * 10.0 ** -len(text.split(".")[1])
+        assert abs(float(text) - value) <= half_digit + 1e-12, (text, value)
