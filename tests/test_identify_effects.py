@@ -125,3 +125,18 @@ def test_cli_effect_option(tmp_path, capsys):
     assert doc["effects"][0]["effect"] == "cubic_stiffness" and doc["effects"][0]["params"]["k_cubic"] > 0
     assert main(["identify", str(path), "--effect", "cubic:1", "--quiet"]) == 2
     assert "did you mean cubic_stiffness" in capsys.readouterr().err
+
+
+def test_identify_and_diagnose_take_a_path_or_a_frame(tmp_path):
+    """`algid.identify("recording.csv")` as a user first tries it (issue 37, item 5)."""
+    from algid.diagnosis import diagnose
+
+    rec = _record([], 0, duration_s=4.0)
+    path = tmp_path / "rig.csv"
+    np.savetxt(path, np.column_stack([rec.t, rec.u, rec.a]), delimiter=",", header="t,u1,u2,a1,a2", comments="")
+    res = algid.identify(str(path))
+    assert res.n == 2 and res.path == path
+    assert algid.identify(rec.to_frame()).n == 2
+    assert diagnose(path).P.n == 2
+    with pytest.raises(TypeError, match="expected a Recording, a path or a pandas DataFrame, got int"):
+        algid.identify(3)

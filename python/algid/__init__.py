@@ -5,7 +5,7 @@ from .continuous import ChangeEvent, ContinuousConfig, ContinuousEstimator
 from .estimator import ISA, SIZES, ChainConfig, ChainEstimator, Status
 from .fleet import batch
 from .identification import Identification, identify
-from .recording import Recording, load_recording
+from .recording import Recording, as_recording, load_recording
 
 __all__ = [
     "Chain",
@@ -20,6 +20,7 @@ __all__ = [
     "SIZES",
     "Status",
     "TABLE1",
+    "as_recording",
     "batch",
     "get_include",
     "identify",

@@ -28,7 +28,7 @@ from ..chain import Chain, springs
 from ..display import Displayed, number
 from ..noise import channel, white_floor, without_hum
 from ..parallel import parallel_map
-from ..recording import Recording, accelerations, derivative
+from ..recording import Recording, accelerations, as_recording, derivative
 from ..recording import motion as recording_motion
 from .band import Band, signal_band
 from .candidates import (
@@ -633,9 +633,10 @@ def diagnose(
 
     Parameters
     ----------
-    rec : Recording
+    rec : Recording, path or DataFrame
         Forces and accelerations (or velocities, or displacements) of every DOF, in SI or in
-        the units ``rec.units`` declares (the result's ``units`` are built from them).
+        the units ``rec.units`` declares (the result's ``units`` are built from them); a path
+        or a DataFrame is read by :func:`algid.load_recording`.
     boundary : {"fixed", "free"}
         Right end of the chain.
     progress : callable or None
@@ -653,6 +654,7 @@ def diagnose(
     -------
     Diagnosis
     """
+    rec = as_recording(rec)
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     clock = time.perf_counter()

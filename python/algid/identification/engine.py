@@ -32,7 +32,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from ..noise import analyse, without_hum
-from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, parameter_units
+from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
 from ..recording import motion as recording_motion
 from .augmented import fit_check, fit_with_effects
 from .motion import equation_error_fit
@@ -105,8 +105,9 @@ def identify(
 
     Parameters
     ----------
-    rec : Recording
-        Forces and accelerations or displacements (:class:`algid.recording.Recording`).
+    rec : Recording, path or DataFrame
+        Forces and accelerations or displacements (:class:`algid.recording.Recording`), or
+        what :func:`algid.load_recording` reads with its default column names and units.
     boundary : {"fixed", "free"}
         Right end of the chain.
     estimator : {"auto", "window", "continuous"}
@@ -128,6 +129,7 @@ def identify(
     -------
     Identification
     """
+    rec = as_recording(rec)
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     if int(replicates) < 2:

@@ -49,6 +49,7 @@ the problem and, where it has one, the offending line / column):
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -67,6 +68,7 @@ from .text import COMPRESSIONS, CSV_CHUNK_LINES, TEXT_SUFFIXES
 from .units import SI_UNITS, parameter_unit_labels
 
 __all__ = [
+    "as_recording",
     "readable",
     "CSV_CHUNK_LINES",
     "DEFAULT_DIFF_POINTS",
@@ -109,6 +111,17 @@ def readable(path) -> bool:
     except RecordingError:
         return False
     return True
+
+
+def as_recording(source) -> Recording:
+    """``source`` itself when it is a :class:`Recording`, else :func:`load_recording` of it (a
+    path or a DataFrame, with the default column names and units); a clear ``TypeError`` for
+    anything else."""
+    if isinstance(source, Recording):
+        return source
+    if isinstance(source, (str, os.PathLike)) or hasattr(source, "columns"):
+        return load_recording(source)
+    raise TypeError(f"expected a Recording, a path or a pandas DataFrame, got {type(source).__name__}")
 
 
 def load_recording(
