@@ -307,10 +307,10 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
 
 
-def _prepare(rec: Recording, boundary: str, progress) -> Setup:
+def _prepare(rec: Recording, boundary: str, progress, notch: bool = True) -> Setup:
     """Windows, band and form (module docstring, steps 1-2), linear fit, noise, model."""
     clock = time.perf_counter()
-    rec, hum = without_hum(rec)
+    rec, hum = without_hum(rec) if notch else (rec, [])
     a, u, dt = accelerations(rec), rec.u, float(rec.dt)
     T = a.shape[0]
     skip = int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
@@ -628,6 +628,7 @@ def diagnose(
     effects: tuple[str, ...] = EFFECTS,
     given: list[str] | None = None,
     quick: bool = False,
+    notch: bool = True,
 ) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
 
@@ -649,6 +650,8 @@ def diagnose(
         Search every candidate's parameter on a coarse grid alone
         (:data:`.candidates.QUICK_GRID` points, no refinement): the verdict, a few times
         faster, with rougher parameters (:func:`algid.identify`'s fit check).
+    notch : bool
+        Notch the mains hum out first (False: the caller has, as :func:`algid.identify` does).
 
     Returns
     -------
@@ -659,7 +662,7 @@ def diagnose(
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     clock = time.perf_counter()
     named = None if given is None else [parse_effect(g, rec.n, boundary) for g in given]
-    st = _prepare(rec, boundary, progress)
+    st = _prepare(rec, boundary, progress, notch)
     P, lin, denom = st.P, st.lin, st.denom
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
     gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))

@@ -83,7 +83,7 @@ def fit_check(rec, boundary: str) -> dict:
     Returns ``gap``, ``noise_floor``, ``explains_record``, ``diagnosis`` (the effect and
     location it finds, or ``unknown``) and ``misfit``: the reason that makes the linear
     chain's determined estimates ``model_misfit`` ("" when it explains the record)."""
-    d = diagnose(rec, boundary, effects=CHECKED_EFFECTS, quick=True)
+    d = diagnose(rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False)  # identify notched it
     out = {"gap": d.gap_before, "noise_floor": float(d.extra["noise_floor"]), "explains_record": d.effect == "none"}
     if d.effect == "none":
         return {**out, "diagnosis": "none", "misfit": ""}
@@ -117,7 +117,7 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
     auto = list(effects) == ["auto"]
     if "auto" in effects and not auto:
         raise ValueError("--effect auto takes the diagnosis's effect: give it alone")
-    d = diagnose(rec, boundary, given=None if auto else list(effects))
+    d = diagnose(rec, boundary, given=None if auto else list(effects), notch=False)  # identify notched it
     if d.best is None:
         return None, f"the diagnosis reports {d.effect!r}: no effect to add"
     cm = corrected_model(d)
