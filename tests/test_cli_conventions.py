@@ -79,6 +79,7 @@ def test_help_is_plain_text(command):
         assert "--json -" in proc.stdout and "stdout" in proc.stdout
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_identify_json_to_stdout_summary_to_stderr(table1_csv):
     plain = _algid("identify", table1_csv)
     assert plain.returncode == 0, plain.stderr
@@ -92,6 +93,7 @@ def test_identify_json_to_stdout_summary_to_stderr(table1_csv):
     assert json.loads(quiet.stdout)["modes"] == doc["modes"] and quiet.stderr == ""
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_identify_modes_are_those_of_the_estimated_chain_and_round_trip(table1_csv, tmp_path):
     out = tmp_path / "est.json"
     proc = _algid("identify", table1_csv, "--json", out, "--plots", tmp_path / "figs")
@@ -145,6 +147,7 @@ def test_identify_without_a_chain_has_no_modes_and_says_why():
     assert modal is None and why == "no estimate of m2: a chain needs every parameter"
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_diagnose_json_is_optional_and_can_go_to_stdout(tmp_path):
     t, a, u, _ = simulate_chain(TABLE1, multisine(3), 2.0)
     path = save_recording(tmp_path / "rec.csv", Recording(t=t, u=u, a=a))

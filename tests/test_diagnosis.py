@@ -282,6 +282,7 @@ def _run_cli(*argv):
     )
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_cli_json_contract_and_figures(tmp_path):
     res = simulate(
         TABLE1,

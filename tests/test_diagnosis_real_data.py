@@ -72,6 +72,7 @@ def test_f16_torsion_mode_softens_and_damps_with_level():
     assert z7 > 2.5 * z1  # ~3x flatter resonance
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_f16_lumped_chain_is_not_explained_by_one_effect():
     from real_data_diagnosis import f16_chain_recording
 

@@ -21,6 +21,7 @@ def _coulomb(force):
     return {"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": force}}
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_closed_loop_axis_from_encoder_counts_is_dry_friction():
     d = diagnose(positioning_axis(seed=2, effects=FRICTION_AND_OFFSET).recording)
     assert d.band.source == "force 1"  # not the differentiated encoder noise
@@ -137,6 +138,7 @@ def test_linear_chain_in_encoder_counts_is_none(q_m):
     assert d.gap_before == pytest.approx(d.extra["noise_floor"], rel=0.25)
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_dry_friction_in_encoder_counts_is_still_found():
     d = diagnose(_slow_encoder_record(5e-6, [_coulomb(1.0)]))
     assert d.effect == "coulomb_friction" and d.location == {"dof": 1}
@@ -144,6 +146,7 @@ def test_dry_friction_in_encoder_counts_is_still_found():
 
 
 @pytest.mark.parametrize("q_m", [5e-6, 20e-6])
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_closed_loop_axis_in_encoder_counts_is_none(q_m):
     # the counts enter the force through the controller and bias the linear fit into a
     # significant negative spring (tens to thousands of N/m); held at zero, the spring-less
@@ -159,6 +162,7 @@ def test_closed_loop_axis_in_encoder_counts_is_none(q_m):
     assert not bound["needed"] and bound["gap_at_bound"] <= bound["noise_gap"]
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_closed_loop_axis_in_encoder_counts_with_dry_friction():
     u_rms = float(np.sqrt(np.mean(positioning_axis(seed=0, encoder_m=5e-6, stroke_m=0.01).recording.u ** 2)))
     effects = [{"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": 0.3 * u_rms}}]

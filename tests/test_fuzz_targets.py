@@ -90,7 +90,7 @@ def test_command_line_on_damaged_files(tmp_path, data, command):
     targets.command(data, tmp_path, command)
 
 
-# cli.py: 1,500 inputs, about 40 s (each record identify accepts now runs its fit check, a
+# cli.py: fewer inputs than reader.py (each record identify accepts runs its fit check, a
 # diagnosis, under atheris' instrumentation)
 @pytest.mark.parametrize("harness, runs", [("reader.py", 20000), ("cli.py", 1500)])
 @pytest.mark.slow

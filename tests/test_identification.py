@@ -326,6 +326,7 @@ def test_slow_positioning_axis_from_encoder_counts():
     assert res.verdict("k1").status == "negligible"  # no spring on the axis
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_axis_with_dry_friction_is_not_called_a_valid_chain():
     sc = positioning_axis(seed=4, duration_s=20.0, effects=FRICTION_AND_OFFSET)
     res = algid.identify(sc.recording)

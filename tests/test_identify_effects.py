@@ -64,6 +64,7 @@ def test_a_linear_record_stays_valid_within_five_sigma():
         assert np.all(np.abs((res.theta - TRUTH) / res.sigma) < 5)
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_the_positioning_axis_with_friction_in_one_call():
     """Encoder only, closed loop: mass within 1 %, viscous within 5 %, Coulomb level within
     3 % (the issue's targets), all valid, whether named or taken from the diagnosis."""

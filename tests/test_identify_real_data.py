@@ -34,6 +34,7 @@ def _identify_cli(path: Path, out: Path, *extra: str) -> dict:
     return json.loads(out.read_text())
 
 
+@pytest.mark.slow  # one of the longest cases of the fast tier
 def test_silverbox_through_the_command_line(tmp_path):
     """The linear chain is close to the least-squares fit but biased by the cubic spring:
     ``model_misfit`` pointing at ``--effect cubic_stiffness:1``; with that effect, m, c, k and

@@ -69,8 +69,8 @@ BIAS_NOISE_FACTOR = 10.0
 UNKNOWN_FLOOR_RATIO = 3.0
 #: A model explains a record to its noise when its withheld gap is at most this many times the
 #: noise floor: with no candidate beyond noise the diagnosis is ``none`` only then, and
-#: :func:`algid.identify` calls a fit valid only then (the gap of a linear record's own fit
-#: reaches 2.0x on the 300 cases of the blind check: the floor is itself an estimate).
+#: :func:`algid.identify` calls a fit valid only then (the floor is itself an estimate: a
+#: linear record's own gap scatters above it).
 FIT_FLOOR_RATIO = 3.0
 MIN_EXPLAINED = 0.5
 #: A linear gap below this (0.01 % NRMS) is numerical resolution (quadrature, the

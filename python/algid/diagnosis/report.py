@@ -158,7 +158,8 @@ def _units_lines(d) -> list[str]:
     ]
 
 
-def _fmt_loc(loc) -> str:
+def location_text(loc) -> str:
+    """``DOF 1`` or ``spring 2`` of an effect's location (``""`` without one)."""
     if not loc:
         return ""
     ((k, v),) = loc.items()
@@ -231,7 +232,7 @@ def to_text(d, source: str = "") -> str:
     else:
         shrink_f = d.gap_before_full / d.gap_after_full if d.gap_after_full > 0 else float("inf")
         L.append(
-            f"  with {d.effect} at {_fmt_loc(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)  "
+            f"  with {d.effect} at {location_text(d.location)}: {d.gap_after:.4g} ({shrink:.3g}x smaller)  "
             f"[{d.gap_after_full:.4g}, {shrink_f:.3g}x]"
         )
         L.append(f"  fitted: {_fmt_params(d.params, d.params_std, d.units)}")
@@ -239,7 +240,7 @@ def to_text(d, source: str = "") -> str:
         combo = d.extra.get("combination")
         if combo is not None:
             parts = " + ".join(
-                f"{eff} at {_fmt_loc(loc)} ({_fmt_params(combo.fit.params[eff], units=d.units)})"
+                f"{eff} at {location_text(loc)} ({_fmt_params(combo.fit.params[eff], units=d.units)})"
                 for eff, loc in zip(combo.fit.effect.split("+"), combo.fit.location["parts"])
             )
             sh = d.gap_before / combo.gap_after if combo.gap_after > 0 else float("inf")
@@ -274,7 +275,7 @@ def to_text(d, source: str = "") -> str:
     for s in d.ranking[:10]:
         mark = "*" if s.significant else " "
         L.append(
-            f"  {mark} {s.fit.effect:<18s} {_fmt_loc(s.fit.location):<9s} {s.gap_after:.4g}  "
+            f"  {mark} {s.fit.effect:<18s} {location_text(s.fit.location):<9s} {s.gap_after:.4g}  "
             f"z={s.z:6.1f}  {_fmt_params(s.fit.params, units=d.units)}"
         )
     if len(d.ranking) > 10:

@@ -28,6 +28,7 @@ import numpy as np
 from ..diagnosis.candidates import EFFECTS, MAIN_PARAM, PHYSICAL
 from ..diagnosis.corrected import corrected_model, effect_parts
 from ..diagnosis.engine import FIT_FLOOR_RATIO, diagnose
+from ..diagnosis.report import location_text
 from .motion import band_limited_motion
 from .plan import Plan
 from .surrogate import surrogate_band
@@ -37,13 +38,9 @@ from .verdicts import judge
 EFFECT_Z = 3.0
 
 
-def _where(location: dict) -> str:
-    return " ".join(f"{'DOF' if k == 'dof' else 'spring'} {v}" for k, v in location.items())
-
-
 def effect_label(effects: list[dict]) -> str:
     """``coulomb_friction at DOF 1 + cubic_stiffness at spring 2``."""
-    return " + ".join(f"{e['effect']} at {_where(e['location'])}" for e in effects)
+    return " + ".join(f"{e['effect']} at {location_text(e['location'])}" for e in effects)
 
 
 def _effect_verdicts(effects: list[dict], misfit: str, units: dict) -> list[dict]:
@@ -54,7 +51,7 @@ def _effect_verdicts(effects: list[dict], misfit: str, units: dict) -> list[dict
         value, sd = float(e["params"][main]), float(e["params_std"].get(main, math.nan))
         rule = PHYSICAL.get(e["effect"])
         reason = ""
-        if not rule(e["params"]) if rule else False:
+        if rule is not None and not rule(e["params"]):
             reason = f"{main} = {value:.4g} has an unphysical sign: the effect does not fit this record"
         elif not (math.isfinite(sd) and abs(value) > EFFECT_Z * sd):
             reason = f"{main} not determined: {value:.4g} +- {sd:.2g} is within {EFFECT_Z:g} sigma of zero"

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..chain import parameter_names
 from ..continuous import PackedParameters, unpack
+from ..diagnosis.report import location_text
 from ..display import Displayed, number, parameter_rows
 from ..noise import NoiseModel
 from .plan import Plan
@@ -278,7 +279,7 @@ def effect_lines(effects: list[dict], source: str) -> list[str]:
     """The table lines of the effects estimated with the chain, after where they came from."""
     lines = [f"  {source}"] if source else []
     for e in effects:
-        where = ", ".join(f"{'DOF' if k == 'dof' else 'spring'} {v}" for k, v in e["location"].items())
+        where = location_text(e["location"])
         for k, value in e["params"].items():
             sd = e["params_std"].get(k, math.nan)
             flag = "" if e["valid"] else "  [not valid]"
