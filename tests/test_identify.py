@@ -88,7 +88,7 @@ def test_invalid_estimates_carry_reasons_on_stderr_and_in_json(tmp_path):
     proc = _identify(save_recording(tmp_path / "axis.npz", sc.recording), "--json", out, "--replicates", "4")
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(out.read_text())
-    assert doc["valid"] is False and doc["estimator"] == "continuous"
+    assert doc["valid"] is False and doc["estimator"] == "integral_equations"  # the diagnosis's linear fit
     bad = [p for p in doc["parameters"] if not p["valid"]]
     assert bad and all(p["reason"] for p in bad)
     assert any("algid diagnose" in line for line in proc.stderr.splitlines())

@@ -13,6 +13,8 @@ import pytest
 
 import algid
 from algid.chain import Chain
+from algid.diagnosis import diagnose
+from algid.diagnosis.report import to_json
 from algid.recording import Recording
 from algid.scenarios import positioning_axis
 from algid.simulator import simulate
@@ -53,6 +55,20 @@ def test_a_biased_linear_fit_is_not_valid_and_the_effect_makes_it_right(effect, 
     assert e["effect"] == effect["name"] and e["location"] == effect["location"] and e["valid"]
     assert e["params"][main] == pytest.approx(effect["params"][main], rel=0.03)
     assert abs(e["params"][main] - effect["params"][main]) < 5 * e["params_std"][main]
+
+
+def test_one_linear_fit_for_one_record_whichever_command_prints_it():
+    """On a record the linear chain does not explain, ``identify`` reports the diagnosis's
+    linear fit: the same numbers as ``diagnose``'s linear model, each ``model_misfit``."""
+    rec = _record([CUBIC], seed=1, duration_s=10.0)
+    linear = algid.identify(rec)
+    lm = to_json(diagnose(rec))["linear_model"]
+    packed = np.array(lm["mass"] + lm["damping"] + lm["stiffness"], dtype=float)
+    sigma = np.array(lm["sigma_mass"] + lm["sigma_damping"] + lm["sigma_stiffness"], dtype=float)
+    np.testing.assert_allclose(linear.theta, packed, rtol=1e-12)
+    np.testing.assert_allclose(linear.sigma, sigma, rtol=1e-12)
+    assert linear.plan.estimator == "integral_equations"
+    assert {v.status for v in linear.verdicts} == {"model_misfit"}
 
 
 def test_a_linear_record_stays_valid_within_five_sigma():

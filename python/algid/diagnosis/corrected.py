@@ -59,17 +59,15 @@ def effect_parts(effect: str, location: dict, params: dict, params_std: dict) ->
     ]
 
 
-def corrected_model(d) -> dict | None:
-    """The chain refitted with the effect :func:`~.engine.diagnose` reports (module
-    docstring) as a dict that :meth:`algid.Chain.from_json` reads: ``n, boundary, mass,
-    damping, stiffness`` (``None`` where the record gives no scale), their ``sigma_*``, the
-    ``effects`` (``effect, location, params, params_std``) and the withheld gap with them;
-    ``None`` when no effect is reported."""
-    if d.best is None:
-        return None
-    P, lin, fit = d.P, d.lin, d.best.fit
+def chain_model(d, fit=None) -> dict:
+    """The chain of the diagnosis's linear fit, with ``fit``'s equations (a candidate's,
+    cross-validated) in place of the linear ones it refits, as a dict that
+    :meth:`algid.Chain.from_json` reads: ``n, boundary, mass, damping, stiffness`` (``None``
+    where the record gives no scale) and their ``sigma_*`` (module docstring)."""
+    P, lin = d.P, d.lin
     per_eq = _physical(P, list(range(P.n)), lin.cv)
-    per_eq.update(_physical(P, fit.eqs, fit.cv))
+    if fit is not None:
+        per_eq.update(_physical(P, fit.eqs, fit.cv))
     var = {e: jackknife_std(v[1]) ** 2 for e, v in per_eq.items()}
     theta = _packed(P, lin.names, {e: v[0] for e, v in per_eq.items()}, var)
     K = len(next(iter(per_eq.values()))[1])
@@ -89,7 +87,25 @@ def corrected_model(d) -> dict | None:
         "sigma_mass": listed(sigma[:n]),
         "sigma_damping": listed(sigma[n : 2 * n]),
         "sigma_stiffness": listed(sigma[2 * n :]),
+    }
+
+
+def linear_model(d) -> dict:
+    """The one linear chain of a record, whichever command prints it: the diagnosis's linear
+    fit (:func:`chain_model`), its withheld gap ``gap``."""
+    return {**chain_model(d), "effects": [], "gap": d.gap_before}
+
+
+def corrected_model(d) -> dict | None:
+    """The chain refitted with the effect :func:`~.engine.diagnose` reports (module
+    docstring): :func:`chain_model` with the reported candidate's equations, the ``effects``
+    (``effect, location, params, params_std``) and the withheld gap ``gap_after`` with them;
+    ``None`` when no effect is reported."""
+    if d.best is None:
+        return None
+    return {
+        **chain_model(d, d.best.fit),
         "effects": effect_parts(d.effect, d.location, d.params, d.params_std),
         "gap_after": d.gap_after,
-        "refitted_dofs": sorted(e + 1 for e in fit.eqs),
+        "refitted_dofs": sorted(e + 1 for e in d.best.fit.eqs),
     }

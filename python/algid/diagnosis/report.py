@@ -8,7 +8,7 @@ import numpy as np
 
 from .candidates import MAIN_PARAM
 from .core import METRIC, METRIC_FORCE
-from .corrected import corrected_model
+from .corrected import corrected_model, linear_model
 from .units import SI
 
 
@@ -81,12 +81,8 @@ def to_json(d) -> dict:
         "main_param": MAIN_PARAM.get(d.effect),
         "corrected_model": corrected_model(d),
         "linear_model": {
-            "n": d.P.n,
-            "boundary": d.P.boundary,
-            "mass": [float(m) if f else None for m, f in zip(lin.mass, lin.forced)],
-            "damping": lin.damping().tolist(),
-            "stiffness": lin.stiffness().tolist(),
-            "unforced_dofs_per_unit_mass": [i + 1 for i, f in enumerate(lin.forced) if not f],
+            **linear_model(d),
+            "unforced_dofs": [i + 1 for i, f in enumerate(lin.forced) if not f],
             "natural_frequencies_hz": d.extra.get("natural_hz", []),
         },
         "analysis": {
@@ -118,9 +114,8 @@ def _combination_json(s) -> dict | None:
     return {"effects": parts, "gap_after": s.gap_after, "gap_after_fullband": s.gap_after_full, "z_noise": s.z}
 
 
-def _corrected_lines(d) -> list[str]:
-    """The chain refitted with the effect, one line per DOF, values +- one sigma."""
-    cm = corrected_model(d)
+def _chain_lines(cm: dict | None, units: dict, title: str, indent: str = "  ") -> list[str]:
+    """A chain model (:mod:`.corrected`) under ``title``, one line per DOF, values +- one sigma."""
     if cm is None:
         return []
     n = cm["n"]
@@ -128,13 +123,13 @@ def _corrected_lines(d) -> list[str]:
     def val(x, s):
         return "n/a" if x is None else f"{x:.5g}" + ("" if s is None else f" +- {s:.2g}")
 
-    out = [f"  chain with the effect (m [{d.units['m']}], c [{d.units['c']}], springs [{d.units['k']}]):"]
+    out = [f"{title} (m [{units['m']}], c [{units['c']}], springs [{units['k']}]):"]
     for i in range(n):
         springs = "  ".join(
             f"k{j + 1}={val(cm['stiffness'][j], cm['sigma_stiffness'][j])}" for j in (i, i + 1) if j < n or i == n - 1
         )
         m, c = val(cm["mass"][i], cm["sigma_mass"][i]), val(cm["damping"][i], cm["sigma_damping"][i])
-        out.append(f"    DOF {i + 1}: m={m}  c={c}  {springs}")
+        out.append(f"{indent}DOF {i + 1}: m={m}  c={c}  {springs}")
     return out
 
 
@@ -178,17 +173,11 @@ def to_text(d, source: str = "") -> str:
     L.append("")
     L.extend(_units_lines(d))
     L.append("")
-    L.append("Linear chain (windowed equation-error fit):")
-    m_head, c_head = f"m [{d.units['m']}]", f"c [{d.units['c']}]"
-    wm, wc = max(len(m_head), 10), max(len(c_head), 10)
-    L.append(f"  DOF   {m_head:<{wm}}  {c_head:<{wc}}  springs [{d.units['k']}]")
-    for e in range(P.n):
-        th = lin.theta[e]
-        springs = "  ".join(f"{nm}={v:.4g}" for nm, v in zip(lin.names[e][2:], th[2:]))
-        m = f"{th[0]:<{wm}.4g}" if lin.forced[e] else f"{'(no force)':<{wm}}"
-        L.append(f"  {e + 1:<4d}  {m}  {th[1]:<{wc}.4g}  {springs}")
+    L.extend(_chain_lines(linear_model(d), d.units, "Linear chain, the windowed equation-error fit", "  "))
+    if d.effect != "none":
+        L.append("  (`algid identify` reports this fit, every value model_misfit: the record is not a linear chain)")
     if not lin.forced.all():
-        L.append("  DOF without force: m unknown, c and k per unit mass [1/s], [1/s^2]")
+        L.append("  a DOF without force: no scale in this fit (n/a); `algid identify` carries it along the springs")
     nat = d.extra.get("natural_hz", [])
     if nat:
         L.append("  natural frequencies [Hz]: " + ", ".join(f"{f:.3g}" for f in nat))
@@ -236,7 +225,7 @@ def to_text(d, source: str = "") -> str:
             f"[{d.gap_after_full:.4g}, {shrink_f:.3g}x]"
         )
         L.append(f"  fitted: {_fmt_params(d.params, d.params_std, d.units)}")
-        L.extend(_corrected_lines(d))
+        L.extend(_chain_lines(corrected_model(d), d.units, "  chain with the effect", "    "))
         combo = d.extra.get("combination")
         if combo is not None:
             parts = " + ".join(

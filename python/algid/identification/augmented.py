@@ -73,17 +73,18 @@ def _effect_verdicts(effects: list[dict], misfit: str, units: dict) -> list[dict
 CHECKED_EFFECTS = tuple(e for e in EFFECTS if e != "stribeck_friction")
 
 
-def fit_check(rec, boundary: str) -> dict:
+def fit_check(rec, boundary: str) -> tuple[dict, object]:
     """Does the linear chain explain the record to its noise? The diagnosis's verdict
     (:func:`algid.diagnose` over :data:`CHECKED_EFFECTS`, on its quick grids): ``none`` (no candidate beyond
     noise, the withheld gap within :data:`FIT_FLOOR_RATIO` of the noise floor) or not.
     Returns ``gap``, ``noise_floor``, ``explains_record``, ``diagnosis`` (the effect and
     location it finds, or ``unknown``) and ``misfit``: the reason that makes the linear
-    chain's determined estimates ``model_misfit`` ("" when it explains the record)."""
+    chain's determined estimates ``model_misfit`` ("" when it explains the record); and the
+    diagnosis itself."""
     d = diagnose(rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False)  # identify notched it
     out = {"gap": d.gap_before, "noise_floor": float(d.extra["noise_floor"]), "explains_record": d.effect == "none"}
     if d.effect == "none":
-        return {**out, "diagnosis": "none", "misfit": ""}
+        return {**out, "diagnosis": "none", "misfit": ""}, d
     if d.best is None:
         found, hint = "unknown", "`algid diagnose` for where the gap sits"
     else:
@@ -94,7 +95,7 @@ def fit_check(rec, boundary: str) -> dict:
         f"the linear chain leaves a withheld gap of {d.gap_before:.3g}, {d.gap_before / out['noise_floor']:.3g}x "
         f"the noise floor, and the diagnosis's test finds {found}: run {hint}"
     )
-    return {**out, "diagnosis": found, "misfit": why}
+    return {**out, "diagnosis": found, "misfit": why}, d
 
 
 def _specs(d) -> list[tuple[str, dict]]:
@@ -118,9 +119,6 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
     if d.best is None:
         return None, f"the diagnosis reports {d.effect!r}: no effect to add"
     cm = corrected_model(d)
-    n, forced = rec.n, np.any(rec.u != 0.0, axis=0)
-    theta = np.concatenate([_packed(cm, k) for k in ("mass", "damping", "stiffness")])
-    sigma = np.concatenate([_packed(cm, f"sigma_{k}") for k in ("mass", "damping", "stiffness")])
     floor = float(d.extra["noise_floor"])
     label = effect_label(cm["effects"])
     misfit = ""
@@ -129,35 +127,41 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
             f"the chain with {label} leaves a withheld gap of {d.gap_after:.3g}, {d.gap_after / floor:.3g}x "
             "its noise floor: it does not explain this record; run `algid diagnose`"
         )
-    mo = band_limited_motion(motion, kind, nm.dt, surrogate_band(nm, np.nan_to_num(theta), n, boundary))
-    verdicts = [
-        replace(v, reason=v.reason.replace("the linear chain does not fit", f"the chain with {label} does not fit"))
-        for v in judge(theta, sigma, n, boundary, mo, rec.u, forced, nm, misfit=misfit)
-    ]
     source = (
         f"effect from the diagnosis (`--effect auto`): {label}, z = {d.best.z:.3g}"
         if auto
         else f"effect given: {label}"
     )
-    folds = int(d.best.fit.cv.theta_folds.shape[0])
+    fit = {"gap": d.gap_after, "noise_floor": floor, "explains_record": not misfit, "gap_linear": d.gap_before}
+    fields = diagnosis_fields(rec, motion, kind, nm, boundary, d, cm, f"the chain with {label}", misfit)
+    fields["model_fit"].update({**fit, "source": source})
+    fields["effects"] = _effect_verdicts(cm["effects"], misfit, d.units)
+    return fields, source
+
+
+def diagnosis_fields(rec, motion, kind, nm, boundary: str, d, cm: dict, model: str, misfit: str) -> dict:
+    """The fields of an :class:`~.result.Identification` beyond the recording's for the chain
+    model ``cm`` the diagnosis ``d`` fitted (:mod:`algid.diagnosis.corrected`: the linear
+    chain, or the chain with effects, named ``model``), judged with ``misfit`` (stage 3)."""
+    n, forced = rec.n, np.any(rec.u != 0.0, axis=0)
+    theta = np.concatenate([_packed(cm, k) for k in ("mass", "damping", "stiffness")])
+    sigma = np.concatenate([_packed(cm, f"sigma_{k}") for k in ("mass", "damping", "stiffness")])
+    mo = band_limited_motion(motion, kind, nm.dt, surrogate_band(nm, np.nan_to_num(theta), n, boundary))
+    verdicts = [
+        replace(v, reason=v.reason.replace("the linear chain does not fit", f"{model} does not fit"))
+        for v in judge(theta, sigma, n, boundary, mo, rec.u, forced, nm, misfit=misfit)
+    ]
+    folds = int(d.lin.cv.theta_folds.shape[0])
     plan = Plan(
-        estimator="augmented",
-        reason=f"eq. 1 with {label}: the diagnosis's integral equations, {folds} folds",
+        estimator="augmented" if cm["effects"] else "integral_equations",
+        reason=f"{model}: the diagnosis's integral equations, {folds} folds",
         window_s=d.P.L * d.P.dt,
         prefilter_hz=math.nan,
         stagger=1,
         window_basis=f"{d.P.form} form, band {d.band.f_hi:.4g} Hz",
         method="integral_equations",
     )
-    fit = {
-        "gap": d.gap_after,
-        "noise_floor": floor,
-        "explains_record": not misfit,
-        "gap_linear": d.gap_before,
-        "folds": folds,
-        "source": source,
-    }
-    fields = {
+    return {
         "plan": plan,
         "theta": theta,
         "sigma": sigma,
@@ -170,8 +174,7 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
         "history_sigma": sigma[None],
         "windows": folds,
         "replicates": 0,
-        "effects": _effect_verdicts(cm["effects"], misfit, d.units),
-        "model_fit": fit,
+        "effects": [],
+        "model_fit": {"folds": folds},
         "diagnosis": d,
     }
-    return fields, source

@@ -7,20 +7,23 @@ verdicts, in stages, each entered once:
    the measured accelerations, or the derivatives of the velocities or displacements
    (:func:`algid.recording.accelerations`); the forces.
 2. Noise model and signal band of the recording (:mod:`algid.noise`).
-3. Plan (:mod:`.plan`): which estimator and its settings, from the recording's time scales
+3. Fit check (:func:`.augmented.fit_check`): the diagnosis's verdict on the record. Unless
+   it is ``none``, the linear chain reported is the diagnosis's fit of it, the one linear
+   fit of the record whichever command prints it
+   (:func:`algid.diagnosis.corrected.linear_model`), its determined estimates
+   ``model_misfit``, and stages 4-6 are skipped.
+4. Plan (:mod:`.plan`): which estimator and its settings, from the recording's time scales
    and a first look at the chain (:func:`.motion.equation_error_fit`: eq. 1 on the DFT bins
    the forces excite), whose lowest natural frequency sets the window length.
-4. Estimate: the plan run over the whole record (:mod:`.runner`); the algebraic windows'
+5. Estimate: the plan run over the whole record (:mod:`.runner`); the algebraic windows'
    length is first chosen among multiples of the plan's by the error a bootstrap measures
    on each (:func:`.surrogate.select_window`).
-5. Uncertainty (:mod:`.uncertainty`): the weak-form windows' own covariance, or a parametric
+6. Uncertainty (:mod:`.uncertainty`): the weak-form windows' own covariance, or a parametric
    bootstrap for the algebraic windows; the method's own error; the window results' scatter
    beyond what noise explains.
-6. Fit check (:func:`.augmented.fit_check`): the diagnosis's verdict on the record; unless
-   it is ``none``, the linear chain's determined estimates are ``model_misfit``.
 7. Verdicts per parameter and DOF (:mod:`.verdicts`).
 
-With ``effects``, stages 3-6 are the diagnosis's fit of eq. 1 with the effects and its check
+With ``effects``, stages 3-7 are the diagnosis's fit of eq. 1 with the effects and its check
 (:mod:`.augmented`).
 """
 
@@ -31,10 +34,11 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from ..diagnosis.corrected import linear_model
 from ..noise import analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
 from ..recording import motion as recording_motion
-from .augmented import fit_check, fit_with_effects
+from .augmented import diagnosis_fields, fit_check, fit_with_effects
 from .motion import equation_error_fit
 from .plan import make_plan, natural_frequencies_hz
 from .result import Identification
@@ -163,11 +167,16 @@ def identify(
         fitted, effect_note = fit_with_effects(rec, motion, kind, nm, boundary, effects)
         if fitted is not None:
             return Identification(**common, **fitted)
+    _progress(progress, "withheld-window test", None)
+    check, d = fit_check(rec, boundary)
+    misfit = check.pop("misfit")
+    if misfit:  # one linear fit per record: the diagnosis's, the one whose gap is measured
+        fields = diagnosis_fields(rec, motion, kind, nm, boundary, d, linear_model(d), "the linear chain", misfit)
+        fields["model_fit"].update(check)
+        return Identification(**common, **fields)
     plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress)
     joint = True  # every estimator carries the scale along the springs (weak form: joint solve; else eq. 7 ratios)
-    _progress(progress, "withheld-window test", None)
-    check = fit_check(rec, boundary)
-    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint, check.pop("misfit"))
+    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint)
     # no value at all where the record has no scale for it (an unforced DOF) or the
     # estimator's systems were singular
     blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])

@@ -26,7 +26,8 @@ joins). Statuses, in the order they are tested:
   three sigma, that is not negligible: eq. 1 does not fit the record.
 * ``model_misfit``: the fitted model does not explain the record to its noise (``misfit``,
   the diagnosis's withheld-window test, :func:`.augmented.fit_check`): the estimate is
-  biased by what the model leaves out. (The window results' scatter beyond the noise
+  biased by what the model leaves out; this verdict takes precedence over every other but
+  ``known`` and ``not_separable`` wherever the fit gives a value. (The window results' scatter beyond the noise
   scales the standard deviations up, :mod:`.uncertainty`; it is no verdict of its own:
   coloured sensor noise scatters them too.)
 * ``negligible``: the share plus three uncertainty shares stays below :data:`NEGLIGIBLE`,
@@ -40,6 +41,7 @@ A DOF is valid when its mass, damping and both springs are ``ok``, ``negligible`
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -207,7 +209,8 @@ def judge(
                 nm,
                 joint,
             )
-            if v.status in ("ok", "negligible", "inadmissible") and misfit:
+            valued = v.status == "not_identifiable" and math.isfinite(v.share)  # a value the misfit spreads
+            if misfit and (v.status in ("ok", "negligible", "inadmissible") or valued):
                 v = Verdict(name, "model_misfit", f"{_WHAT[fam]} biased: {misfit}", v.share, v.sigma_share)
             out.append(v)
     return out
