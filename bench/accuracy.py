@@ -28,11 +28,10 @@ import numpy as np
 from scipy.special import erf
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
 import algid  # noqa: E402
 from algid import reference  # noqa: E402
 from algid.chain import TABLE1, Chain  # noqa: E402
-from signals import multisine, relative_errors, simulate_chain  # noqa: E402
+from algid.simulator.exact import multisine, relative_errors, simulate_chain  # noqa: E402
 
 FS = 1000.0
 CHECK_TIMES = (0.02, 0.05, 0.1, 0.5)

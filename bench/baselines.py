@@ -32,13 +32,9 @@ measurement function is filterpy's per-point loop.
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 from scipy.signal import lfilter
 
-sys.path.append(str(Path(__file__).resolve().parents[1] / "python"))  # an installed algid comes first
 from algid import reference  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------

@@ -68,8 +68,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.diagnosis.candidates import EFFECTS as DIAGNOSED  # noqa: E402
 from algid.diagnosis.candidates import MAIN_PARAM  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402
+from algid.simulator.effects import EFFECT_LOCATIONS  # noqa: E402
 
 EFFECTS = (
     "coulomb_friction",
@@ -84,7 +86,8 @@ EFFECTS = (
 #: Effects the generator can also draw (the realistic check, bench/realistic_blind.py); kept
 #: out of EFFECTS so that the blind check's seeds draw the cases they always drew.
 MORE_EFFECTS = ("stribeck_friction", "amplitude_damping", "sensor_highpass")
-SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")
+assert set(EFFECTS + MORE_EFFECTS) == set(DIAGNOSED), "the blind check draws every effect the diagnosis knows"
+SPRING_EFFECTS = tuple(e for e in EFFECTS + MORE_EFFECTS if EFFECT_LOCATIONS[e] == "spring")
 #: Main parameter of every effect: the diagnosis's own table.
 MAIN = dict(MAIN_PARAM)
 CLASSES = ("none",) + EFFECTS + MORE_EFFECTS + ("unknown",)

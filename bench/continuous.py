@@ -43,7 +43,6 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -51,13 +50,11 @@ import numpy as np
 from scipy.signal import butter, lfilter
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.append(str(HERE.parent / "python"))  # an installed algid comes first
 import baselines  # noqa: E402
-import crlb as C  # noqa: E402
 
 import algid  # noqa: E402
 from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.identification import crlb as C  # noqa: E402
 
 FS = 1000.0
 DT = 1.0 / FS

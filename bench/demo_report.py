@@ -45,13 +45,13 @@ import sys
 import time
 from pathlib import Path
 
-import crlb
 import numpy as np
 from scipy.stats import norm
 
 from algid.chain import TABLE1
 from algid.controller import BezierReference, TrackingController
 from algid.demo import format_summary, jsonable, run_scenario, summarize
+from algid.identification import crlb
 from algid.simulator import simulate
 
 

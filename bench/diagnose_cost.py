@@ -30,11 +30,8 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.append(str(HERE.parent / "python"))  # an installed algid comes first
-sys.path.insert(0, str(HERE))
-import crlb  # noqa: E402
-
 from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.identification import crlb  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402
 
 FS = 1000.0

@@ -4,7 +4,7 @@ worker processes.
 The fleet: ``--count`` recordings of 3-DOF chains (``--machines`` folders, machine i's chain
 ``Chain.random(3, default_rng(i))``), ``--duration`` s at 1 kHz under the tests' multisine,
 cycling through no effect, a cubic spring and dry friction, and SNRs of 60, 40 and 30 dB
-(``tests/fleet_recordings.py``); generated once on the same Dask cluster into ``--data``.
+(:func:`algid.scenarios.write_fleet_recording`); generated once on the same Dask cluster into ``--data``.
 
 For each worker count W (a ``LocalCluster`` of W single-threaded processes, started and warmed
 up by one recording per worker before the clock starts), :func:`algid.batch` over the fleet
@@ -31,34 +31,24 @@ counts in one run (about 5 minutes, after 11 minutes generating the fleet the fi
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import os
 import shutil
-import sys
 import time
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-# an installed algid comes first; the checkout's python/ only serves when none is installed
-PATHS = [str(HERE.parent / "tests")] + ([] if importlib.util.find_spec("algid") else [str(HERE.parent / "python")])
-sys.path[:0] = PATHS
-# the workers are new processes: they find algid and the generator through PYTHONPATH
-os.environ["PYTHONPATH"] = os.pathsep.join(PATHS + [os.environ.get("PYTHONPATH", "")])
-
-import algid  # noqa: E402
-from algid.fleet.engine import local_cluster  # noqa: E402
-from algid.fleet.task import Options, run_one  # noqa: E402
+import algid
+from algid.fleet.engine import local_cluster
+from algid.fleet.task import Options, run_one
+from algid.scenarios import write_fleet_recording
 
 
 def generate(client, data: Path, count: int, machines: int, duration_s: float) -> list[Path]:
     """The fleet in ``data`` (kept between runs: only missing recordings are simulated)."""
-    from fleet_recordings import write_recording
-
     per = -(-count // machines)
     jobs = [(i, j) for i in range(machines) for j in range(per)][:count]
     missing = [(i, j) for i, j in jobs if not (data / f"m{i:02d}" / f"rec{j:04d}.npz").exists()]
-    futures = client.map(lambda ij: write_recording(data, ij[0], ij[1], 3, duration_s), missing, pure=False)
+    futures = client.map(lambda ij: write_fleet_recording(data, ij[0], ij[1], 3, duration_s), missing, pure=False)
     client.gather(futures)
     return [data / f"m{i:02d}" / f"rec{j:04d}.npz" for i, j in jobs]
 

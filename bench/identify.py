@@ -57,16 +57,13 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent / "tests"))
-import crlb as C  # noqa: E402
-
 import algid  # noqa: E402
 from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.identification import crlb as C  # noqa: E402
 from algid.recording import Recording  # noqa: E402
 from algid.scenarios import positioning_axis  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
-from signals import multisine, simulate_chain  # noqa: E402
+from algid.simulator.exact import multisine, simulate_chain  # noqa: E402
 
 FS = 1000.0
 SNRS = (20, 30, 40, 50, 60)

@@ -154,7 +154,6 @@ def commands(reps: int, folder: Path, python: str = sys.executable, env: dict | 
 
 _BASELINE_SCRIPT = """
 import json, statistics, sys, time
-sys.path.insert(0, {bench!r})
 import identify_cost as C
 import algid
 rows = []
@@ -168,8 +167,8 @@ print(json.dumps(rows))
 
 def baseline(folder: Path, cases: list, reps: int, work: Path) -> dict:
     """The warm identify times and the commands' of the algid in ``folder``."""
-    env = {**os.environ, "PYTHONPATH": str(folder)}
-    script = _BASELINE_SCRIPT.format(bench=str(Path(__file__).parent), cases=cases, reps=reps)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(folder), str(Path(__file__).parent)])}
+    script = _BASELINE_SCRIPT.format(cases=cases, reps=reps)
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env)
     if proc.returncode != 0:
         raise RuntimeError(proc.stderr[-3000:])

@@ -19,14 +19,12 @@ from __future__ import annotations
 import argparse
 import json
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.append(str(Path(__file__).resolve().parents[1] / "python"))  # an installed algid comes first
 from algid.chain import stiffness_matrix  # noqa: E402
 
 TONES_HZ = np.geomspace(1.0, 40.0, 6)

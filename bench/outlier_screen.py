@@ -25,16 +25,14 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.append(str(HERE.parent / "python"))  # an installed algid comes first
-sys.path.insert(0, str(HERE))
 import blind_diagnosis as B  # noqa: E402
 import identify as I  # noqa: E402
-import real_data_diagnosis as R  # noqa: E402
 import realistic_blind as RB  # noqa: E402
 
 from algid.chain import TABLE1  # noqa: E402
 from algid.identification.screen import OUTLIER_RANGE, RANGE_RANK, screen  # noqa: E402
 from algid.recording import Recording  # noqa: E402
+from algid.recording.datasets import f16_chain_recording, silverbox_recording  # noqa: E402
 from algid.scenarios import impact_test, positioning_axis  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
 
@@ -85,9 +83,9 @@ def families(seeds: int):
         for s in range(min(seeds, 6)):
             yield "impact hammer, 1-4 hits", f"{hits} hits seed {s}", impact_test(seed=s, hits=hits).recording
     if DATA.is_dir():
-        yield "measured: Silverbox, F-16", "Silverbox SNLS80mV", R.silverbox_recording(DATA, "all")
+        yield "measured: Silverbox, F-16", "Silverbox SNLS80mV", silverbox_recording(DATA, "all")
         for level in range(1, 8):
-            yield "measured: Silverbox, F-16", f"F-16 FullMSine level {level}", R.f16_chain_recording(DATA, level)
+            yield "measured: Silverbox, F-16", f"F-16 FullMSine level {level}", f16_chain_recording(DATA, level)
 
 
 def main(argv=None) -> int:

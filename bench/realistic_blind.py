@@ -98,7 +98,6 @@ import numpy as np
 from scipy.signal import butter, lfilter
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
 import blind_diagnosis as B  # noqa: E402
 
 from algid.chain import Chain  # noqa: E402

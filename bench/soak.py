@@ -35,19 +35,15 @@ from __future__ import annotations
 import argparse
 import json
 import resource
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 from scipy.signal import lfilter
 
-sys.path.append(str(Path(__file__).resolve().parents[1] / "python"))  # an installed algid comes first
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import crlb  # noqa: E402
-
 import algid  # noqa: E402
 from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.identification import crlb  # noqa: E402
 
 FS_HZ = 1000.0
 

@@ -21,19 +21,14 @@ The default simulates 15 minutes (every figure, fewer windows); the published fi
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
-
-sys.path.append(str(Path(__file__).resolve().parents[1] / "python"))  # an installed algid comes first
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import crlb  # noqa: E402
 from soak import FS_HZ, ModalPlant  # noqa: E402
 
 import algid  # noqa: E402
 from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.identification import crlb  # noqa: E402
 
 
 def record(n: int, snr_db: float, minutes: int, seed: int):

@@ -1,19 +1,14 @@
-"""The Cramer-Rao bound of ``bench/crlb.py``: its sensitivities against finite differences of
+"""The Cramer-Rao bound of :mod:`algid.identification.crlb`: its sensitivities against finite differences of
 independent simulations, the benchmark's own and ``algid.simulator``'s sampled mode (held
 DAC, actuator lag), and the bound against the spread of an efficient estimator."""
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
-import crlb as C  # noqa: E402
-
 from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.identification import crlb as C  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
 
 N = TABLE1.n

@@ -9,7 +9,6 @@ flattens ~3x (PROVENANCE.md, period-averaged FRF).
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +17,6 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"measured data not present at {DATA}")
-
-sys.path.insert(0, str(REPO / "bench"))
 
 
 def _ls_cubic_oracle(rec) -> float:
@@ -34,9 +31,8 @@ def _ls_cubic_oracle(rec) -> float:
 
 
 def test_silverbox_is_a_hardening_cubic_spring():
-    from real_data_diagnosis import silverbox_recording
-
     from algid.diagnosis import diagnose
+    from algid.recording.datasets import silverbox_recording
 
     rec = silverbox_recording(DATA, "arrow")
     d = diagnose(rec)
@@ -56,9 +52,8 @@ def test_silverbox_is_a_hardening_cubic_spring():
 
 
 def test_f16_torsion_mode_softens_and_damps_with_level():
-    from real_data_diagnosis import f16_modal_recording
-
     from algid.diagnosis import diagnose
+    from algid.recording.datasets import f16_modal_recording
 
     fits = {}
     for level in (1, 7):
@@ -74,9 +69,8 @@ def test_f16_torsion_mode_softens_and_damps_with_level():
 
 @pytest.mark.slow  # one of the longest cases of the fast tier
 def test_f16_lumped_chain_is_not_explained_by_one_effect():
-    from real_data_diagnosis import f16_chain_recording
-
     from algid.diagnosis import diagnose
+    from algid.recording.datasets import f16_chain_recording
 
     d = diagnose(f16_chain_recording(DATA, 7), boundary="free")
     assert d.effect == "unknown"

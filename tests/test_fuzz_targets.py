@@ -1,4 +1,4 @@
-"""Short runs of the fuzz targets of ``bench/fuzz`` (the reader and the command line fed
+"""Short runs of the fuzz targets of ``tests/fuzz`` (the reader and the command line fed
 damaged files of every kind): a hypothesis mutation of the seed files, and a coverage-guided
 atheris run of each harness (20-40 s each; the long runs are in ``docs/reliability.md``).
 The property: a valid recording, or one ``RecordingError`` / one line and exit 2; never
@@ -20,11 +20,9 @@ from conftest import REPO
 
 pytest.importorskip("h5py")
 pytest.importorskip("pyuff")
-FUZZ = REPO / "bench" / "fuzz"
-sys.path.insert(0, str(FUZZ))
-import targets  # noqa: E402
-
+FUZZ = REPO / "tests" / "fuzz"
 from algid.recording import RecordingError, load_recording  # noqa: E402
+from fuzz import targets  # noqa: E402
 
 SEEDS = targets.seeds()
 SHORT = settings(

@@ -20,8 +20,6 @@ REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"measured data not present at {DATA}")
 
-sys.path.insert(0, str(REPO / "bench"))
-
 
 def _identify_cli(path: Path, out: Path, *extra: str) -> dict:
     proc = subprocess.run(
@@ -39,10 +37,9 @@ def test_silverbox_through_the_command_line(tmp_path):
     """The linear chain is close to the least-squares fit but biased by the cubic spring:
     ``model_misfit`` pointing at ``--effect cubic_stiffness:1``; with that effect, m, c, k and
     the cubic coefficient are valid, the latter the diagnosis's within 5 %."""
-    from real_data_diagnosis import silverbox_recording
-
     from algid.diagnosis import diagnose
     from algid.recording import save_recording
+    from algid.recording.datasets import silverbox_recording
 
     rec = silverbox_recording(DATA, "arrow")  # the first 40,000 samples (65.5 s)
     path = save_recording(tmp_path / "silverbox.npz", rec)
@@ -67,10 +64,9 @@ def test_silverbox_through_the_command_line(tmp_path):
 
 @pytest.mark.parametrize("level", [1, 7])
 def test_f16_estimates_are_plausible_or_flagged(level):
-    from real_data_diagnosis import f16_arrays, f16_chain_recording
-
     import algid
     from algid.recording import Recording
+    from algid.recording.datasets import f16_arrays, f16_chain_recording
 
     F, acc, fs = f16_arrays(DATA, level)
     shaker = Recording(t=np.arange(F.size) / fs, u=F[:, None], a=acc[:, :1])

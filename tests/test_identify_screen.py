@@ -146,8 +146,7 @@ def test_command_line_reports_the_screened_samples(noisy, tmp_path):
 
 @pytest.mark.skipif(not DATA.is_dir(), reason=f"measured data not present at {DATA}")
 def test_measured_records_screen_nothing():
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
-    from real_data_diagnosis import f16_chain_recording, silverbox_recording
+    from algid.recording.datasets import f16_chain_recording, silverbox_recording
 
     assert screen(silverbox_recording(DATA, "all"))[1].count == 0
     for level in (1, 3, 5, 7):

@@ -10,7 +10,10 @@ the realistic blind check.
   its spring, damping and friction; force and displacement measured. Any simulator effect
   of its one DOF or spring (dry friction, a clearance or backlash, micro-slip ...).
 
-Each returns a :class:`Scenario`: the :class:`~algid.recording.Recording` as a data logger
+* :func:`write_fleet_recording`: one recording of a generated fleet of machines (folders)
+  for ``algid batch``: simulated chains with a mix of noise levels and effects.
+
+Each of the first two returns a :class:`Scenario`: the :class:`~algid.recording.Recording` as a data logger
 would write it (only the signals the rig measures), the true chain, and what else acts.
 """
 
@@ -18,13 +21,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from .chain import Chain
 from .positioning import BangBangReference, PositioningController
-from .recording import Recording
+from .recording import Recording, save_recording
 from .simulator import effect_forces, simulate
+from .simulator.exact import multisine
 
 
 @dataclass
@@ -155,3 +160,43 @@ def impact_test(
         [],
         {"natural_hz": chain.natural_frequencies_hz().tolist(), "hits": hits, "fs_hz": fs_hz},
     )
+
+
+#: Effects mixed into a fleet (None: the linear chain), cycled over the recordings.
+FLEET_EFFECTS = (
+    None,
+    {"name": "cubic_stiffness", "location": {"spring": 1}, "params": {"k_cubic": 3e7}},
+    {"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": 1.5}},
+)
+#: Sensor SNRs [dB] cycled over the recordings.
+FLEET_NOISE_DB = (60.0, 40.0, 30.0)
+
+
+def fleet_recording(
+    chain: Chain, duration_s: float, seed: int, effect=None, noise_db: float | None = 40.0
+) -> Recording:
+    """One recording of a fleet (``algid batch``'s tests and ``bench/fleet.py``): ``chain``
+    at 1 kHz under the tests' multisine force (:func:`algid.simulator.exact.multisine`),
+    forces and accelerations with ``noise_db`` of sensor noise."""
+    sim = simulate(
+        chain,
+        multisine(chain.n, seed),
+        duration_s,
+        effects=[] if effect is None else [effect],
+        noise_db=noise_db,
+        noise_on=("accel", "force"),
+        seed=seed,
+    )
+    return Recording(t=sim.t, u=sim.u, a=sim.a)
+
+
+def write_fleet_recording(folder: Path, machine: int, index: int, n: int, duration_s: float, suffix=".npz") -> Path:
+    """Recording ``index`` of machine ``machine`` (``folder/m{machine:02d}/rec{index:04d}``): the
+    chain ``Chain.random(n, default_rng(machine))``, seed ``1000 machine + index``, whose residues
+    pick the effect and the noise level."""
+    chain = Chain.random(n, np.random.default_rng(machine))
+    (folder / f"m{machine:02d}").mkdir(parents=True, exist_ok=True)
+    seed = 1000 * machine + index
+    effect, noise_db = FLEET_EFFECTS[seed % len(FLEET_EFFECTS)], FLEET_NOISE_DB[seed % len(FLEET_NOISE_DB)]
+    rec = fleet_recording(chain, duration_s, seed, effect, noise_db)
+    return save_recording(folder / f"m{machine:02d}" / f"rec{index:04d}{suffix}", rec)

@@ -11,7 +11,7 @@ from typing import Any
 from ..chain import Chain
 from ..deprecation import warn_renamed
 
-__all__ = ["COULOMB_V_EPS", "EFFECT_NAMES", "Effect", "as_effect"]
+__all__ = ["COULOMB_V_EPS", "EFFECT_LOCATIONS", "EFFECT_NAMES", "Effect", "as_effect"]
 
 #: Smallest velocity scale [m/s] of the dry-friction regularisation ``F tanh(v / v_eps)``
 #: (the default is ``max(COULOMB_V_EPS, F / (m_i f_sub))``, see :mod:`algid.simulator`).
@@ -43,6 +43,8 @@ _RENAMED_PARAMS = {
 
 #: The effect names the simulator knows (part of the public interface).
 EFFECT_NAMES: tuple[str, ...] = tuple(_EFFECT_SPECS)
+#: Where each effect sits: ``"dof"`` or ``"spring"``.
+EFFECT_LOCATIONS: dict[str, str] = {name: spec[0] for name, spec in _EFFECT_SPECS.items()}
 
 
 @dataclass(frozen=True)

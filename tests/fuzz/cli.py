@@ -10,8 +10,8 @@ It measures nothing: it searches for inputs that break the property. The default
 longer than 60 s is one (``-timeout=60`` unless given); the published hour (docs/reliability.md,
 "Coverage-guided fuzzing") is the second command below:
 
-    python bench/fuzz/cli.py                          # 2 minutes
-    python bench/fuzz/cli.py -fork=1 -ignore_timeouts=1 -ignore_ooms=1 -max_total_time=3600 \
+    python tests/fuzz/cli.py                          # 2 minutes
+    python tests/fuzz/cli.py -fork=1 -ignore_timeouts=1 -ignore_ooms=1 -max_total_time=3600 \
         -timeout=60 -rss_limit_mb=3000
 """
 

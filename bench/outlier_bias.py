@@ -7,18 +7,14 @@ is ready, the change events, the status of the outlier sample, the accelerations
 weak form estimated and the largest reported relative sigma (docs/reliability.md, findings 9
 and 11).
 
-    python bench/fuzz/outlier_bias.py
+    python bench/outlier_bias.py
 """
-
-import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
 import algid  # noqa: E402
 from algid.chain import TABLE1  # noqa: E402
-from signals import multisine, simulate_chain  # noqa: E402
+from algid.simulator.exact import multisine, simulate_chain  # noqa: E402
 
 CONFIGS = {
     "defaults": {},

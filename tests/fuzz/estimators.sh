@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # libFuzzer on the C++ estimators (tests/cpp/fuzz_estimators.cpp): build with clang under
 # AddressSanitizer and UndefinedBehaviorSanitizer, then fuzz; the arguments go to libFuzzer.
-#   bash bench/fuzz/estimators.sh                          # one minute
-#   bash bench/fuzz/estimators.sh -max_total_time=3600     # an hour
+#   bash tests/fuzz/estimators.sh                          # one minute
+#   bash tests/fuzz/estimators.sh -max_total_time=3600     # an hour
 # Needs clang with its libFuzzer runtime (Debian: apt-get install clang) and cmake. The corpus
 # grows in build/fuzz/estimators; findings are build/fuzz/estimators-crash-* (replay: pass the
 # file instead of the options).
