@@ -20,6 +20,9 @@ verdicts, in stages, each entered once:
    it is ``none``, the linear chain's determined estimates are ``model_misfit``.
 7. Verdicts per parameter and DOF (:mod:`.verdicts`).
 
+A base-excited record (a support motion ``a0``) runs every stage on the chain whose DOF 0 is
+the support, dropped at the end (:mod:`.base`).
+
 With ``effects``, stages 3-6 are the diagnosis's fit of eq. 1 with the effects and its check
 (:mod:`.augmented`).
 """
@@ -35,6 +38,7 @@ from ..noise import analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
 from ..recording import motion as recording_motion
 from .augmented import fit_check, fit_with_effects
+from .base import FIT_CHECK_SKIPPED, augment, reduce
 from .motion import equation_error_fit
 from .plan import make_plan, natural_frequencies_hz
 from .result import Identification
@@ -130,6 +134,11 @@ def identify(
     Identification
     """
     rec = as_recording(rec)
+    scale, base = "", rec.base is not None
+    if base:  # the support is DOF 0 of the chain estimated, dropped at the end (:mod:`.base`)
+        if effects:
+            raise ValueError("effects cannot be estimated on a base-excited record (a support motion a0)")
+        rec, scale = augment(rec)
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     if int(replicates) < 2:
@@ -166,12 +175,13 @@ def identify(
     plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress)
     joint = True  # every estimator carries the scale along the springs (weak form: joint solve; else eq. 7 ratios)
     _progress(progress, "withheld-window test", None)
-    check = fit_check(rec, boundary)
+    skipped = FIT_CHECK_SKIPPED if base and not scale else ""
+    check = {"misfit": ""} if skipped else fit_check(rec, boundary)
     verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint, check.pop("misfit"))
     # no value at all where the record has no scale for it (an unforced DOF) or the
     # estimator's systems were singular
     blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])
-    return Identification(
+    result = Identification(
         **common,
         plan=plan,
         theta=np.where(blank, np.nan, unc.theta),
@@ -187,3 +197,4 @@ def identify(
         replicates=unc.replicates,
         model_fit={**check, **({"source": effect_note} if effect_note else {})},
     )
+    return reduce(result, scale, verdicts, skipped) if base else result
