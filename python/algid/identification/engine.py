@@ -56,11 +56,11 @@ def _progress(cb: ProgressFn, stage: str, fraction: float) -> None:
         cb(stage, fraction)
 
 
-def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress):
+def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, joint=True):
     """Stages 3-5: the plan, its run over the record and the run's uncertainty."""
     duration, forced = rec.t.size * rec.dt, np.any(rec.u != 0.0, axis=0)
     first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), rec.n, boundary)
-    plan = make_plan(nm, duration, estimator, first)
+    plan = make_plan(nm, duration, estimator, first, joint)
     _progress(progress, "estimate", 0.0)
     if plan.method == "algebraic":
         plan, run = select_window(
@@ -172,10 +172,12 @@ def identify(
         fitted, effect_note = fit_with_effects(rec, motion, kind, nm, boundary, effects)
         if fitted is not None:
             return Identification(**common, **fitted)
-    plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress)
+    # the support's equation of a base-excited record with a force stays out of the others' (:mod:`.base`)
+    pooled = not (base and not scale)
+    plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, pooled)
     joint = True  # every estimator carries the scale along the springs (weak form: joint solve; else eq. 7 ratios)
     _progress(progress, "withheld-window test", None)
-    skipped = FIT_CHECK_SKIPPED if base and not scale else ""
+    skipped = FIT_CHECK_SKIPPED if base else ""
     check = {"misfit": ""} if skipped else fit_check(rec, boundary)
     verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint, check.pop("misfit"))
     # no value at all where the record has no scale for it (an unforced DOF) or the

@@ -276,7 +276,9 @@ class Identification(PackedParameters):
             lines.append(f"  {self.scale}:")
             for name, r in self.ratios.items():
                 flag = "" if r["valid"] else "  [not valid]"
-                lines.append(f"  {name:>7} = {r['value']:10.5g} +- {r['sigma']:.2g} 1/s{'' if name[0] == 'c' else '^2'}{flag}")
+                lines.append(
+                    f"  {name:>7} = {r['value']:10.5g} +- {r['sigma']:.2g} 1/s{'' if name[0] == 'c' else '^2'}{flag}"
+                )
         for p, v in enumerate([] if self.scale else self.verdicts):
             val, sg = self.theta[p], self.sigma[p]
             txt = "       n/a" if not math.isfinite(val) else f"{val:10.5g}"
@@ -288,7 +290,9 @@ class Identification(PackedParameters):
         modal, why = self.modes()
         if modal is not None and self.scale:
             ok = all(r["valid"] for r in self.ratios.values())
-            lines.append(f"modes (they depend on the ratios alone; {'every ratio valid' if ok else 'not every ratio is valid'}):")
+            lines.append(
+                f"modes (they depend on the ratios alone; {'every ratio valid' if ok else 'not every ratio is valid'}):"
+            )
         elif modal is not None and not self.valid:
             lines.append("modes of the estimates as they are (not every estimate is valid):")
         lines.append(modal.table() if modal is not None else f"modes: n/a ({why})")

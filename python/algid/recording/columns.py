@@ -187,7 +187,9 @@ def _complete(groups: dict[str, dict[int, int]], source: str, base: bool = False
             continue
         top = max(cols)
         if top != n and (key != "u" or top > n):
-            what = f"force columns u1..u{n}" if not base else f"{ROLES[motions[0]]} columns {motions[0]}1..{motions[0]}{n}"
+            what = (
+                f"force columns u1..u{n}" if not base else f"{ROLES[motions[0]]} columns {motions[0]}1..{motions[0]}{n}"
+            )
             raise RecordingError(f"{source}: mismatched n: {what} but {ROLES[key]} columns up to {key}{top}")
         if key == "u" and base:
             out[key] = [cols[i] for i in sorted(cols)]

@@ -90,7 +90,11 @@ class Recording:
         base = _base(self.base, self.base_kind, T)
         if self.u is None and base is None:
             raise RecordingError("no force columns u1..un (and no support motion a0 of a base-excited record)")
-        u = _as_2d("u", self.u, T) if self.u is not None else np.zeros((T, next(m for m in (a, v, x) if m is not None).shape[1]))
+        u = (
+            _as_2d("u", self.u, T)
+            if self.u is not None
+            else np.zeros((T, next(m for m in (a, v, x) if m is not None).shape[1]))
+        )
         n = u.shape[1]
         if n < 1:
             raise RecordingError("no force columns u1..un")
