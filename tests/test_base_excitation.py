@@ -135,3 +135,11 @@ def test_force_on_dof1_gives_the_full_scale():
     assert r.plan.method == "algebraic" and not r.scale
     np.testing.assert_allclose(r.theta, truth, rtol=0.03)
     assert r.valid
+
+
+def test_diagnose_refuses_a_base_excited_record_clearly():
+    from algid.diagnosis.engine import diagnose
+
+    rec = Recording(t=T_S, u=None, a=np.sin(np.outer(T_S, [5.0, 7.0])), base=np.cos(3 * T_S))
+    with pytest.raises(RecordingError, match="base-excited record .* run `algid identify`"):
+        diagnose(rec)

@@ -118,12 +118,19 @@ class Identification(PackedParameters):
     @property
     def identified_any(self) -> bool:
         """At least one parameter the record determines (valid or not: an inadmissible or
-        misfitting estimate is determined, just not by eq. 1)."""
+        misfitting estimate is determined, just not by eq. 1); without scale, a valid ratio."""
+        if self.scale:
+            return any(r["valid"] for r in self.ratios.values())
         return any(v.status in ("ok", "negligible", "inadmissible", "model_misfit") for v in self.verdicts)
 
     @property
     def reasons(self) -> list[str]:
-        """One line per parameter that is not ``ok`` (``"k3: ..."``)."""
+        """One line per parameter that is not ``ok`` (``"k3: ..."``); without scale, that line
+        and one per ratio that is not valid."""
+        if self.scale:
+            return [f"{self.scale}: masses, dampings and springs not identifiable"] + [
+                f"{name}: not valid" for name, r in self.ratios.items() if not r["valid"]
+            ]
         lines = [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
         return lines + [f"{e['effect']}: {e['reason']}" for e in self.effects if e["reason"]]
 
@@ -221,7 +228,7 @@ class Identification(PackedParameters):
         doc["modes"] = modal.to_json() if modal is not None else None
         if modal is None:
             doc["modes_reason"] = why
-        if n == 1 and self.boundary == "fixed":
+        if n == 1 and self.boundary == "fixed" and self.verdicts[-1].status == "not_separable":
             doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
         if self.motion != "acceleration":
             doc["note_accel"] = f"accelerations derived from {self.motion}s by 5-point differentiation"
