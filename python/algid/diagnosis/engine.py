@@ -28,7 +28,7 @@ from ..chain import Chain, springs
 from ..display import Displayed, number
 from ..noise import channel, white_floor, without_hum
 from ..parallel import parallel_map
-from ..recording import Recording, accelerations, as_recording, derivative
+from ..recording import Recording, RecordingError, accelerations, as_recording, derivative
 from ..recording import motion as recording_motion
 from .band import Band, signal_band
 from .candidates import (
@@ -658,6 +658,11 @@ def diagnose(
     Diagnosis
     """
     rec = as_recording(rec)
+    if rec.base is not None:
+        raise RecordingError(
+            "a base-excited record (support motion a0): the diagnosis's equations have the wall at rest; "
+            "run `algid identify`, which takes the support's motion"
+        )
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     clock = time.perf_counter()

@@ -23,6 +23,9 @@ verdicts, in stages, each entered once:
    beyond what noise explains.
 7. Verdicts per parameter and DOF (:mod:`.verdicts`).
 
+A base-excited record (a support motion ``a0``) runs every stage on the chain whose DOF 0 is
+the support, dropped at the end (:mod:`.base`); its fit check is skipped (:data:`.base.FIT_CHECK_SKIPPED`).
+
 With ``effects``, stages 3-7 are the diagnosis's fit of eq. 1 with the effects and its check
 (:mod:`.augmented`).
 """
@@ -39,6 +42,7 @@ from ..noise import analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
 from ..recording import motion as recording_motion
 from .augmented import diagnosis_fields, fit_check, fit_with_effects
+from .base import FIT_CHECK_SKIPPED, augment, reduce
 from .motion import equation_error_fit
 from .plan import make_plan, natural_frequencies_hz
 from .result import Identification
@@ -56,11 +60,11 @@ def _progress(cb: ProgressFn, stage: str, fraction: float) -> None:
         cb(stage, fraction)
 
 
-def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress):
+def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, joint=True):
     """Stages 3-5: the plan, its run over the record and the run's uncertainty."""
     duration, forced = rec.t.size * rec.dt, np.any(rec.u != 0.0, axis=0)
     first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), rec.n, boundary)
-    plan = make_plan(nm, duration, estimator, first)
+    plan = make_plan(nm, duration, estimator, first, joint)
     _progress(progress, "estimate", 0.0)
     if plan.method == "algebraic":
         plan, run = select_window(
@@ -134,6 +138,11 @@ def identify(
     Identification
     """
     rec = as_recording(rec)
+    scale, base = "", rec.base is not None
+    if base:  # the support is DOF 0 of the chain estimated, dropped at the end (:mod:`.base`)
+        if effects:
+            raise ValueError("effects cannot be estimated on a base-excited record (a support motion a0)")
+        rec, scale = augment(rec)
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     if int(replicates) < 2:
@@ -168,19 +177,22 @@ def identify(
         if fitted is not None:
             return Identification(**common, **fitted)
     _progress(progress, "withheld-window test", None)
-    check, d = fit_check(rec, boundary)
+    skipped = FIT_CHECK_SKIPPED if base else ""
+    check, d = ({"misfit": ""}, None) if skipped else fit_check(rec, boundary)
     misfit = check.pop("misfit")
     if misfit:  # one linear fit per record: the diagnosis's, the one whose gap is measured
         fields = diagnosis_fields(rec, motion, kind, nm, boundary, d, linear_model(d), "the linear chain", misfit)
         fields["model_fit"].update(check)
         return Identification(**common, **fields)
-    plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress)
+    # the support's equation of a base-excited record with a force stays out of the others' (:mod:`.base`)
+    pooled = not (base and not scale)
+    plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, pooled)
     joint = True  # every estimator carries the scale along the springs (weak form: joint solve; else eq. 7 ratios)
     verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint)
     # no value at all where the record has no scale for it (an unforced DOF) or the
     # estimator's systems were singular
     blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])
-    return Identification(
+    result = Identification(
         **common,
         plan=plan,
         theta=np.where(blank, np.nan, unc.theta),
@@ -196,3 +208,4 @@ def identify(
         replicates=unc.replicates,
         model_fit={**check, **({"source": effect_note} if effect_note else {})},
     )
+    return reduce(result, scale, verdicts, skipped) if base else result

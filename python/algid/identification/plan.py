@@ -27,7 +27,9 @@ Rules (every threshold named below):
   the record carries measured accelerations, whose sensor noise is white as their weights
   and bias terms assume; the paper's algebraic windows behind the prefilter when the
   accelerations are derived from velocities or displacements, whose noise the
-  differentiation colours (``docs/identify.md`` compares the two on a positioning axis).
+  differentiation colours (``docs/identify.md`` compares the two on a positioning axis), or
+  when an equation of the chain must stay out of the others' estimates (a base-excited record
+  with a force, :mod:`.base`).
 * **Prefilter** (the same low-pass on forces and accelerations, which leaves eq. 1
   unchanged): :data:`PREFILTER_MARGIN` times the top of the signal band or of the natural
   frequencies, whichever is higher; off when that is above :data:`PREFILTER_MAX` of the
@@ -127,17 +129,18 @@ def window_limits(nm: NoiseModel, duration_s: float) -> tuple[float, float]:
     return lo, max(lo, duration_s * STAGGER / MIN_WINDOW_RESULTS)
 
 
-def window_method(nm: NoiseModel) -> str:
-    """The continuous estimator's window results (module docstring)."""
-    return "weak_form" if nm.motion == "acceleration" else "algebraic"
+def window_method(nm: NoiseModel, joint: bool = True) -> str:
+    """The continuous estimator's window results (module docstring); ``joint=False``: the
+    algebraic windows, whatever the motion."""
+    return "weak_form" if nm.motion == "acceleration" and joint else "algebraic"
 
 
-def window_length(nm: NoiseModel, duration_s: float, f_natural: np.ndarray) -> tuple[float, str]:
+def window_length(nm: NoiseModel, duration_s: float, f_natural: np.ndarray, joint: bool = True) -> tuple[float, str]:
     """First guess of the continuous window length [s] and what set it (module docstring)."""
     fn = np.asarray(f_natural, dtype=float)
     fn = fn[np.isfinite(fn) & (fn > 2.0 / duration_s) & (fn <= nm.f_hi)]
     if fn.size:
-        periods = MODE_PERIODS[window_method(nm)]
+        periods = MODE_PERIODS[window_method(nm, joint)]
         what = "one period" if periods == 1.0 else ("half a period" if periods == 0.5 else f"{periods:g} periods")
         f_ref, basis = float(fn.min()) / periods, f"{what} of the lowest natural frequency ({fn.min():.3g} Hz)"
     elif np.isfinite(nm.f_mid) and 0 < nm.f_mid < BROADBAND * nm.nyquist:
@@ -163,15 +166,20 @@ def prefilter_hz(nm: NoiseModel, f_natural: np.ndarray) -> float:
     return 0.0 if fc > PREFILTER_MAX / nm.dt else float(fc)
 
 
-def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto", f_natural: np.ndarray | None = None) -> Plan:
+def make_plan(
+    nm: NoiseModel, duration_s: float, requested: str = "auto", f_natural: np.ndarray | None = None, joint: bool = True
+) -> Plan:
     """The plan for a record of ``duration_s`` [s] with noise model ``nm``.
 
     ``f_natural``: natural frequencies [Hz] of a first estimate (empty if none yet).
+    ``joint=False``: an equation of the chain must not be pooled with the others (the support's
+    of a base-excited record with a force, :mod:`.base`): the algebraic windows, which solve
+    every DOF alone, rather than the weak form's joint solve.
     """
     f_natural = np.array([]) if f_natural is None else f_natural
     if requested not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {requested!r}")
-    L, basis = window_length(nm, duration_s, f_natural)
+    L, basis = window_length(nm, duration_s, f_natural, joint)
     fits = "shortened" not in basis and duration_s >= L * MIN_WINDOW_RESULTS / STAGGER - 1e-12
     is_clean = clean(nm)
     if requested != "auto":
@@ -193,7 +201,7 @@ def make_plan(nm: NoiseModel, duration_s: float, requested: str = "auto", f_natu
         reason = f"{why} record: reseeded windows of the recording's time scale, aggregated"
     if estimator == "window":
         return Plan("window", reason, float("nan"), float("nan"), 1, "the whole record")
-    method = window_method(nm)
+    method = window_method(nm, joint)
     plan = Plan("continuous", reason, L, prefilter_hz(nm, f_natural), STAGGER, basis, method)
     if method == "weak_form" and nm.f_hi >= BROADBAND_BAND * nm.nyquist:
         # signal up to the Nyquist rate: fourth differences are signal, not noise

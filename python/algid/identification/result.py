@@ -73,6 +73,11 @@ class Identification(PackedParameters):
     model_fit: dict = field(default_factory=dict)
     #: the diagnosis that fitted the effects (its figures), None without effects
     diagnosis: object = field(default=None, repr=False, compare=False)
+    #: why the record gives the chain only up to a common scale ("" when it has one): a
+    #: base-excited record without force (:mod:`.base`); theta then holds the chain scaled to k1 = 1
+    scale: str = ""
+    #: without scale, what the record determines: ``{"k1/m1": {"value", "sigma", "valid"}, ...}``
+    ratios: dict = field(default_factory=dict)
 
     # ---- views -------------------------------------------------------------------------
     @property
@@ -113,12 +118,19 @@ class Identification(PackedParameters):
     @property
     def identified_any(self) -> bool:
         """At least one parameter the record determines (valid or not: an inadmissible or
-        misfitting estimate is determined, just not by eq. 1)."""
+        misfitting estimate is determined, just not by eq. 1); without scale, a valid ratio."""
+        if self.scale:
+            return any(r["valid"] for r in self.ratios.values())
         return any(v.status in ("ok", "negligible", "inadmissible", "model_misfit") for v in self.verdicts)
 
     @property
     def reasons(self) -> list[str]:
-        """One line per parameter that is not ``ok`` (``"k3: ..."``)."""
+        """One line per parameter that is not ``ok`` (``"k3: ..."``); without scale, that line
+        and one per ratio that is not valid."""
+        if self.scale:
+            return [f"{self.scale}: masses, dampings and springs not identifiable"] + [
+                f"{name}: not valid" for name, r in self.ratios.items() if not r["valid"]
+            ]
         lines = [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
         return lines + [f"{e['effect']}: {e['reason']}" for e in self.effects if e["reason"]]
 
@@ -205,11 +217,18 @@ class Identification(PackedParameters):
         }
         if self.model_fit:
             doc["model_fit"] = dict(self.model_fit)
+        if self.scale:
+            for key in ("mass", "damping", "stiffness", "sigma_mass", "sigma_damping", "sigma_stiffness"):
+                doc[key] = [None] * len(doc[key])
+            for p in params:
+                p["value"] = p["sigma"] = None
+            doc["scale"] = self.scale
+            doc["ratios"] = {name: dict(r) for name, r in self.ratios.items()}
         modal, why = self.modes()
         doc["modes"] = modal.to_json() if modal is not None else None
         if modal is None:
             doc["modes_reason"] = why
-        if n == 1 and self.boundary == "fixed":
+        if n == 1 and self.boundary == "fixed" and self.verdicts[-1].status == "not_separable":
             doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
         if self.motion != "acceleration":
             doc["note_accel"] = f"accelerations derived from {self.motion}s by 5-point differentiation"
@@ -260,7 +279,14 @@ class Identification(PackedParameters):
         if self.screened.count:
             lines.append(f"  {self.screened.line()}")
         units = self.units
-        for p, v in enumerate(self.verdicts):
+        if self.scale:
+            lines.append(f"  {self.scale}:")
+            for name, r in self.ratios.items():
+                flag = "" if r["valid"] else "  [not valid]"
+                lines.append(
+                    f"  {name:>7} = {r['value']:10.5g} +- {r['sigma']:.2g} 1/s{'' if name[0] == 'c' else '^2'}{flag}"
+                )
+        for p, v in enumerate([] if self.scale else self.verdicts):
             val, sg = self.theta[p], self.sigma[p]
             txt = "       n/a" if not math.isfinite(val) else f"{val:10.5g}"
             sd = "" if not math.isfinite(sg) else f" +- {sg:.2g}"
@@ -269,7 +295,12 @@ class Identification(PackedParameters):
         lines += effect_lines(self.effects, self.model_fit.get("source", ""))
         lines.append(f"valid: {self.valid} (DOF: {', '.join(str(bool(x)) for x in self.valid_dof)})")
         modal, why = self.modes()
-        if modal is not None and not self.valid:
+        if modal is not None and self.scale:
+            ok = all(r["valid"] for r in self.ratios.values())
+            lines.append(
+                f"modes (they depend on the ratios alone; {'every ratio valid' if ok else 'not every ratio is valid'}):"
+            )
+        elif modal is not None and not self.valid:
             lines.append("modes of the estimates as they are (not every estimate is valid):")
         lines.append(modal.table() if modal is not None else f"modes: n/a ({why})")
         return "\n".join(lines)

@@ -35,7 +35,9 @@ the problem and, where it has one, the offending line / column):
 
 * a known extension; the file exists and is not empty;
 * a time column (or ``dt``) and ``u1..un`` present, plus ``a1..an``, ``v1..vn`` and/or
-  ``x1..xn`` for the *same* n, numbered 1..n without holes; no signal named twice; a DOF
+  ``x1..xn`` for the *same* n, numbered 1..n without holes; a base-excited record (a shake
+  table) has its support's motion ``a0`` (or ``v0``, ``x0``) and forces on any DOFs, or none
+  (:attr:`Recording.base`); no signal named twice; a DOF
   number beyond the number of columns is refused before anything is allocated;
 * every row has as many fields as the header and every field read parses as a number;
 * no NaN or inf anywhere;
@@ -59,6 +61,7 @@ from .core import DT_RANGE_S, MIN_SAMPLES, MOTIONS, UNIFORM_RTOL, Recording, Rec
 from .derivatives import (
     DEFAULT_DIFF_POINTS,
     accelerations,
+    base_acceleration,
     derivative,
     derivative_weights,
     motion,
@@ -79,6 +82,7 @@ __all__ = [
     "Recording",
     "RecordingError",
     "accelerations",
+    "base_acceleration",
     "derivative",
     "derivative_weights",
     "load_recording",
@@ -184,8 +188,9 @@ def _header_names(rec: Recording) -> list[str]:
     roles = {"u": "force", "a": "acceleration", "v": "velocity", "x": "displacement"}
     names = []
     for name in rec.columns():
-        label = rec.units.get(roles.get(name[0], "time"), "s")
-        names.append(name if label == SI_UNITS[roles.get(name[0], "time")] else f"{name} [{label}]")
+        role = roles.get(name[0], "time")
+        label = rec.units.get(role, SI_UNITS[role])  # a support motion of another kind than the DOFs': SI
+        names.append(name if label == SI_UNITS[role] else f"{name} [{label}]")
     return names
 
 

@@ -21,6 +21,8 @@ from .units import ROLES
 
 _WITH_UNIT = re.compile(r"^(?P<name>.*?)\s*[\[(](?P<unit>[^\[\]()]*)[\])]\s*$")
 _SIGNAL = re.compile(r"^([uavx])([1-9][0-9]*)$")
+#: The support's motion of a base-excited record (a shake table): ``a0``, ``v0`` or ``x0``.
+_BASE = re.compile(r"^([avx])0$")
 TIME_NAMES = ("t", "time")
 #: Role names a mapping (or ``--units``) may use -> array name.
 ROLE_KEYS = {**{key: key for key in ROLES}, **{role: key for key, role in ROLES.items()}, "accel": "a"}
@@ -42,14 +44,19 @@ def _is_index(name: str) -> bool:
 class Layout:
     """Where every signal is among a file's columns.
 
-    ``groups`` maps ``"t"`` (absent when the file has no time column) to ``[position]`` and
-    ``"u"``, ``"a"``, ``"v"``, ``"x"`` to the positions of DOF 1..n; ``units`` gives the unit
-    each of those columns declares (None when it declares none)."""
+    ``groups`` maps ``"t"`` (absent when the file has no time column) to ``[position]``,
+    ``"a"``, ``"v"``, ``"x"`` to the positions of DOF 1..n, ``"u"`` to those of the DOFs
+    ``forced`` (all of them unless the record has a support motion) and ``"base"`` (a
+    base-excited record) to the position of the support's motion ``a0``, ``v0`` or ``x0``,
+    whose kind is ``base``; ``units`` gives the unit each of those columns declares (None
+    when it declares none)."""
 
     n: int
     groups: dict[str, list[int]]
     units: dict[str, list[str | None]]
     ignored: list[str] = field(default_factory=list)
+    base: str | None = None  #: "a", "v" or "x": the support motion's kind (None: no support motion)
+    forced: list[int] = field(default_factory=list)  #: DOFs (0-based) with a force column
 
     def positions(self) -> list[int]:
         """The positions read, in file order."""
@@ -111,6 +118,7 @@ def resolve(
     mapped = _mapped(names, columns or {}, source)
     seen: set[str] = set()
     groups: dict[str, dict[int, int]] = {key: {} for key in "uavx"}
+    base: dict[str, int] = {}
     ignored: list[str] = []
     tpos = mapped["t"][0] if "t" in mapped else None
     taken = {p for cols in mapped.values() for p in cols}
@@ -118,10 +126,13 @@ def resolve(
         name, _ = split_name(raw)
         key = name.lower()
         m = _SIGNAL.match(key)
-        if key in seen and (m or key in TIME_NAMES):
+        if key in seen and (m or key in TIME_NAMES or _BASE.match(key)):
             raise RecordingError(f"{source}: duplicate column {quote(name)}")
         seen.add(key)
         if pos in taken:
+            continue
+        if _BASE.match(key):
+            base[key[0]] = pos
             continue
         if key in TIME_NAMES and "t" not in mapped:
             if tpos is not None:
@@ -139,36 +150,50 @@ def resolve(
         if key != "t":
             groups[key] = {i + 1: p for i, p in enumerate(cols)}
     unnamed = f" (columns not recognised: {listing([quote(n) for n in ignored])})" if ignored else ""
+    if len(base) > 1:
+        raise RecordingError(f"{source}: two support motions {listing([k + '0' for k in base])}: keep one")
     try:
-        out = _complete(groups, source)
+        out = _complete(groups, source, bool(base))
     except RecordingError as err:
         raise RecordingError(f"{err}{unnamed}") from None
     if tpos is not None:
         out["t"] = [tpos]
     elif need_time:
         raise RecordingError(f"{source}: missing column 't' (name it, or give the sampling rate){unnamed}")
-    n = len(out["u"])
+    forced = sorted(i - 1 for i in groups["u"])
+    if base:
+        out["base"] = list(base.values())
+    n = len(out["a"] if "a" in out else out["v"] if "v" in out else out["x"])
     declared = declared or [None] * len(names)
     units = {key: [split_name(names[p])[1] or declared[p] for p in cols] for key, cols in out.items()}
-    return Layout(n=n, groups=out, units=units, ignored=ignored)
+    return Layout(n=n, groups=out, units=units, ignored=ignored, base=next(iter(base), None), forced=forced)
 
 
-def _complete(groups: dict[str, dict[int, int]], source: str) -> dict[str, list[int]]:
-    """Positions of DOF 1..n of every role present; raise on a missing role, DOF or a mismatched n."""
-    if not groups["u"]:
-        raise RecordingError(f"{source}: missing force columns u1..un")
-    n = max(groups["u"])
-    if not groups["a"] and not groups["v"] and not groups["x"]:
+def _complete(groups: dict[str, dict[int, int]], source: str, base: bool = False) -> dict[str, list[int]]:
+    """Positions of DOF 1..n of every role present; raise on a missing role, DOF or a mismatched n.
+    With a support motion (``base``) the forces are optional: any DOFs may have one."""
+    motions = [key for key in "avx" if groups[key]]
+    if not groups["u"] and not base:
+        raise RecordingError(
+            f"{source}: missing force columns u1..un (or the support's acceleration a0 of a base-excited record)"
+        )
+    if not motions:
+        n = max(groups["u"])
         raise RecordingError(f"{source}: missing columns a1..a{n} (or velocities v1..v{n}, or displacements x1..x{n})")
+    n = max(groups["u"]) if groups["u"] and not base else max(groups[motions[0]])
     out: dict[str, list[int]] = {}
     for key, cols in groups.items():
         if not cols:
             continue
         top = max(cols)
-        if top != n and key != "u":
-            raise RecordingError(
-                f"{source}: mismatched n: force columns u1..u{n} but {ROLES[key]} columns up to {key}{top}"
+        if top != n and (key != "u" or top > n):
+            what = (
+                f"force columns u1..u{n}" if not base else f"{ROLES[motions[0]]} columns {motions[0]}1..{motions[0]}{n}"
             )
+            raise RecordingError(f"{source}: mismatched n: {what} but {ROLES[key]} columns up to {key}{top}")
+        if key == "u" and base:
+            out[key] = [cols[i] for i in sorted(cols)]
+            continue
         missing = [f"{key}{i}" for i in range(1, n + 1) if i not in cols]
         if missing:
             raise RecordingError(f"{source}: missing column{'s' if len(missing) > 1 else ''} {listing(missing)}")

@@ -39,7 +39,8 @@ class Recording:
     Parameters
     ----------
     t : (T,) sample times [s], strictly increasing and uniform.
-    u : (T, n) forces applied to each mass [N, or ``units["force"]``].
+    u : (T, n) forces applied to each mass [N, or ``units["force"]``]; None for a base-excited
+        record without force (zero on every DOF).
     a : (T, n) accelerations of each mass [m/s^2, or ``units["acceleration"]``], or None.
     x : (T, n) displacements of each mass [m, or ``units["displacement"]``], or None.
     v : (T, n) velocities of each mass [m/s, or ``units["velocity"]``], or None (at least one of a, v, x).
@@ -50,6 +51,10 @@ class Recording:
         ``velocity``, ``displacement``); SI for every role not given. Time is always in s;
         a label that is not SI (``"V"``, ``"counts"``) says what the numbers are.
     notes : what the reader did that the user should know (columns ignored, units converted).
+    base : (T,) motion of the support (the left wall, ``x_0`` of eq. 1) of a base-excited
+        record (a shake table), or None (the wall stands still); its kind is ``base_kind``:
+        ``"a"`` acceleration, ``"v"`` velocity or ``"x"`` displacement, in SI units or in the
+        unit of the DOFs' motion of the same kind.
 
     Raises
     ------
@@ -67,6 +72,8 @@ class Recording:
     v: np.ndarray | None = None
     units: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    base: np.ndarray | None = None
+    base_kind: str = "a"
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -75,15 +82,22 @@ class Recording:
         T = t.size
         if T == 0:
             raise RecordingError("empty recording: no samples")
-        u = _as_2d("u", self.u, T)
-        n = u.shape[1]
-        if n < 1:
-            raise RecordingError("no force columns u1..un")
         a = None if self.a is None else _as_2d("a", self.a, T)
         x = None if self.x is None else _as_2d("x", self.x, T)
         v = None if self.v is None else _as_2d("v", self.v, T)
         if a is None and x is None and v is None:
             raise RecordingError("need accelerations a1..an, velocities v1..vn or displacements x1..xn")
+        base = _base(self.base, self.base_kind, T)
+        if self.u is None and base is None:
+            raise RecordingError("no force columns u1..un (and no support motion a0 of a base-excited record)")
+        u = (
+            _as_2d("u", self.u, T)
+            if self.u is not None
+            else np.zeros((T, next(m for m in (a, v, x) if m is not None).shape[1]))
+        )
+        n = u.shape[1]
+        if n < 1:
+            raise RecordingError("no force columns u1..un")
         for name, arr in (("a", a), ("v", v), ("x", x)):
             if arr is not None and arr.shape[1] != n:
                 raise RecordingError(f"mismatched n: {n} force columns but {arr.shape[1]} {ROLES[name]} columns")
@@ -92,10 +106,12 @@ class Recording:
         for name, arr in (("t", t[:, None]), ("u", u), ("a", a), ("v", v), ("x", x)):
             if arr is not None:
                 check_finite(name, arr)
+        if base is not None:
+            check_finite(f"{self.base_kind}0", base[:, None])
         dt = check_time(t)
         if self.dt is not None and not math.isclose(float(self.dt), dt, rel_tol=UNIFORM_RTOL):
             raise RecordingError(f"dt = {self.dt} given but the time column has dt = {dt:.9g} s")
-        self.t, self.u, self.a, self.v, self.x = t, u, a, v, x
+        self.t, self.u, self.a, self.v, self.x, self.base = t, u, a, v, x, base
         self.dt, self.n = dt, n
         self.path = None if self.path is None else Path(self.path)
         self.units = _unit_labels(self.units, self)
@@ -112,12 +128,17 @@ class Recording:
         return 1.0 / float(self.dt)
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The recording as named 1-D columns ``t, u1..un[, a1..an][, v1..vn][, x1..xn]``."""
+        """The recording as named 1-D columns ``t, u1..un[, a1..an][, v1..vn][, x1..xn]``;
+        a base-excited record's support motion as ``a0`` (``v0``, ``x0``), its forces only on
+        the DOFs that have one."""
         out: dict[str, np.ndarray] = {"t": self.t}
+        if self.base is not None:
+            out[f"{self.base_kind}0"] = self.base
         for key, arr in (("u", self.u), ("a", self.a), ("v", self.v), ("x", self.x)):
             if arr is not None:
                 for i in range(self.n):
-                    out[f"{key}{i + 1}"] = arr[:, i]
+                    if key != "u" or self.base is None or np.any(arr[:, i] != 0.0):
+                        out[f"{key}{i + 1}"] = arr[:, i]
         return out
 
     def is_si(self) -> bool:
@@ -168,6 +189,18 @@ def _unit_labels(given: dict[str, str], rec: Recording) -> dict[str, str]:
     return {role: str(given.get(role, SI_UNITS[role])) for role, key in names.items() if getattr(rec, key) is not None}
 
 
+def _base(value, kind: str, T: int) -> np.ndarray | None:
+    """The support motion (T,) of a base-excited record, or None."""
+    if value is None:
+        return None
+    if kind not in ("a", "v", "x"):
+        raise RecordingError(f"base_kind must be 'a', 'v' or 'x', got {kind!r}")
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (T,):
+        raise RecordingError(f"{kind}0 has shape {arr.shape}, expected ({T},) to match t")
+    return arr
+
+
 def _as_2d(name: str, value, T: int) -> np.ndarray:
     arr = np.asarray(value, dtype=float)
     if arr.ndim == 1:
@@ -183,7 +216,7 @@ def check_finite(name: str, arr: np.ndarray, lines: np.ndarray | None = None) ->
     if bad.any():
         row, col = np.argwhere(bad)[0]
         what = "NaN" if np.isnan(arr[row, col]) else "inf"
-        column = name if name == "t" else f"{name}{col + 1}"
+        column = name if name == "t" or name.endswith("0") else f"{name}{col + 1}"  # t, a0 (support)
         where = f"line {lines[row]}" if lines is not None else f"sample {row}"
         raise RecordingError(f"column {column} has {what} at {where} ({int(bad.sum())} non-finite values)")
 

@@ -99,6 +99,15 @@ def accelerations(rec: Recording, points: int = DEFAULT_DIFF_POINTS) -> np.ndarr
     return second_derivative(rec.x, rec.dt, points)
 
 
+def base_acceleration(rec: Recording, points: int = DEFAULT_DIFF_POINTS) -> np.ndarray:
+    """The support's acceleration (T,) [m/s^2] of a base-excited record: ``a0`` as measured,
+    or derived from ``v0`` or ``x0`` as :func:`accelerations` derives the DOFs'."""
+    if rec.base is None:
+        raise RecordingError("not a base-excited record: no support motion a0, v0 or x0")
+    order = {"a": 0, "v": 1, "x": 2}[rec.base_kind]
+    return rec.base if order == 0 else derivative(rec.base, rec.dt, order, points)
+
+
 def motion(rec: Recording) -> tuple[str, np.ndarray]:
     """The measured motion the estimator's accelerations come from: ``("acceleration", a)``,
     ``("velocity", v)`` or ``("displacement", x)``, in that order of preference."""

@@ -11,7 +11,7 @@ import numpy as np
 from ..messages import quote
 from .columns import ROLE_KEYS, Layout
 from .core import Recording, RecordingError, check_finite, file_time
-from .units import ROLES, conversion_note, to_si
+from .units import ROLES, SI_UNITS, conversion_note, to_si
 
 
 def role_units(units: dict | None) -> dict[str, str]:
@@ -66,19 +66,28 @@ def assemble(
     parts: dict[str, np.ndarray] = {}
     for key, cols in layout.groups.items():
         arr = data[:, [order[p] for p in cols]]
-        declared = [given.get(ROLES[key], u) for u in layout.units[key]]
+        kind = layout.base if key == "base" else key
+        declared = [given.get(ROLES[kind], u) for u in layout.units[key]]
         try:
-            check_finite(key, arr, lines)
+            check_finite(f"{kind}0" if key == "base" else key, arr, lines)
         except RecordingError as err:
             raise RecordingError(f"{source}: {err}") from None
-        labels[ROLES[key]] = _convert(key, arr, declared, source, notes)
+        label = _convert(kind, arr, declared, source, notes)
         parts[key] = arr
+        if key == "base":
+            base_label = label
+        elif labels.setdefault(ROLES[key], label) != label:
+            raise RecordingError(f"{source}: {ROLES[key]} columns in different units: {labels[ROLES[key]]}, {label}")
+    if "base" in parts:
+        _check_base_unit(source, layout.base, base_label, labels)
     try:
         t, note = file_time(parts["t"][:, 0] if "t" in parts else None, dt, data.shape[0], lines)
         notes += [note] if note else []
         return Recording(
             t=t,
-            u=parts["u"],
+            u=_forces(parts.get("u"), layout, data.shape[0]),
+            base=parts["base"][:, 0] if "base" in parts else None,
+            base_kind=layout.base or "a",
             a=parts.get("a"),
             v=parts.get("v"),
             x=parts.get("x"),
@@ -89,3 +98,26 @@ def assemble(
         )
     except RecordingError as err:
         raise RecordingError(f"{source}: {err}") from None
+
+
+def _forces(u: np.ndarray | None, layout: Layout, T: int) -> np.ndarray:
+    """The (T, n) forces: a base-excited record's DOFs without a force column carry none."""
+    if layout.base is None:
+        return u
+    out = np.zeros((T, layout.n))
+    if u is not None:
+        out[:, layout.forced] = u
+    return out
+
+
+def _check_base_unit(source: str, kind: str, label: str, labels: dict[str, str]) -> None:
+    """The support motion must be in the DOFs' units: SI (or converted to it), or the same
+    label as the DOFs' motion of the same kind (``V`` beside ``V``)."""
+    role = ROLES[kind]
+    motion = next(ROLES[k] for k in "avx" if ROLES[k] in labels)
+    si = label == SI_UNITS[role] and labels[motion] == SI_UNITS[motion]
+    if not si and labels.get(role) != label:
+        raise RecordingError(
+            f"{source}: support motion {kind}0 in {quote(label)} but the {motion} of the DOFs in "
+            f"{quote(labels[motion])}: give both in SI units or both in the same unit"
+        )
