@@ -22,6 +22,7 @@ from ..messages import quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
 from ..recording.options import add_recording_options, print_notes, recording_options
+from ..recording.transient import add_band_option
 from .plan import ESTIMATORS
 from .surrogate import REPLICATES
 
@@ -89,6 +90,7 @@ def add_parser(sub) -> None:
         "2); 'auto' takes the effect the diagnosis reports",
     )
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
+    add_band_option(p)
     add_recording_options(p)
     p.set_defaults(func=run)
 
@@ -115,7 +117,13 @@ def run(args) -> int:
         print_notes(rec, "identify", args.quiet)
         try:
             result = identify(
-                rec, args.boundary, args.estimator, replicates=args.replicates, progress=progress, effects=args.effect
+                rec,
+                args.boundary,
+                args.estimator,
+                replicates=args.replicates,
+                progress=progress,
+                effects=args.effect,
+                band_hz=args.band,
             )
         except ValueError as err:  # e.g. a configuration the estimator rejects
             raise IdentifyError(str(err)) from err

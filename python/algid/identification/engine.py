@@ -4,12 +4,15 @@ verdicts, in stages, each entered once:
 0. Screen: finite samples far outside their channel's robust range are taken out and
    treated as missing (:mod:`.screen`).
 1. Signals: mains hum notched out of every channel alike (:func:`algid.noise.without_hum`);
-   the measured accelerations, or the derivatives of the velocities or displacements
+   an impact record's hits found, its force cleaned and force and motion band-passed alike
+   around the modes the chain is to hold (:mod:`algid.recording.transient`); the measured
+   accelerations, or the derivatives of the velocities or displacements
    (:func:`algid.recording.accelerations`); the forces.
 2. Noise model and signal band of the recording (:mod:`algid.noise`).
 3. Plan (:mod:`.plan`): which estimator and its settings, from the recording's time scales
    and a first look at the chain (:func:`.motion.equation_error_fit`: eq. 1 on the DFT bins
-   the forces excite), whose lowest natural frequency sets the window length.
+   the forces excite), whose lowest natural frequency sets the window length; for an impact
+   record, from the response's modes in the band.
 4. Estimate: the plan run over the whole record (:mod:`.runner`); the algebraic windows'
    length is first chosen among multiples of the plan's by the error a bootstrap measures
    on each (:func:`.surrogate.select_window`).
@@ -34,6 +37,7 @@ import numpy as np
 from ..noise import analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
 from ..recording import motion as recording_motion
+from ..recording.transient import transient_record
 from .augmented import fit_check, fit_with_effects
 from .motion import equation_error_fit
 from .plan import make_plan, natural_frequencies_hz
@@ -52,11 +56,14 @@ def _progress(cb: ProgressFn, stage: str, fraction: float) -> None:
         cb(stage, fraction)
 
 
-def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress):
+def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, transient=None):
     """Stages 3-5: the plan, its run over the record and the run's uncertainty."""
     duration, forced = rec.t.size * rec.dt, np.any(rec.u != 0.0, axis=0)
-    first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), rec.n, boundary)
-    plan = make_plan(nm, duration, estimator, first)
+    if transient is None:
+        first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), rec.n, boundary)
+    else:
+        first = np.array(transient.in_band_hz)
+    plan = make_plan(nm, duration, estimator, first, transient)
     _progress(progress, "estimate", 0.0)
     if plan.method == "algebraic":
         plan, run = select_window(
@@ -99,6 +106,7 @@ def identify(
     seed: int = 0,
     progress: ProgressFn = None,
     effects: Sequence[str] = (),
+    band_hz: tuple[float, float] | None = None,
 ) -> Identification:
     """Identify the chain of a whole recording, with one standard deviation per parameter
     and a verdict on each.
@@ -124,6 +132,10 @@ def identify(
         ``cubic_stiffness:2``...; ``auto`` takes the effect the diagnosis reports. The
         estimator is then the diagnosis's integral equations, and ``estimator`` and
         ``replicates`` do not apply.
+    band_hz : (low, high) [Hz] or None
+        Impact records: the band whose modes the chain holds (default: around the ``n`` lowest
+        modes of the response, :mod:`algid.recording.transient`); the modes outside are filtered
+        out and reported as residual modes.
 
     Returns
     -------
@@ -139,6 +151,9 @@ def identify(
     rec, screened = screen(rec, reach=0 if rec.a is not None else DEFAULT_DIFF_POINTS // 2)
     missing = screened.rows
     rec, hum = without_hum(rec)
+    raw, (rec, transient) = rec, transient_record(rec, band_hz)
+    if transient is not None:
+        missing = missing | transient.missing
     n, dt = rec.n, float(rec.dt)
     a = accelerations(rec, DEFAULT_DIFF_POINTS)
     kind, motion = recording_motion(rec)
@@ -156,6 +171,7 @@ def identify(
         units=parameter_units(rec),
         recording_notes=tuple(rec.notes),
         screened=screened,
+        transient=transient,
     )
     effect_note = ""
     if effects:
@@ -163,10 +179,10 @@ def identify(
         fitted, effect_note = fit_with_effects(rec, motion, kind, nm, boundary, effects)
         if fitted is not None:
             return Identification(**common, **fitted)
-    plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress)
+    plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, transient)
     joint = True  # every estimator carries the scale along the springs (weak form: joint solve; else eq. 7 ratios)
     _progress(progress, "withheld-window test", None)
-    check = fit_check(rec, boundary)
+    check = fit_check(raw, boundary, None if transient is None else transient.band_hz)
     verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint, check.pop("misfit"))
     # no value at all where the record has no scale for it (an unforced DOF) or the
     # estimator's systems were singular
