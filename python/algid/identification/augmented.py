@@ -81,7 +81,9 @@ def fit_check(rec, boundary: str, band_hz: tuple | None = None) -> dict:
     location it finds, or ``unknown``) and ``misfit``: the reason that makes the linear
     chain's determined estimates ``model_misfit`` ("" when it explains the record). ``band_hz``:
     an impact record's band (:mod:`algid.recording.transient`)."""
-    d = diagnose(rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False, band_hz=band_hz)  # identify notched it
+    d = diagnose(
+        rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False, band_hz=band_hz
+    )  # identify notched it
     out = {"gap": d.gap_before, "noise_floor": float(d.extra["noise_floor"]), "explains_record": d.effect == "none"}
     if d.effect == "none":
         return {**out, "diagnosis": "none", "misfit": ""}

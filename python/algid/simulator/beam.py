@@ -167,7 +167,7 @@ def hammer_test(
     aa = firwin(16 * oversample + 1, 0.4 / oversample * 2)  # anti-alias at 0.4 fs, the same on every channel
     chans = {k: filtfilt(aa, [1.0], s)[::oversample] for k, s in (("u", measured_F), ("a", a), ("v", v))}
     rng = np.random.default_rng(seed)
-    for k, s in chans.items():
+    for s in chans.values():
         if np.isfinite(noise_db):
             s += rng.normal(0.0, np.sqrt(np.mean(s**2)) * 10 ** (-noise_db / 20), s.size)
     return Recording(
