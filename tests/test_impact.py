@@ -93,3 +93,21 @@ def test_measured_hit_first_mode_near_900_hz():
     modal, _ = res.modes()
     assert modal.frequencies_hz[0] == pytest.approx(899.9, rel=0.005)  # the response's spectral peak
     assert 2640.0 == pytest.approx(min(res.transient.residual_hz, key=lambda f: abs(f - 2640)), abs=3)
+
+
+def test_transient_plot_draws_the_numbers_it_comes_from(tmp_path):
+    from algid.plotting.transient import save_transient, transient_figure, transient_lines
+
+    rec = hammer_test(double_hit=(0.003, 0.3))
+    res = identify(rec)
+    d = transient_lines(res, rec)
+    fig = transient_figure(res, rec)
+    top, bottom = fig.axes
+    assert np.array_equal(top.lines[0].get_ydata(), d["force"])
+    assert np.array_equal(bottom.lines[0].get_ydata(), d["measured"])
+    assert np.array_equal(bottom.lines[1].get_ydata(), d["model"])
+    # the identified chain follows the measured decay (a wrong chain would not)
+    after = slice(res.transient.hits[0].stop, res.transient.hits[0].stop + 2000)
+    gap = np.linalg.norm(d["model"][after] - d["measured"][after]) / np.linalg.norm(d["measured"][after])
+    assert gap < 0.3
+    assert save_transient(res, rec, tmp_path).exists()

@@ -60,7 +60,8 @@ def add_parser(sub) -> None:
         type=Path,
         metavar="DIR",
         help="write estimates.png (histories with one-sigma bands; with --effect, prediction.png: the chain with "
-        "the effect against the linear one and the data) and frf.png (model vs H1 of the recording)",
+        "the effect against the linear one and the data) and frf.png (model vs H1 of the recording); on an impact "
+        "record transient.png (the hits, the decay and the identified chain's response to the force)",
     )
     p.add_argument(
         "--boundary",
@@ -167,5 +168,9 @@ def _write_figures(result, rec, folder: Path, progress: Progress) -> None:
         modal, _ = result.modes()
         chain = Chain.from_packed(result.theta, result.n, result.boundary) if modal is not None else None
         save_frf(recording_h1(rec), folder, chain)
+        if result.transient is not None:
+            from ..plotting.transient import save_transient
+
+            save_transient(result, rec, folder)
     finally:
         progress.close()
