@@ -18,6 +18,7 @@ from ..messages import one_line, quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
 from ..recording.options import add_recording_options, print_notes, recording_options
+from ..recording.transient import add_band_option
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -45,6 +46,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     )
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
     p.add_argument("--quiet", action="store_true", help="no progress and no report on the terminal")
+    add_band_option(p)
     add_recording_options(p)
     p.set_defaults(func=run)
     return p
@@ -73,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
         return _err(err)
     print_notes(rec, "diagnose", quiet)
     try:
-        d = diagnose(rec, boundary=args.boundary, progress=progress.message)
+        d = diagnose(rec, boundary=args.boundary, progress=progress.message, band_hz=args.band)
     except ValueError as err:
         return _err(f"{Path(args.recording).name}: {err}")
     finally:

@@ -30,6 +30,7 @@ from ..noise import channel, white_floor, without_hum
 from ..parallel import parallel_map
 from ..recording import Recording, RecordingError, accelerations, as_recording, derivative
 from ..recording import motion as recording_motion
+from ..recording.transient import transient_record
 from .band import Band, signal_band
 from .candidates import (
     ADDITIVE,
@@ -50,7 +51,7 @@ from .equations import force_form, linear_design, target
 from .integrals import integrals
 from .linear import LinearFit, fit_linear, force_scale, reconstruct_states
 from .locate import locate, noise_floor
-from .model import ModelVerdict, inertia, model_verdict, physical_uncertainty
+from .model import ModelVerdict, inertia, model_verdict, physical_uncertainty, transient_response
 from .units import SI, diagnosis_units
 from .windows import Prepared, detrend, parseval_weights, prepare, window_length
 
@@ -295,6 +296,7 @@ class Setup:
     timings: dict
     measured: tuple | None = None  # (x, v) on the analysed samples when the record gives them
     hum: list = field(default_factory=list)  # mains lines notched out [Hz]
+    transient: object = None  # an impact record's hits and band (algid.recording.transient)
 
 
 def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
@@ -307,13 +309,16 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
 
 
-def _prepare(rec: Recording, boundary: str, progress, notch: bool = True) -> Setup:
+def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_hz=None) -> Setup:
     """Windows, band and form (module docstring, steps 1-2), linear fit, noise, model."""
     clock = time.perf_counter()
     rec, hum = without_hum(rec) if notch else (rec, [])
+    rec, tr = transient_record(rec, band_hz)
     a, u, dt = accelerations(rec), rec.u, float(rec.dt)
     T = a.shape[0]
     skip = int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
+    if tr is not None:  # the first hit carries the scale: no lead-in past it
+        skip = min(skip, tr.hits[0].start)
     _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: linear fit")
     A = integrals(a, dt)
     L0 = window_length(dt, 1.0, T - skip)
@@ -342,6 +347,8 @@ def _prepare(rec: Recording, boundary: str, progress, notch: bool = True) -> Set
     denom = float(np.sum(P.y**2))
     # the gap the noise explains, as the verdict's ``none`` reads it on the linear fit
     noise_gap = FIT_FLOOR_RATIO * relative_floors(P, floor_band, denom, lin.resid)[1]
+    drive = int(np.argmax(np.max(np.abs(u), axis=0)))  # the hammer's DOF
+    response = None if tr is None else transient_response(u[:, drive], motion[:, drive], tr)
     return Setup(
         P=P,
         lin=lin,
@@ -349,10 +356,11 @@ def _prepare(rec: Recording, boundary: str, progress, notch: bool = True) -> Set
         denom=denom,
         floor=floor,
         floor_band=floor_band,
-        model=model_verdict(P, lin, band.f_hi, states, noise_gap=noise_gap, denom=denom),
+        model=model_verdict(P, lin, band.f_hi, states, noise_gap=noise_gap, denom=denom, response=response),
         timings={"linear": time.perf_counter() - clock},
         measured=measured,
         hum=hum,
+        transient=tr,
     )
 
 
@@ -629,6 +637,7 @@ def diagnose(
     given: list[str] | None = None,
     quick: bool = False,
     notch: bool = True,
+    band_hz: tuple[float, float] | None = None,
 ) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
 
@@ -652,6 +661,8 @@ def diagnose(
         faster, with rougher parameters (:func:`algid.identify`'s fit check).
     notch : bool
         Notch the mains hum out first (False: the caller has, as :func:`algid.identify` does).
+    band_hz : (low, high) [Hz] or None
+        Impact records: the band of the modes the chain holds (:mod:`algid.recording.transient`).
 
     Returns
     -------
@@ -667,7 +678,7 @@ def diagnose(
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     clock = time.perf_counter()
     named = None if given is None else [parse_effect(g, rec.n, boundary) for g in given]
-    st = _prepare(rec, boundary, progress, notch)
+    st = _prepare(rec, boundary, progress, notch, band_hz)
     P, lin, denom = st.P, st.lin, st.denom
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
     gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))
@@ -725,6 +736,7 @@ def diagnose(
             "combination": combo if best is not None else None,
             "mains_hz": st.hum,
             "given": named is not None,
+            "transient": st.transient.to_json() if st.transient is not None else None,
         },
         units=diagnosis_units(rec.units, recording_motion(rec)[0]),
         recording_units=dict(rec.units),

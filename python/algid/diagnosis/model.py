@@ -8,7 +8,11 @@ recording and of the linear fit, and reports the first that fails with its evide
    force or no motion in the band, or, for every forced DOF, the multiple coherence of its
    acceleration with all the forces, averaged over the band weighted by the force power, is below
    :data:`MIN_RESPONSE_COHERENCE` (independent noise in both channels, a force sensor wired
-   to another rig). The record carries no identifiable system, whatever the fit says.
+   to another rig). The record carries no identifiable system, whatever the fit says. An impact
+   record (:mod:`algid.recording.transient`) is one decay per hit, over which a Welch coherence
+   measures nothing: with two hits or more, the coherence across hits (one FFT per hit),
+   averaged over the band weighted by the force power, against the same bound; with one hit,
+   its band-passed decay standing :data:`MIN_DECAY_DB` above the record's quiet level.
 1. ``inertia_not_identifiable``: a forced DOF whose inertia the record does not determine:
    the inertia force ``|m| rms(a)`` is below :data:`INERTIA_SHARE` of the force in the
    signal band (a quasi-static, displacement-driven device), or the mass is not above zero
@@ -50,6 +54,9 @@ MODEL_VERDICTS = ("chain", "no_force_response", "inertia_not_identifiable", "mor
 #: respond to the forces. Independent noise gives about q / K (q forces, K Welch averages,
 #: kept below a tenth by the segment length); a chain at 0 dB SNR gives about 0.5.
 MIN_RESPONSE_COHERENCE = 0.25
+#: A single hit's band-passed decay stands this far above the quiet level [dB] when the
+#: structure responds to it.
+MIN_DECAY_DB = 20.0
 #: Inertia force over force, in the band, below which a DOF's mass is not determined.
 INERTIA_SHARE = 0.02
 #: A resonance peak stands this many times above the lower of its two flanking minima.
@@ -179,6 +186,28 @@ def force_response(P: Prepared, f_hi: float) -> dict:
     return {"related": related, "coherence": out, "reason": reason}
 
 
+def transient_response(u: np.ndarray, y: np.ndarray, tr) -> dict:
+    """Question 0 for an impact record ``tr`` with its cleaned, band-passed force ``u`` (T,) and
+    response ``y`` (T,): the coherence across hits, or a single hit's decay over the quiet
+    level (module docstring)."""
+    from ..recording.transient import across_hits
+
+    if len(tr.hits) >= 2:
+        x = across_hits(u, y, tr)
+        band = (x["f_hz"] >= tr.band_hz[0]) & (x["f_hz"] <= tr.band_hz[1]) & np.isfinite(x["coherence"])
+        w = x["force_power"][band]
+        share = float(np.sum(np.clip(x["coherence"][band], 0, 1) * w) / np.sum(w)) if np.sum(w) > 0 else 0.0
+        related = share >= MIN_RESPONSE_COHERENCE
+        what = f"coherence across {x['hits']} hits {share:.2f}"
+        out = {"related": related, "coherence": {1: share}, "hits": x["hits"]}
+    else:
+        db = tr.to_json()["decay_over_quiet_db"]
+        related = db is not None and db >= MIN_DECAY_DB
+        what = "decay over quiet level " + (f"{db:.1f} dB" if db is not None else "not measurable")
+        out = {"related": related, "decay_over_quiet_db": db, "hits": 1}
+    return {**out, "reason": "" if related else f"the response does not rise with the hits ({what})", "what": what}
+
+
 def resonances(P: Prepared, f_hi: float) -> dict:
     """Resonance peaks of every forced DOF's drive-point H1 (question 2), in the signal band,
     below :data:`FORCE_EDGE` of the force's own band edge (:func:`algid.noise.channel`) and
@@ -298,12 +327,14 @@ def model_verdict(
     states: tuple | None = None,
     noise_gap: float | None = None,
     denom: float | None = None,
+    response: dict | None = None,
 ) -> ModelVerdict:
     """The three questions of the module docstring, in order; ``states = (x, v)`` measured
     or reconstructed on the analysed samples (default: the linear fit's reconstruction);
     ``noise_gap`` and ``denom`` as :func:`admissibility` takes them (without them every
-    significant negative damping or spring counts)."""
-    response = force_response(P, f_hi)
+    significant negative damping or spring counts); ``response`` question 0's answer when the
+    caller has it (an impact record's, :func:`transient_response`)."""
+    response = force_response(P, f_hi) if response is None else response
     if not response["related"]:
         evidence = {"force_response": response}
         reason = f"no force response: {response['reason']}; the record carries no identifiable system"

@@ -73,15 +73,17 @@ def _effect_verdicts(effects: list[dict], misfit: str, units: dict) -> list[dict
 CHECKED_EFFECTS = tuple(e for e in EFFECTS if e != "stribeck_friction")
 
 
-def fit_check(rec, boundary: str) -> tuple[dict, object]:
+def fit_check(rec, boundary: str, band_hz: tuple | None = None) -> tuple[dict, object]:
     """Does the linear chain explain the record to its noise? The diagnosis's verdict
     (:func:`algid.diagnose` over :data:`CHECKED_EFFECTS`, on its quick grids): ``none`` (no candidate beyond
     noise, the withheld gap within :data:`FIT_FLOOR_RATIO` of the noise floor) or not.
     Returns ``gap``, ``noise_floor``, ``explains_record``, ``diagnosis`` (the effect and
     location it finds, or ``unknown``) and ``misfit``: the reason that makes the linear
     chain's determined estimates ``model_misfit`` ("" when it explains the record); and the
-    diagnosis itself."""
-    d = diagnose(rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False)  # identify notched it
+    diagnosis itself. ``band_hz``: an impact record's band (:mod:`algid.recording.transient`)."""
+    d = diagnose(
+        rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False, band_hz=band_hz
+    )  # identify notched it
     out = {"gap": d.gap_before, "noise_floor": float(d.extra["noise_floor"]), "explains_record": d.effect == "none"}
     if d.effect == "none":
         return {**out, "diagnosis": "none", "misfit": ""}, d

@@ -22,6 +22,7 @@ from ..messages import quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
 from ..recording.options import add_recording_options, print_notes, recording_options
+from ..recording.transient import add_band_option
 from .plan import ESTIMATORS
 from .surrogate import REPLICATES
 
@@ -59,7 +60,8 @@ def add_parser(sub) -> None:
         type=Path,
         metavar="DIR",
         help="write estimates.png (histories with one-sigma bands; with --effect, prediction.png: the chain with "
-        "the effect against the linear one and the data) and frf.png (model vs H1 of the recording)",
+        "the effect against the linear one and the data) and frf.png (model vs H1 of the recording); on an impact "
+        "record transient.png (the hits, the decay and the identified chain's response to the force)",
     )
     p.add_argument(
         "--boundary",
@@ -89,6 +91,7 @@ def add_parser(sub) -> None:
         "2); 'auto' takes the effect the diagnosis reports",
     )
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
+    add_band_option(p)
     add_recording_options(p)
     p.set_defaults(func=run)
 
@@ -115,7 +118,13 @@ def run(args) -> int:
         print_notes(rec, "identify", args.quiet)
         try:
             result = identify(
-                rec, args.boundary, args.estimator, replicates=args.replicates, progress=progress, effects=args.effect
+                rec,
+                args.boundary,
+                args.estimator,
+                replicates=args.replicates,
+                progress=progress,
+                effects=args.effect,
+                band_hz=args.band,
             )
         except ValueError as err:  # e.g. a configuration the estimator rejects
             raise IdentifyError(str(err)) from err
@@ -159,5 +168,9 @@ def _write_figures(result, rec, folder: Path, progress: Progress) -> None:
         modal, _ = result.modes()
         chain = Chain.from_packed(result.theta, result.n, result.boundary) if modal is not None else None
         save_frf(recording_h1(rec), folder, chain)
+        if result.transient is not None:
+            from ..plotting.transient import save_transient
+
+            save_transient(result, rec, folder)
     finally:
         progress.close()

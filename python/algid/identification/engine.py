@@ -4,7 +4,9 @@ verdicts, in stages, each entered once:
 0. Screen: finite samples far outside their channel's robust range are taken out and
    treated as missing (:mod:`.screen`).
 1. Signals: mains hum notched out of every channel alike (:func:`algid.noise.without_hum`);
-   the measured accelerations, or the derivatives of the velocities or displacements
+   an impact record's hits found, its force cleaned and force and motion band-passed alike
+   around the modes the chain is to hold (:mod:`algid.recording.transient`); the measured
+   accelerations, or the derivatives of the velocities or displacements
    (:func:`algid.recording.accelerations`); the forces.
 2. Noise model and signal band of the recording (:mod:`algid.noise`).
 3. Fit check (:func:`.augmented.fit_check`): the diagnosis's verdict on the record. Unless
@@ -14,7 +16,8 @@ verdicts, in stages, each entered once:
    ``model_misfit``, and stages 4-6 are skipped.
 4. Plan (:mod:`.plan`): which estimator and its settings, from the recording's time scales
    and a first look at the chain (:func:`.motion.equation_error_fit`: eq. 1 on the DFT bins
-   the forces excite), whose lowest natural frequency sets the window length.
+   the forces excite), whose lowest natural frequency sets the window length; for an impact
+   record, from the response's modes in the band.
 5. Estimate: the plan run over the whole record (:mod:`.runner`); the algebraic windows'
    length is first chosen among multiples of the plan's by the error a bootstrap measures
    on each (:func:`.surrogate.select_window`).
@@ -41,6 +44,7 @@ from ..diagnosis.corrected import linear_model
 from ..noise import analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
 from ..recording import motion as recording_motion
+from ..recording.transient import transient_record
 from .augmented import diagnosis_fields, fit_check, fit_with_effects
 from .base import FIT_CHECK_SKIPPED, augment, reduce
 from .motion import equation_error_fit
@@ -60,11 +64,14 @@ def _progress(cb: ProgressFn, stage: str, fraction: float) -> None:
         cb(stage, fraction)
 
 
-def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, joint=True):
-    """Stages 3-5: the plan, its run over the record and the run's uncertainty."""
+def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, joint=True, transient=None):
+    """Stages 4-6: the plan, its run over the record and the run's uncertainty."""
     duration, forced = rec.t.size * rec.dt, np.any(rec.u != 0.0, axis=0)
-    first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), rec.n, boundary)
-    plan = make_plan(nm, duration, estimator, first, joint)
+    if transient is None:
+        first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), rec.n, boundary)
+    else:
+        first = np.array(transient.in_band_hz)
+    plan = make_plan(nm, duration, estimator, first, joint, transient)
     _progress(progress, "estimate", 0.0)
     if plan.method == "algebraic":
         plan, run = select_window(
@@ -107,6 +114,7 @@ def identify(
     seed: int = 0,
     progress: ProgressFn = None,
     effects: Sequence[str] = (),
+    band_hz: tuple[float, float] | None = None,
 ) -> Identification:
     """Identify the chain of a whole recording, with one standard deviation per parameter
     and a verdict on each.
@@ -132,6 +140,10 @@ def identify(
         ``cubic_stiffness:2``...; ``auto`` takes the effect the diagnosis reports. The
         estimator is then the diagnosis's integral equations, and ``estimator`` and
         ``replicates`` do not apply.
+    band_hz : (low, high) [Hz] or None
+        Impact records: the band whose modes the chain holds (default: around the ``n`` lowest
+        modes of the response, :mod:`algid.recording.transient`); the modes outside are filtered
+        out and reported as residual modes.
 
     Returns
     -------
@@ -152,6 +164,9 @@ def identify(
     rec, screened = screen(rec, reach=0 if rec.a is not None else DEFAULT_DIFF_POINTS // 2)
     missing = screened.rows
     rec, hum = without_hum(rec)
+    raw, (rec, transient) = rec, transient_record(rec, band_hz)
+    if transient is not None:
+        missing = missing | transient.missing
     n, dt = rec.n, float(rec.dt)
     a = accelerations(rec, DEFAULT_DIFF_POINTS)
     kind, motion = recording_motion(rec)
@@ -169,6 +184,7 @@ def identify(
         units=parameter_units(rec),
         recording_notes=tuple(rec.notes),
         screened=screened,
+        transient=transient,
     )
     effect_note = ""
     if effects:
@@ -178,7 +194,8 @@ def identify(
             return Identification(**common, **fitted)
     _progress(progress, "withheld-window test", None)
     skipped = FIT_CHECK_SKIPPED if base else ""
-    check, d = ({"misfit": ""}, None) if skipped else fit_check(rec, boundary)
+    band = None if transient is None else transient.band_hz
+    check, d = ({"misfit": ""}, None) if skipped else fit_check(raw, boundary, band)
     misfit = check.pop("misfit")
     if misfit:  # one linear fit per record: the diagnosis's, the one whose gap is measured
         fields = diagnosis_fields(rec, motion, kind, nm, boundary, d, linear_model(d), "the linear chain", misfit)
@@ -186,7 +203,9 @@ def identify(
         return Identification(**common, **fields)
     # the support's equation of a base-excited record with a force stays out of the others' (:mod:`.base`)
     pooled = not (base and not scale)
-    plan, run, unc = _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, pooled)
+    plan, run, unc = _estimate(
+        rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, pooled, transient
+    )
     joint = True  # every estimator carries the scale along the springs (weak form: joint solve; else eq. 7 ratios)
     verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint)
     # no value at all where the record has no scale for it (an unforced DOF) or the

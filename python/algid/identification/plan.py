@@ -30,6 +30,15 @@ Rules (every threshold named below):
   differentiation colours (``docs/identify.md`` compares the two on a positioning axis), or
   when an equation of the chain must stay out of the others' estimates (a base-excited record
   with a force, :mod:`.base`).
+* **Impact records** (:mod:`algid.recording.transient`, decided once from the record): the
+  record is already band-passed around the modes the chain holds, and the force's spectrum says
+  nothing of the time scale, so the window is :data:`TRANSIENT_PERIODS` periods of the lowest of the
+  response's modes in the band (:func:`window_length` given those modes) and the estimator the
+  continuous one (the band-pass took the noise floor the clean test reads); the weak form is
+  given the raw record's white-noise levels (the band-passed signals' fourth differences are
+  signal; none for accelerations derived from velocities or displacements) and is the window
+  method whatever the motion (the paper's algebraic windows need the force inside each window,
+  and a decay has none); the prefilter as below, from the band's top.
 * **Prefilter** (the same low-pass on forces and accelerations, which leaves eq. 1
   unchanged): :data:`PREFILTER_MARGIN` times the top of the signal band or of the natural
   frequencies, whichever is higher; off when that is above :data:`PREFILTER_MAX` of the
@@ -58,6 +67,9 @@ MIN_WINDOW_SAMPLES = 48
 SHORTEN_MAX = 0.5
 #: Window length in periods of the lowest natural frequency, per window method.
 MODE_PERIODS = {"weak_form": 1.0, "algebraic": 0.5}
+#: Window length of an impact record in periods of its lowest mode in the band: a lightly damped
+#: decay shows its damping only over many periods.
+TRANSIENT_PERIODS = 8.0
 #: Multiples of the first guess of the algebraic windows' length that are tried.
 WINDOW_MULTIPLES = (0.5, 0.7, 1.0, 1.4, 2.0)
 #: A force whose median frequency is above this share of the Nyquist rate is broadband (white
@@ -135,12 +147,15 @@ def window_method(nm: NoiseModel, joint: bool = True) -> str:
     return "weak_form" if nm.motion == "acceleration" and joint else "algebraic"
 
 
-def window_length(nm: NoiseModel, duration_s: float, f_natural: np.ndarray, joint: bool = True) -> tuple[float, str]:
-    """First guess of the continuous window length [s] and what set it (module docstring)."""
+def window_length(
+    nm: NoiseModel, duration_s: float, f_natural: np.ndarray, joint: bool = True, periods: float | None = None
+) -> tuple[float, str]:
+    """First guess of the continuous window length [s] and what set it (module docstring);
+    ``periods`` of the lowest natural frequency (default :data:`MODE_PERIODS`)."""
     fn = np.asarray(f_natural, dtype=float)
     fn = fn[np.isfinite(fn) & (fn > 2.0 / duration_s) & (fn <= nm.f_hi)]
     if fn.size:
-        periods = MODE_PERIODS[window_method(nm, joint)]
+        periods = MODE_PERIODS[window_method(nm, joint)] if periods is None else periods
         what = "one period" if periods == 1.0 else ("half a period" if periods == 0.5 else f"{periods:g} periods")
         f_ref, basis = float(fn.min()) / periods, f"{what} of the lowest natural frequency ({fn.min():.3g} Hz)"
     elif np.isfinite(nm.f_mid) and 0 < nm.f_mid < BROADBAND * nm.nyquist:
@@ -167,11 +182,18 @@ def prefilter_hz(nm: NoiseModel, f_natural: np.ndarray) -> float:
 
 
 def make_plan(
-    nm: NoiseModel, duration_s: float, requested: str = "auto", f_natural: np.ndarray | None = None, joint: bool = True
+    nm: NoiseModel,
+    duration_s: float,
+    requested: str = "auto",
+    f_natural: np.ndarray | None = None,
+    joint: bool = True,
+    transient=None,
 ) -> Plan:
     """The plan for a record of ``duration_s`` [s] with noise model ``nm``.
 
-    ``f_natural``: natural frequencies [Hz] of a first estimate (empty if none yet).
+    ``f_natural``: natural frequencies [Hz] of a first estimate (empty if none yet), or of the
+    response's modes in the band for an impact record (``transient``, a
+    :class:`algid.recording.transient.Transient`).
     ``joint=False``: an equation of the chain must not be pooled with the others (the support's
     of a base-excited record with a force, :mod:`.base`): the algebraic windows, which solve
     every DOF alone, rather than the weak form's joint solve.
@@ -179,11 +201,15 @@ def make_plan(
     f_natural = np.array([]) if f_natural is None else f_natural
     if requested not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {ESTIMATORS}, got {requested!r}")
-    L, basis = window_length(nm, duration_s, f_natural, joint)
+    L, basis = window_length(nm, duration_s, f_natural, joint, None if transient is None else TRANSIENT_PERIODS)
     fits = "shortened" not in basis and duration_s >= L * MIN_WINDOW_RESULTS / STAGGER - 1e-12
     is_clean = clean(nm)
     if requested != "auto":
         estimator, reason = requested, "requested (--estimator)"
+    elif transient is not None:
+        # band-passed: its noise floor outside the band is gone, so "clean" says nothing
+        estimator = "continuous"
+        reason = "impact record: windows of the response's modes over the whole record, aggregated"
     elif not fits:
         estimator = "window"
         reason = f"record of {duration_s:.3g} s too short for {MIN_WINDOW_RESULTS} continuous windows of {L:.3g} s"
@@ -201,9 +227,13 @@ def make_plan(
         reason = f"{why} record: reseeded windows of the recording's time scale, aggregated"
     if estimator == "window":
         return Plan("window", reason, float("nan"), float("nan"), 1, "the whole record")
-    method = window_method(nm, joint)
+    method = "weak_form" if transient is not None else window_method(nm, joint)
     plan = Plan("continuous", reason, L, prefilter_hz(nm, f_natural), STAGGER, basis, method)
-    if method == "weak_form" and nm.f_hi >= BROADBAND_BAND * nm.nyquist:
+    if method == "weak_form" and transient is not None:
+        # derived accelerations: their noise is the motion's, coloured, not a white level to give
+        rms = transient.noise_rms if nm.motion == "acceleration" else (0.0, transient.noise_rms[1])
+        plan = replace(plan, noise_rms=tuple(float(s) for s in rms))
+    elif method == "weak_form" and nm.f_hi >= BROADBAND_BAND * nm.nyquist:
         # signal up to the Nyquist rate: fourth differences are signal, not noise
         rms = [float(np.sqrt(np.mean([c.sigma**2 for c in chans]))) for chans in (nm.motions, nm.forces)]
         plan = replace(plan, noise_rms=tuple(rms))

@@ -71,6 +71,8 @@ class Identification(PackedParameters):
     effects: list = field(default_factory=list)
     #: the fit check (``gap``, ``noise_floor``, ``explains_record``) and where effects came from (``source``)
     model_fit: dict = field(default_factory=dict)
+    #: an impact record's hits, band and residual modes (:class:`algid.recording.transient.Transient`)
+    transient: object = None
     #: the diagnosis that fitted the effects (its figures), None without effects
     diagnosis: object = field(default=None, repr=False, compare=False)
     #: why the record gives the chain only up to a common scale ("" when it has one): a
@@ -214,6 +216,7 @@ class Identification(PackedParameters):
             "recording_notes": list(self.recording_notes),
             "screened": self.screened.to_json(),
             "effects": [{k: v for k, v in e.items()} for e in self.effects],
+            "transient": self.transient.to_json() if self.transient is not None else None,
         }
         if self.model_fit:
             doc["model_fit"] = dict(self.model_fit)
@@ -278,6 +281,8 @@ class Identification(PackedParameters):
             )
         if self.screened.count:
             lines.append(f"  {self.screened.line()}")
+        if self.transient is not None:
+            lines.append(f"  {self.transient.line()}")
         units = self.units
         if self.scale:
             lines.append(f"  {self.scale}:")
