@@ -13,7 +13,8 @@ verdicts, in stages, each entered once:
    it is ``none``, the linear chain reported is the diagnosis's fit of it, the one linear
    fit of the record whichever command prints it
    (:func:`algid.diagnosis.corrected.linear_model`), its determined estimates
-   ``model_misfit``, and stages 4-6 are skipped.
+   ``model_misfit``, and stages 4-6 are skipped. (Not on an impact record: the diagnosis's
+   windows do not yet fit a decay, so its own estimate is reported, ``model_misfit``.)
 4. Plan (:mod:`.plan`): which estimator and its settings, from the recording's time scales
    and a first look at the chain (:func:`.motion.equation_error_fit`: eq. 1 on the DFT bins
    the forces excite), whose lowest natural frequency sets the window length; for an impact
@@ -197,7 +198,7 @@ def identify(
     band = None if transient is None else transient.band_hz
     check, d = ({"misfit": ""}, None) if skipped else fit_check(raw, boundary, band)
     misfit = check.pop("misfit")
-    if misfit:  # one linear fit per record: the diagnosis's, the one whose gap is measured
+    if misfit and transient is None:  # one linear fit per record: the diagnosis's, whose gap is measured
         fields = diagnosis_fields(rec, motion, kind, nm, boundary, d, linear_model(d), "the linear chain", misfit)
         fields["model_fit"].update(check)
         return Identification(**common, **fields)
@@ -207,7 +208,7 @@ def identify(
         rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, pooled, transient
     )
     joint = True  # every estimator carries the scale along the springs (weak form: joint solve; else eq. 7 ratios)
-    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint)
+    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint, misfit)
     # no value at all where the record has no scale for it (an unforced DOF) or the
     # estimator's systems were singular
     blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])
