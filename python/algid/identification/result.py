@@ -22,8 +22,102 @@ def _num(v: float):
     return float(v) if math.isfinite(v) else None
 
 
+class PackedEstimates(PackedParameters):
+    """Views shared by every whole-record estimate of the chain (:class:`Identification`, and
+    :class:`~.frf_result.FrfIdentification` from FRFs): ``n``, ``boundary``, ``theta``,
+    ``sigma`` (3n+1,) and ``verdicts`` are the subclass's fields."""
+
+    @property
+    def names(self) -> list[str]:
+        """``m1..mn, c1..cn, k1..k{n+1}``."""
+        return parameter_names(self.n)
+
+    @property
+    def estimate(self) -> np.ndarray:
+        """The packed estimates (``theta``), as the estimators name them."""
+        return self.theta
+
+    @property
+    def sigma_mass(self) -> np.ndarray:
+        """One standard deviation of the masses [kg] (n,)."""
+        return unpack(self.sigma, self.n)[0]
+
+    @property
+    def sigma_damping(self) -> np.ndarray:
+        """One standard deviation of the dampings [N s/m] (n,)."""
+        return unpack(self.sigma, self.n)[1]
+
+    @property
+    def sigma_stiffness(self) -> np.ndarray:
+        """One standard deviation of the springs [N/m] (n+1,)."""
+        return unpack(self.sigma, self.n)[2]
+
+    @property
+    def valid_dof(self) -> np.ndarray:
+        """(n,) DOF whose mass, damping and springs are all valid."""
+        return dof_validity(self.verdicts, self.n)
+
+    def modes(self):
+        """``(ModalAnalysis, "")`` of the estimated chain with uncertainties from ``sigma``
+        (:func:`algid.modal.modal_analysis`), or ``(None, reason)`` when a parameter has no
+        admissible estimate."""
+        from ..modal import identification_modes
+
+        key = (self.theta.tobytes(), self.sigma.tobytes())  # computed once for the table and the JSON
+        cached = self.__dict__.get("_modes")
+        if cached is None or cached[0] != key:
+            self.__dict__["_modes"] = cached = (key, identification_modes(self))
+        return cached[1]
+
+    def verdict(self, name: str) -> Verdict:
+        """The verdict of parameter ``name`` (``"m1"``, ``"k2"``, ...)."""
+        return next(v for v in self.verdicts if v.name == name)
+
+    def parameter_lines(self) -> list[str]:
+        """The table's line of every parameter: value, one standard deviation, unit and the
+        status where it is not ``ok``."""
+        lines = []
+        for p, v in enumerate(self.verdicts):
+            val, sg = self.theta[p], self.sigma[p]
+            txt = "       n/a" if not math.isfinite(val) else f"{val:10.5g}"
+            sd = "" if not math.isfinite(sg) else f" +- {sg:.2g}"
+            flag = "" if v.status == "ok" else f"  [{v.status}]"
+            lines.append(f"  {v.name:>4} = {txt}{sd} {self.units[v.name[0]]}{flag}")
+        return lines
+
+    def modal_lines(self) -> list[str]:
+        """The table's last lines: the modes of the estimates (:meth:`modes`)."""
+        modal, why = self.modes()
+        if modal is None:
+            return [f"modes: n/a ({why})"]
+        caveat = [] if self.valid else ["modes of the estimates as they are (not every estimate is valid):"]
+        return caveat + [modal.table()]
+
+    def parameters_json(self) -> dict:
+        """The JSON keys of the estimates: ``n``, ``boundary``, ``mass`` ... ``sigma_stiffness``,
+        ``valid``, ``valid_dof``, ``reasons`` (what :meth:`algid.Chain.from_json` reads)."""
+        return {
+            "n": self.n,
+            "boundary": self.boundary,
+            "mass": [_num(v) for v in self.mass],
+            "damping": [_num(v) for v in self.damping],
+            "stiffness": [_num(v) for v in self.stiffness],
+            "sigma_mass": [_num(v) for v in self.sigma_mass],
+            "sigma_damping": [_num(v) for v in self.sigma_damping],
+            "sigma_stiffness": [_num(v) for v in self.sigma_stiffness],
+            "valid": self.valid,
+            "valid_dof": [bool(v) for v in self.valid_dof],
+            "reasons": self.reasons,
+        }
+
+    def modes_json(self) -> dict:
+        """``modes`` (one object per mode, or None) and, without modes, ``modes_reason``."""
+        modal, why = self.modes()
+        return {"modes": modal.to_json()} if modal is not None else {"modes": None, "modes_reason": why}
+
+
 @dataclass
-class Identification(PackedParameters):
+class Identification(PackedEstimates):
     """Estimates of an n-DOF chain from a whole recording.
 
     Attributes
@@ -74,37 +168,6 @@ class Identification(PackedParameters):
     #: the diagnosis that fitted the effects (its figures), None without effects
     diagnosis: object = field(default=None, repr=False, compare=False)
 
-    # ---- views -------------------------------------------------------------------------
-    @property
-    def names(self) -> list[str]:
-        """``m1..mn, c1..cn, k1..k{n+1}``."""
-        return parameter_names(self.n)
-
-    @property
-    def estimate(self) -> np.ndarray:
-        """The packed estimates (``theta``), as the estimators name them."""
-        return self.theta
-
-    @property
-    def sigma_mass(self) -> np.ndarray:
-        """One standard deviation of the masses [kg] (n,)."""
-        return unpack(self.sigma, self.n)[0]
-
-    @property
-    def sigma_damping(self) -> np.ndarray:
-        """One standard deviation of the dampings [N s/m] (n,)."""
-        return unpack(self.sigma, self.n)[1]
-
-    @property
-    def sigma_stiffness(self) -> np.ndarray:
-        """One standard deviation of the springs [N/m] (n+1,)."""
-        return unpack(self.sigma, self.n)[2]
-
-    @property
-    def valid_dof(self) -> np.ndarray:
-        """(n,) DOF whose mass, damping and springs are all valid."""
-        return dof_validity(self.verdicts, self.n)
-
     @property
     def valid(self) -> bool:
         """Every DOF and every effect estimated with them valid."""
@@ -121,22 +184,6 @@ class Identification(PackedParameters):
         """One line per parameter that is not ``ok`` (``"k3: ..."``)."""
         lines = [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
         return lines + [f"{e['effect']}: {e['reason']}" for e in self.effects if e["reason"]]
-
-    def modes(self):
-        """``(ModalAnalysis, "")`` of the estimated chain with uncertainties from ``sigma``
-        (:func:`algid.modal.modal_analysis`), or ``(None, reason)`` when a parameter has no
-        admissible estimate."""
-        from ..modal import identification_modes
-
-        key = (self.theta.tobytes(), self.sigma.tobytes())  # computed once for the table and the JSON
-        cached = self.__dict__.get("_modes")
-        if cached is None or cached[0] != key:
-            self.__dict__["_modes"] = cached = (key, identification_modes(self))
-        return cached[1]
-
-    def verdict(self, name: str) -> Verdict:
-        """The verdict of parameter ``name`` (``"m1"``, ``"k2"``, ...)."""
-        return next(v for v in self.verdicts if v.name == name)
 
     # ---- display: one-line repr, notebook table (algid.display) -------------------------
     def _display_fields(self) -> dict:
@@ -175,17 +222,7 @@ class Identification(PackedParameters):
             for p, v in enumerate(self.verdicts)
         ]
         doc = {
-            "n": n,
-            "boundary": self.boundary,
-            "mass": [_num(v) for v in self.mass],
-            "damping": [_num(v) for v in self.damping],
-            "stiffness": [_num(v) for v in self.stiffness],
-            "sigma_mass": [_num(v) for v in self.sigma_mass],
-            "sigma_damping": [_num(v) for v in self.sigma_damping],
-            "sigma_stiffness": [_num(v) for v in self.sigma_stiffness],
-            "valid": self.valid,
-            "valid_dof": [bool(v) for v in self.valid_dof],
-            "reasons": self.reasons,
+            **self.parameters_json(),
             "parameters": params,
             "estimator": self.plan.estimator,
             "estimator_reason": self.plan.reason,
@@ -205,10 +242,7 @@ class Identification(PackedParameters):
         }
         if self.model_fit:
             doc["model_fit"] = dict(self.model_fit)
-        modal, why = self.modes()
-        doc["modes"] = modal.to_json() if modal is not None else None
-        if modal is None:
-            doc["modes_reason"] = why
+        doc.update(self.modes_json())
         if n == 1 and self.boundary == "fixed":
             doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
         if self.motion != "acceleration":
@@ -259,20 +293,10 @@ class Identification(PackedParameters):
             )
         if self.screened.count:
             lines.append(f"  {self.screened.line()}")
-        units = self.units
-        for p, v in enumerate(self.verdicts):
-            val, sg = self.theta[p], self.sigma[p]
-            txt = "       n/a" if not math.isfinite(val) else f"{val:10.5g}"
-            sd = "" if not math.isfinite(sg) else f" +- {sg:.2g}"
-            flag = "" if v.status == "ok" else f"  [{v.status}]"
-            lines.append(f"  {v.name:>4} = {txt}{sd} {units[v.name[0]]}{flag}")
+        lines += self.parameter_lines()
         lines += effect_lines(self.effects, self.model_fit.get("source", ""))
         lines.append(f"valid: {self.valid} (DOF: {', '.join(str(bool(x)) for x in self.valid_dof)})")
-        modal, why = self.modes()
-        if modal is not None and not self.valid:
-            lines.append("modes of the estimates as they are (not every estimate is valid):")
-        lines.append(modal.table() if modal is not None else f"modes: n/a ({why})")
-        return "\n".join(lines)
+        return "\n".join(lines + self.modal_lines())
 
 
 def effect_lines(effects: list[dict], source: str) -> list[str]:
