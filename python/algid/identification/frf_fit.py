@@ -43,7 +43,7 @@ import numpy as np
 
 from ..chain import deformation_matrix, parameter_names
 from ..modal import known_parameters
-from ..recording.frf_file import FrfData, load_frf
+from ..recording.frf_file import QUANTITIES, FrfData, load_frf
 from .verdicts import NEGLIGIBLE, RELATIVE, UNDETERMINED, ZERO_BOUND, Verdict
 
 #: Output-error residual over the FRFs' own noise above which eq. 1 does not explain them.
@@ -305,3 +305,15 @@ def identify_frf(source, boundary: str = "fixed"):
     misfit = "" if fit["model_fit"]["explains_data"] else MISFIT_REASON
     verdicts = frf_verdicts(fit["theta"], fit["sigma"], fit["shares"], data.n, boundary, misfit)
     return FrfIdentification(n=data.n, boundary=boundary, data=data, verdicts=verdicts, **fit)
+
+
+def model_frf(theta: np.ndarray, data: FrfData, boundary: str = "fixed") -> np.ndarray:
+    """The FRFs (R, Q, F) of packed parameters ``theta`` (3n+1,) at the lines, responses and
+    forces of ``data``, in its quantity (receptance times ``(i w)^p``); any finite values,
+    admissible or not."""
+    f = data.frequency_hz
+    free, U, S = rank_one_terms(data.n, boundary, 2 * np.pi * f)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        G = np.linalg.inv(dynamic_stiffness(theta[free], U, S))
+    G = G[:, data.response_dof - 1][:, :, data.force_dof - 1]
+    return np.moveaxis(G * (2j * np.pi * f[:, None, None]) ** QUANTITIES[data.quantity][1], 0, 2)

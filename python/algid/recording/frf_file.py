@@ -95,7 +95,8 @@ class FrfData:
     @property
     def unit(self) -> str:
         """Label of ``H``: motion unit per force unit."""
-        return f"{self.units[self.motion]}/{self.units['force']}"
+        motion = self.units[self.motion]
+        return f"({motion})/{self.units['force']}" if "/" in motion else f"{motion}/{self.units['force']}"
 
     def receptance(self) -> np.ndarray:
         """``H`` divided by ``(i w)^p`` (p = 0, 1, 2 for receptance, mobility, accelerance):
