@@ -121,7 +121,12 @@ def run(args) -> int:
             print_notes(rec, "identify", args.quiet)
             try:
                 result = identify(
-                    rec, args.boundary, args.estimator, replicates=args.replicates, progress=progress, effects=args.effect
+                    rec,
+                    args.boundary,
+                    args.estimator,
+                    replicates=args.replicates,
+                    progress=progress,
+                    effects=args.effect,
                 )
             except ValueError as err:  # e.g. a configuration the estimator rejects
                 raise IdentifyError(str(err)) from err
