@@ -86,7 +86,11 @@ def _uff58(func_type, rsp, ref, data, f, unit="g", rsp_dir=1):
     import pyuff
 
     zero = dict.fromkeys(
-        [f"{axis}_{what}_unit_exp" for axis in ("abscissa", "ordinate", "orddenom") for what in ("len", "force", "temp")]
+        [
+            f"{axis}_{what}_unit_exp"
+            for axis in ("abscissa", "ordinate", "orddenom")
+            for what in ("len", "force", "temp")
+        ]
         + ["z_axis_spec_data_type", "z_axis_len_unit_exp", "z_axis_force_unit_exp", "z_axis_temp_unit_exp"],
         0,
     )
