@@ -30,6 +30,7 @@ import numpy as np
 
 from ..messages import quote, quote_path
 from .core import RecordingError
+from .npz import _DAMAGED
 from .units import SI_UNITS
 
 #: FRF quantity -> (motion per force, power of ``i w`` that turns a receptance into it).
@@ -107,7 +108,10 @@ class FrfData:
 
 
 def _frequencies(f, where: str) -> np.ndarray:
-    f = np.asarray(f, dtype=float)
+    try:
+        f = np.asarray(f, dtype=float)
+    except (TypeError, ValueError):
+        raise RecordingError(f"{where}: frequency_hz is not numeric") from None
     if f.ndim != 1 or f.size < 2:
         raise RecordingError(f"{where}: frequency_hz has shape {f.shape}, expected (F,) with F >= 2")
     if not np.all(np.isfinite(f)) or f[0] < 0:
@@ -147,10 +151,11 @@ def is_frf_source(source) -> bool:
     if not path.is_file():
         return False
     if ext == ".npz":
-        if not zipfile.is_zipfile(path):
-            return False
-        with zipfile.ZipFile(path) as z:
-            return "frf.npy" in z.namelist()
+        try:
+            with zipfile.ZipFile(path) as z:
+                return "frf.npy" in z.namelist()
+        except (zipfile.BadZipFile, OSError):
+            return False  # the time-recording reader says what is wrong with it
     if ext in (".uff", ".unv"):
         from .uff import holds_frf
 
@@ -182,7 +187,7 @@ def _read_npz(path: Path) -> FrfData:
     try:
         with np.load(path, allow_pickle=False) as z:
             arrays = {key: z[key] for key in z.files}
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError) as err:
+    except _DAMAGED as err:
         raise RecordingError(f"{path.name}: not a readable .npz file ({type(err).__name__})") from None
     return _from_arrays(arrays, path.name, path)
 
