@@ -135,7 +135,7 @@ def equation_error_fit(lines: Lines, U: np.ndarray, S: np.ndarray) -> np.ndarray
     b = np.zeros((F, n, Q), complex)
     b[:, lines.forced, np.arange(Q)] = 1.0
     col = np.linalg.norm(A.reshape(-1, A.shape[-1]), axis=0)
-    row = np.linalg.norm(A / np.where(col > 0, col, 1.0), axis=-1) * np.median(lines.scale / np.abs(lines.X), axis=0)
+    row = np.linalg.norm(A / np.where(col > 0, col, 1.0), axis=-1) * np.median(lines.relative, axis=0)
     A, b = A.reshape(-1, A.shape[-1]), b.reshape(-1)
     p = _weighted_solve(A, b, 1.0 / np.maximum(row.reshape(-1), 1e-300))
     Z2 = np.abs(dynamic_stiffness(p, U, S)) ** 2
