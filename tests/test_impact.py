@@ -43,6 +43,15 @@ def test_a_multisine_force_is_not_a_transient():
     assert analyse_transient(u[:, None], u[:, None], 1e-4, 1) is None
 
 
+@pytest.mark.parametrize("seed", [0, 5])
+def test_a_bang_bang_axis_is_not_a_transient(seed):
+    """The drive's force is zero between moves, but its steps are no hammer's pulses."""
+    from algid.recording.transient import transient_record
+    from algid.scenarios import positioning_axis
+
+    assert transient_record(positioning_axis(seed=seed, duration_s=12.0).recording)[1] is None
+
+
 @pytest.mark.parametrize(
     "boundary,beta", [("clamped-free", (1.8751, 4.6941, 7.8548)), ("clamped-clamped", (4.7300, 7.8532, 10.9956))]
 )

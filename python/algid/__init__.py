@@ -6,6 +6,7 @@ from .estimator import ISA, SIZES, ChainConfig, ChainEstimator, Status
 from .fleet import batch
 from .identification import Identification, identify
 from .recording import Recording, as_recording, load_recording
+from .recording.frf_file import FrfData, load_frf
 
 __all__ = [
     "Chain",
@@ -14,6 +15,7 @@ __all__ = [
     "ChangeEvent",
     "ContinuousConfig",
     "ContinuousEstimator",
+    "FrfData",
     "ISA",
     "Identification",
     "Recording",
@@ -24,6 +26,7 @@ __all__ = [
     "batch",
     "get_include",
     "identify",
+    "load_frf",
     "load_recording",
 ]
 __version__ = "0.1.0"

@@ -21,6 +21,7 @@ from ..cli import STREAMS, error_line
 from ..messages import quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
+from ..recording.frf_file import is_frf_source
 from ..recording.options import add_recording_options, print_notes, recording_options
 from ..recording.transient import add_band_option
 from .plan import ESTIMATORS
@@ -46,7 +47,8 @@ def add_parser(sub) -> None:
         "recording",
         type=Path,
         help="CSV/TSV/TXT (optionally .gz, .bz2, .xz, .zip), .npz, HDF5 or UFF 58 with time, forces u1..un "
-        "and accelerations a1..an (or velocities v1..vn, displacements x1..xn)",
+        "and accelerations a1..an (or velocities v1..vn, displacements x1..xn); or FRFs: UFF 58 of function "
+        "type 4, or .npz with frequency_hz, frf, quantity (docs/identify.md)",
     )
     p.add_argument(
         "--json",
@@ -61,7 +63,8 @@ def add_parser(sub) -> None:
         metavar="DIR",
         help="write estimates.png (histories with one-sigma bands; with --effect, prediction.png: the chain with "
         "the effect against the linear one and the data) and frf.png (model vs H1 of the recording); on an impact "
-        "record transient.png (the hits, the decay and the identified chain's response to the force)",
+        "record transient.png (the hits, the decay and the identified chain's response to the force); for FRFs "
+        "frf_fit.png (model vs measured FRFs)",
     )
     p.add_argument(
         "--boundary",
@@ -114,22 +117,25 @@ def run(args) -> int:
                 _check_output(path, flag)
         if args.replicates < 2:
             raise IdentifyError(f"--replicates must be >= 2, got {args.replicates}")
-        rec = load_recording(args.recording, **recording_options(args))
-        print_notes(rec, "identify", args.quiet)
-        try:
-            result = identify(
-                rec,
-                args.boundary,
-                args.estimator,
-                replicates=args.replicates,
-                progress=progress,
-                effects=args.effect,
-                band_hz=args.band,
-            )
-        except ValueError as err:  # e.g. a configuration the estimator rejects
-            raise IdentifyError(str(err)) from err
-        finally:
-            progress.close()
+        if is_frf_source(args.recording):
+            result, rec = _identify_frf(args), None
+        else:
+            rec = load_recording(args.recording, **recording_options(args))
+            print_notes(rec, "identify", args.quiet)
+            try:
+                result = identify(
+                    rec,
+                    args.boundary,
+                    args.estimator,
+                    replicates=args.replicates,
+                    progress=progress,
+                    effects=args.effect,
+                    band_hz=args.band,
+                )
+            except ValueError as err:  # e.g. a configuration the estimator rejects
+                raise IdentifyError(str(err)) from err
+            finally:
+                progress.close()
         if args.json is not None and str(args.json) != "-":
             args.json.write_text(json.dumps(result.to_json(), indent=2) + "\n", encoding="utf-8")
         if args.trace is not None:
@@ -142,7 +148,8 @@ def run(args) -> int:
     except OSError as err:
         print(error_line("identify", err), file=sys.stderr)
         return 2
-    for line in ([result.screened.line()] if result.screened.count else []) + result.reasons:
+    screened = getattr(result, "screened", None)  # FRFs have no samples to screen
+    for line in ([screened.line()] if screened is not None and screened.count else []) + result.reasons:
         print(f"algid identify: {line}", file=sys.stderr)
     to_stdout = args.json is not None and str(args.json) == "-"
     if to_stdout:
@@ -155,14 +162,32 @@ def run(args) -> int:
     return 0
 
 
+def _identify_frf(args):
+    """The FRF fit of ``args.recording`` (:func:`algid.identification.frf_fit.identify_frf`)."""
+    from .frf_fit import identify_frf
+
+    if args.trace is not None or args.effect or args.estimator != "auto":
+        raise IdentifyError("--trace, --effect and --estimator apply to time recordings, not to FRFs")
+    try:
+        result = identify_frf(args.recording, args.boundary)
+    except ValueError as err:  # RecordingError included
+        raise IdentifyError(str(err)) from err
+    print_notes(result.data, "identify", args.quiet)
+    return result
+
+
 def _write_figures(result, rec, folder: Path, progress: Progress) -> None:
     """``estimates.png`` and ``frf.png`` (the estimated chain's FRF, if it has one, against
-    the recording's H1)."""
+    the recording's H1); for FRFs (``rec`` None) ``frf_fit.png``, the model against them."""
     from ..frf import recording_h1
-    from ..plotting.frf import save_frf
+    from ..plotting.frf import save_frf, save_frf_fit
     from ..plotting.identify import save_figures
 
     progress("writing figures", None)
+    if rec is None:
+        save_frf_fit(result, folder)
+        progress.close()
+        return
     try:
         save_figures(result, folder)
         modal, _ = result.modes()

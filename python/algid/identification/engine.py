@@ -45,9 +45,11 @@ from ..diagnosis.corrected import linear_model
 from ..noise import analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
 from ..recording import motion as recording_motion
+from ..recording.frf_file import is_frf_source
 from ..recording.transient import transient_record
 from .augmented import diagnosis_fields, fit_check, fit_with_effects
 from .base import FIT_CHECK_SKIPPED, augment, reduce
+from .frf_fit import identify_frf
 from .motion import equation_error_fit
 from .plan import make_plan, natural_frequencies_hz
 from .result import Identification
@@ -149,7 +151,14 @@ def identify(
     Returns
     -------
     Identification
+        or, for FRFs (an FRF ``.npz``, a UFF file of function type 4, a mapping with ``frf``,
+        :class:`~algid.recording.frf_file.FrfData`), the :class:`~.frf_result.FrfIdentification`
+        of :func:`.frf_fit.identify_frf`, which prints and writes JSON alike.
     """
+    if is_frf_source(rec):
+        if effects or estimator != "auto":
+            raise ValueError("--effect and --estimator apply to time recordings, not to FRFs")
+        return identify_frf(rec, boundary)
     rec = as_recording(rec)
     scale, base = "", rec.base is not None
     if base:  # the support is DOF 0 of the chain estimated, dropped at the end (:mod:`.base`)

@@ -22,8 +22,102 @@ def _num(v: float):
     return float(v) if math.isfinite(v) else None
 
 
+class PackedEstimates(PackedParameters):
+    """Views shared by every whole-record estimate of the chain (:class:`Identification`, and
+    :class:`~.frf_result.FrfIdentification` from FRFs): ``n``, ``boundary``, ``theta``,
+    ``sigma`` (3n+1,) and ``verdicts`` are the subclass's fields."""
+
+    @property
+    def names(self) -> list[str]:
+        """``m1..mn, c1..cn, k1..k{n+1}``."""
+        return parameter_names(self.n)
+
+    @property
+    def estimate(self) -> np.ndarray:
+        """The packed estimates (``theta``), as the estimators name them."""
+        return self.theta
+
+    @property
+    def sigma_mass(self) -> np.ndarray:
+        """One standard deviation of the masses [kg] (n,)."""
+        return unpack(self.sigma, self.n)[0]
+
+    @property
+    def sigma_damping(self) -> np.ndarray:
+        """One standard deviation of the dampings [N s/m] (n,)."""
+        return unpack(self.sigma, self.n)[1]
+
+    @property
+    def sigma_stiffness(self) -> np.ndarray:
+        """One standard deviation of the springs [N/m] (n+1,)."""
+        return unpack(self.sigma, self.n)[2]
+
+    @property
+    def valid_dof(self) -> np.ndarray:
+        """(n,) DOF whose mass, damping and springs are all valid."""
+        return dof_validity(self.verdicts, self.n)
+
+    def modes(self):
+        """``(ModalAnalysis, "")`` of the estimated chain with uncertainties from ``sigma``
+        (:func:`algid.modal.modal_analysis`), or ``(None, reason)`` when a parameter has no
+        admissible estimate."""
+        from ..modal import identification_modes
+
+        key = (self.theta.tobytes(), self.sigma.tobytes())  # computed once for the table and the JSON
+        cached = self.__dict__.get("_modes")
+        if cached is None or cached[0] != key:
+            self.__dict__["_modes"] = cached = (key, identification_modes(self))
+        return cached[1]
+
+    def verdict(self, name: str) -> Verdict:
+        """The verdict of parameter ``name`` (``"m1"``, ``"k2"``, ...)."""
+        return next(v for v in self.verdicts if v.name == name)
+
+    def parameter_lines(self) -> list[str]:
+        """The table's line of every parameter: value, one standard deviation, unit and the
+        status where it is not ``ok``."""
+        lines = []
+        for p, v in enumerate(self.verdicts):
+            val, sg = self.theta[p], self.sigma[p]
+            txt = "       n/a" if not math.isfinite(val) else f"{val:10.5g}"
+            sd = "" if not math.isfinite(sg) else f" +- {sg:.2g}"
+            flag = "" if v.status == "ok" else f"  [{v.status}]"
+            lines.append(f"  {v.name:>4} = {txt}{sd} {self.units[v.name[0]]}{flag}")
+        return lines
+
+    def modal_lines(self) -> list[str]:
+        """The table's last lines: the modes of the estimates (:meth:`modes`)."""
+        modal, why = self.modes()
+        if modal is None:
+            return [f"modes: n/a ({why})"]
+        caveat = [] if self.valid else ["modes of the estimates as they are (not every estimate is valid):"]
+        return caveat + [modal.table()]
+
+    def parameters_json(self) -> dict:
+        """The JSON keys of the estimates: ``n``, ``boundary``, ``mass`` ... ``sigma_stiffness``,
+        ``valid``, ``valid_dof``, ``reasons`` (what :meth:`algid.Chain.from_json` reads)."""
+        return {
+            "n": self.n,
+            "boundary": self.boundary,
+            "mass": [_num(v) for v in self.mass],
+            "damping": [_num(v) for v in self.damping],
+            "stiffness": [_num(v) for v in self.stiffness],
+            "sigma_mass": [_num(v) for v in self.sigma_mass],
+            "sigma_damping": [_num(v) for v in self.sigma_damping],
+            "sigma_stiffness": [_num(v) for v in self.sigma_stiffness],
+            "valid": self.valid,
+            "valid_dof": [bool(v) for v in self.valid_dof],
+            "reasons": self.reasons,
+        }
+
+    def modes_json(self) -> dict:
+        """``modes`` (one object per mode, or None) and, without modes, ``modes_reason``."""
+        modal, why = self.modes()
+        return {"modes": modal.to_json()} if modal is not None else {"modes": None, "modes_reason": why}
+
+
 @dataclass
-class Identification(PackedParameters):
+class Identification(PackedEstimates):
     """Estimates of an n-DOF chain from a whole recording.
 
     Attributes
@@ -81,37 +175,6 @@ class Identification(PackedParameters):
     #: without scale, what the record determines: ``{"k1/m1": {"value", "sigma", "valid"}, ...}``
     ratios: dict = field(default_factory=dict)
 
-    # ---- views -------------------------------------------------------------------------
-    @property
-    def names(self) -> list[str]:
-        """``m1..mn, c1..cn, k1..k{n+1}``."""
-        return parameter_names(self.n)
-
-    @property
-    def estimate(self) -> np.ndarray:
-        """The packed estimates (``theta``), as the estimators name them."""
-        return self.theta
-
-    @property
-    def sigma_mass(self) -> np.ndarray:
-        """One standard deviation of the masses [kg] (n,)."""
-        return unpack(self.sigma, self.n)[0]
-
-    @property
-    def sigma_damping(self) -> np.ndarray:
-        """One standard deviation of the dampings [N s/m] (n,)."""
-        return unpack(self.sigma, self.n)[1]
-
-    @property
-    def sigma_stiffness(self) -> np.ndarray:
-        """One standard deviation of the springs [N/m] (n+1,)."""
-        return unpack(self.sigma, self.n)[2]
-
-    @property
-    def valid_dof(self) -> np.ndarray:
-        """(n,) DOF whose mass, damping and springs are all valid."""
-        return dof_validity(self.verdicts, self.n)
-
     @property
     def valid(self) -> bool:
         """Every DOF and every effect estimated with them valid."""
@@ -135,22 +198,6 @@ class Identification(PackedParameters):
             ]
         lines = [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
         return lines + [f"{e['effect']}: {e['reason']}" for e in self.effects if e["reason"]]
-
-    def modes(self):
-        """``(ModalAnalysis, "")`` of the estimated chain with uncertainties from ``sigma``
-        (:func:`algid.modal.modal_analysis`), or ``(None, reason)`` when a parameter has no
-        admissible estimate."""
-        from ..modal import identification_modes
-
-        key = (self.theta.tobytes(), self.sigma.tobytes())  # computed once for the table and the JSON
-        cached = self.__dict__.get("_modes")
-        if cached is None or cached[0] != key:
-            self.__dict__["_modes"] = cached = (key, identification_modes(self))
-        return cached[1]
-
-    def verdict(self, name: str) -> Verdict:
-        """The verdict of parameter ``name`` (``"m1"``, ``"k2"``, ...)."""
-        return next(v for v in self.verdicts if v.name == name)
 
     # ---- display: one-line repr, notebook table (algid.display) -------------------------
     def _display_fields(self) -> dict:
@@ -189,17 +236,7 @@ class Identification(PackedParameters):
             for p, v in enumerate(self.verdicts)
         ]
         doc = {
-            "n": n,
-            "boundary": self.boundary,
-            "mass": [_num(v) for v in self.mass],
-            "damping": [_num(v) for v in self.damping],
-            "stiffness": [_num(v) for v in self.stiffness],
-            "sigma_mass": [_num(v) for v in self.sigma_mass],
-            "sigma_damping": [_num(v) for v in self.sigma_damping],
-            "sigma_stiffness": [_num(v) for v in self.sigma_stiffness],
-            "valid": self.valid,
-            "valid_dof": [bool(v) for v in self.valid_dof],
-            "reasons": self.reasons,
+            **self.parameters_json(),
             "parameters": params,
             "estimator": self.plan.estimator,
             "estimator_reason": self.plan.reason,
@@ -227,10 +264,7 @@ class Identification(PackedParameters):
                 p["value"] = p["sigma"] = None
             doc["scale"] = self.scale
             doc["ratios"] = {name: dict(r) for name, r in self.ratios.items()}
-        modal, why = self.modes()
-        doc["modes"] = modal.to_json() if modal is not None else None
-        if modal is None:
-            doc["modes_reason"] = why
+        doc.update(self.modes_json())
         if n == 1 and self.boundary == "fixed" and self.verdicts[-1].status == "not_separable":
             doc["note"] = "n = 1 with walls: only k1 + k2 is identifiable; it is reported as stiffness[0]"
         if self.motion != "acceleration":
@@ -283,32 +317,28 @@ class Identification(PackedParameters):
             lines.append(f"  {self.screened.line()}")
         if self.transient is not None:
             lines.append(f"  {self.transient.line()}")
-        units = self.units
-        if self.scale:
-            lines.append(f"  {self.scale}:")
-            for name, r in self.ratios.items():
-                flag = "" if r["valid"] else "  [not valid]"
-                lines.append(
-                    f"  {name:>7} = {r['value']:10.5g} +- {r['sigma']:.2g} 1/s{'' if name[0] == 'c' else '^2'}{flag}"
-                )
-        for p, v in enumerate([] if self.scale else self.verdicts):
-            val, sg = self.theta[p], self.sigma[p]
-            txt = "       n/a" if not math.isfinite(val) else f"{val:10.5g}"
-            sd = "" if not math.isfinite(sg) else f" +- {sg:.2g}"
-            flag = "" if v.status == "ok" else f"  [{v.status}]"
-            lines.append(f"  {v.name:>4} = {txt}{sd} {units[v.name[0]]}{flag}")
+        lines += self.ratio_lines() if self.scale else self.parameter_lines()
         lines += effect_lines(self.effects, self.model_fit.get("source", ""))
         lines.append(f"valid: {self.valid} (DOF: {', '.join(str(bool(x)) for x in self.valid_dof)})")
-        modal, why = self.modes()
-        if modal is not None and self.scale:
-            ok = all(r["valid"] for r in self.ratios.values())
-            lines.append(
-                f"modes (they depend on the ratios alone; {'every ratio valid' if ok else 'not every ratio is valid'}):"
-            )
-        elif modal is not None and not self.valid:
-            lines.append("modes of the estimates as they are (not every estimate is valid):")
-        lines.append(modal.table() if modal is not None else f"modes: n/a ({why})")
-        return "\n".join(lines)
+        return "\n".join(lines + self.modal_lines())
+
+    def ratio_lines(self) -> list[str]:
+        """Without a scale (a base-excited record without force): the line of every ratio."""
+        lines = [f"  {self.scale}:"]
+        for name, r in self.ratios.items():
+            flag = "" if r["valid"] else "  [not valid]"
+            unit = "1/s" if name[0] == "c" else "1/s^2"
+            lines.append(f"  {name:>7} = {r['value']:10.5g} +- {r['sigma']:.2g} {unit}{flag}")
+        return lines
+
+    def modal_lines(self) -> list[str]:
+        """The modes; without a scale they depend on the ratios alone."""
+        modal, _ = self.modes()
+        if modal is None or not self.scale:
+            return super().modal_lines()
+        ok = all(r["valid"] for r in self.ratios.values())
+        say = "every ratio valid" if ok else "not every ratio is valid"
+        return [f"modes (they depend on the ratios alone; {say}):", modal.table()]
 
 
 def effect_lines(effects: list[dict], source: str) -> list[str]:

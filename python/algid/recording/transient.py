@@ -12,7 +12,8 @@ the force's "signal" at a few hertz. So, decided once from the record (:func:`an
   force's white noise from its first differences) in short runs; runs closer than
   :data:`DOUBLE_HIT_S` are one hit (a double hit: the hammer bounced). The record is a transient
   when the hits hold at least :data:`ENERGY_SHARE` of that force's energy in at most
-  :data:`SPAN_SHARE` of the record.
+  :data:`SPAN_SHARE` of the record, and its baseline swings by at most :data:`BASELINE_SWING`
+  of the highest hit (not the steps of a bang-bang drive).
 * **Force** (:func:`clean_force`): inside every hit (widened by :data:`HIT_MARGIN_S`) the force
   less its baseline, drawn straight from the level just before the hit to the level just after;
   zero outside.
@@ -60,6 +61,10 @@ DOUBLE_HIT_S = 0.02
 ENERGY_SHARE = 0.9
 #: ... in at most this share of the record.
 SPAN_SHARE = 0.05
+#: The force's baseline swings by at most this share of the highest hit (a hammer's sensor
+#: drifts by a few percent of the hit; the steps of a bang-bang drive, which the running median
+#: keeps, are as high as its force).
+BASELINE_SWING = 0.25
 #: A hit's extent is widened by this on each side [s].
 HIT_MARGIN_S = 2e-3
 #: Longest quiet before a hit counted as its pre-trigger [s].
@@ -150,13 +155,17 @@ def white_sigma(x: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2))
 
 
+def baseline(u: np.ndarray, dt: float) -> np.ndarray:
+    """The force's slow baseline: its running median over :data:`BASELINE_S`."""
+    from scipy.ndimage import median_filter
+
+    return median_filter(u, size=max(3, int(round(BASELINE_S / dt)) | 1), mode="nearest")
+
+
 def find_hits(u: np.ndarray, dt: float) -> tuple[list[Hit], float]:
     """Hits of the force ``u`` (T,) sampled every ``dt`` [s] and the share of the baseline-free
     force's energy they hold (module docstring)."""
-    from scipy.ndimage import median_filter
-
-    width = max(3, int(round(BASELINE_S / dt)) | 1)
-    r = u - median_filter(u, size=width, mode="nearest")
+    r = u - baseline(u, dt)
     top = float(np.max(np.abs(r)))
     if top == 0.0:
         return [], 0.0
@@ -182,10 +191,13 @@ def _peak(r: np.ndarray, lo: int, hi: int) -> float:
     return float(r[i])
 
 
-def is_transient(hits: list[Hit], share: float, T: int) -> bool:
-    """Hits holding most of the force's energy in a small part of the record."""
+def is_transient(hits: list[Hit], share: float, T: int, swing: float = 0.0) -> bool:
+    """Hits holding most of the force's energy in a small part of the record, above a baseline
+    that swings (``swing``: its largest excursion from its median) by at most
+    :data:`BASELINE_SWING` of the highest hit."""
     span = sum(h.stop - h.start for h in hits)
-    return bool(hits) and share >= ENERGY_SHARE and span <= SPAN_SHARE * T
+    top = max((abs(h.peak) for h in hits), default=0.0)
+    return bool(hits) and share >= ENERGY_SHARE and span <= SPAN_SHARE * T and swing <= BASELINE_SWING * top
 
 
 def clean_force(u: np.ndarray, hits: list[Hit], dt: float) -> np.ndarray:
@@ -286,7 +298,8 @@ def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: 
     drive = int(np.argmax(np.max(np.abs(u - np.median(u, axis=0)), axis=0)))
     hits, share = find_hits(u[:, drive], dt)
     T = u.shape[0]
-    if not is_transient(hits, share, T):
+    base = baseline(u[:, drive], dt)
+    if not is_transient(hits, share, T, float(np.max(np.abs(base - np.median(base))))):
         return None
     segs, pres = segments(hits, T, dt)
     resp = y[:, drive] if y.shape[1] > drive else y[:, 0]
