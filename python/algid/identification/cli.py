@@ -62,6 +62,13 @@ def add_parser(sub) -> None:
         "the effect against the linear one and the data) and frf.png (model vs H1 of the recording)",
     )
     p.add_argument(
+        "--resolution",
+        type=float,
+        metavar="HZ",
+        help="bin width of frf.png's H1 estimate (default: half the narrowest half-power bandwidth of the "
+        "estimated modes, as far as the record allows)",
+    )
+    p.add_argument(
         "--boundary",
         choices=("fixed", "free"),
         default="fixed",
@@ -111,6 +118,8 @@ def run(args) -> int:
                 _check_output(path, flag)
         if args.replicates < 2:
             raise IdentifyError(f"--replicates must be >= 2, got {args.replicates}")
+        if args.resolution is not None and not args.resolution > 0:
+            raise IdentifyError(f"--resolution must be > 0 Hz, got {args.resolution:g}")
         rec = load_recording(args.recording, **recording_options(args))
         print_notes(rec, "identify", args.quiet)
         try:
@@ -126,7 +135,7 @@ def run(args) -> int:
         if args.trace is not None:
             result.write_trace(args.trace)
         if args.plots is not None:
-            _write_figures(result, rec, args.plots, progress)
+            _write_figures(result, rec, args.plots, progress, args.resolution)
     except (RecordingError, IdentifyError) as err:
         print(error_line("identify", err), file=sys.stderr)
         return 2
@@ -146,10 +155,11 @@ def run(args) -> int:
     return 0
 
 
-def _write_figures(result, rec, folder: Path, progress: Progress) -> None:
+def _write_figures(result, rec, folder: Path, progress: Progress, resolution: float | None = None) -> None:
     """``estimates.png`` and ``frf.png`` (the estimated chain's FRF, if it has one, against
-    the recording's H1)."""
-    from ..frf import recording_h1
+    the recording's H1 in bins of ``resolution`` [Hz], by default fine enough for the
+    estimated modes: :func:`algid.frf.resolution_hz`)."""
+    from ..frf import recording_h1, resolution_hz
     from ..plotting.frf import save_frf
     from ..plotting.identify import save_figures
 
@@ -158,6 +168,8 @@ def _write_figures(result, rec, folder: Path, progress: Progress) -> None:
         save_figures(result, folder)
         modal, _ = result.modes()
         chain = Chain.from_packed(result.theta, result.n, result.boundary) if modal is not None else None
-        save_frf(recording_h1(rec), folder, chain)
+        if resolution is None and chain is not None:
+            resolution = resolution_hz(chain)
+        save_frf(recording_h1(rec, resolution=resolution), folder, chain)
     finally:
         progress.close()
