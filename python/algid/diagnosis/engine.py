@@ -297,6 +297,7 @@ class Setup:
     measured: tuple | None = None  # (x, v) on the analysed samples when the record gives them
     hum: list = field(default_factory=list)  # mains lines notched out [Hz]
     transient: object = None  # an impact record's hits and band (algid.recording.transient)
+    noise: NoiseLevels | None = None  # the sensor noise behind ``floor`` (:func:`noise_floors`)
 
 
 def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
@@ -338,7 +339,7 @@ def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_h
         a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form=form, fit_band=order > 0
     )
     lin = fit_linear(P)
-    floor, floor_band = noise_floors(P, lin, motion if order else None, order)
+    floor, floor_band, levels = noise_floors(P, lin, motion if order else None, order)
     measured = None
     if kind == "displacement":  # positions and their derivative, in band: no states to reconstruct
         xb = band_limited(rec.x, dt, band.f_hi)
@@ -361,6 +362,7 @@ def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_h
         measured=measured,
         hum=hum,
         transient=tr,
+        noise=levels,
     )
 
 
@@ -375,9 +377,9 @@ def band_limited(x: np.ndarray, dt: float, f_hi: float) -> np.ndarray:
     return line + np.fft.irfft(X, T, axis=0)
 
 
-def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: int) -> tuple[np.ndarray, np.ndarray]:
+def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: int):
     """Per-DOF noise RMS of the equation errors in each equation's target units, over the
-    full band and in the signal band.
+    full band and in the signal band, and the :class:`NoiseLevels` behind them.
 
     Measured accelerations: the white floor of the equation errors (:func:`.locate.noise_floor`),
     its band share ``band_fraction`` in band. Derived accelerations: the motion's white floor
@@ -396,12 +398,11 @@ def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: 
     floor = noise_floor(P, lin.resid)
     band = floor * np.sqrt(P.band_fraction)
     if motion is None and P.form != "force":
-        return floor, band
+        return floor, band, NoiseLevels()
     from scipy.signal import welch
 
     from ..noise import quantisation_psd
     from ..recording.derivatives import DEFAULT_DIFF_POINTS, derivative_weights
-    from .equations import base_design
     from .windows import band_filter
 
     fs = 1.0 / P.dt
@@ -429,24 +430,49 @@ def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: 
         dof = P.nw * max(int(np.sum(P.band_mask)), 1)
         draws = int(np.clip(np.ceil(FLOOR_DOF / dof), 1, 8))
         rng = np.random.default_rng(0)
-        N, sl = P.y.shape[0], P.sl
         for _ in range(draws):
-            w = rng.standard_normal(P.a_full.shape) * sigma
-            a_n = derivative(w, P.dt, order)
-            A1n, A2n = integrals(a_n, P.dt)
-            a_n, A1n, A2n = a_n[sl], A1n[sl], A2n[sl]
-            for e in range(n):
-                X = base_design(P, e, A1n, A2n, u=np.zeros(N), a=a_n[:, e])
-                y = np.zeros(N) if force_form(P, e) else a_n[:, e]
-                Z = band_filter(P, detrend(P, y - X @ lin.theta_a[e]))
-                power[e] += float(np.sum(Z**2)) / N / draws
+            E = equation_noise(P, lin, sigma, order, rng)
+            power += np.sum(band_filter(P, P.windows(E)) ** 2, axis=(0, 1)) / E.shape[0] / draws
     for e in range(n):
         if P.forced[e]:
             theta_u = 1.0 if force_form(P, e) else float(lin.theta_a[e][0])
             band[e] = np.sqrt(power[e] + theta_u**2 * white[e] * f_hi)
         else:
             band[e] = np.sqrt(power[e])
-    return floor, band
+    sigma = sigma if motion is not None else None
+    return floor, band, NoiseLevels(order=order, motion_sigma=sigma, force_psd=white[:n])
+
+
+@dataclass(frozen=True)
+class NoiseLevels:
+    """The sensor noise the floors of :func:`noise_floors` carry through the analysis:
+    ``motion_sigma`` (n,) white-noise standard deviation of the motion channels [their
+    unit], differentiated ``order`` times into accelerations (None: measured accelerations,
+    whose floor is read off the equation errors); ``force_psd`` (n,) the forces' white
+    floors [N^2/Hz] (None: likewise)."""
+
+    order: int = 0
+    motion_sigma: np.ndarray | None = None
+    force_psd: np.ndarray | None = None
+
+
+def equation_noise(P: Prepared, lin: LinearFit, sigma: np.ndarray, order: int, rng: np.random.Generator):
+    """(N, n) one draw of white noise of standard deviation ``sigma`` (n,) on the motion
+    channels carried through the analysis: differentiated ``order`` times as the recording's
+    accelerations were, integrated, put into each equation with the linear fit's parameters
+    and detrended per window (each equation's target units; the force sensor's noise apart)."""
+    from .equations import base_design
+
+    N, sl = P.y.shape[0], P.sl
+    a_n = derivative(rng.standard_normal(P.a_full.shape) * sigma, P.dt, order)
+    A1n, A2n = integrals(a_n, P.dt)
+    a_n, A1n, A2n = a_n[sl], A1n[sl], A2n[sl]
+    out = np.empty((N, P.n))
+    for e in range(P.n):
+        X = base_design(P, e, A1n, A2n, u=np.zeros(N), a=a_n[:, e])
+        y = np.zeros(N) if force_form(P, e) else a_n[:, e]
+        out[:, e] = detrend(P, y - X @ lin.theta_a[e]).reshape(N)
+    return out
 
 
 #: In-band degrees of freedom (windows times band bins) of the simulated noise of
@@ -735,6 +761,7 @@ def diagnose(
             "form": P.form,
             "combination": combo if best is not None else None,
             "mains_hz": st.hum,
+            "noise_levels": st.noise,
             "given": named is not None,
             "transient": st.transient.to_json() if st.transient is not None else None,
         },
@@ -819,14 +846,19 @@ def _explained(gap_before: float, gap_after: float, floor_rel: float) -> float:
     return float((gap_before**2 - gap_after**2) / excess) if excess > 0 else 1.0
 
 
-def natural_frequencies(lin: LinearFit, boundary: str) -> np.ndarray:
-    """Undamped natural frequencies [Hz] of the fitted chain (empty if unphysical)."""
+def fitted_chain(lin: LinearFit, boundary: str) -> Chain | None:
+    """The chain of the linear fit's magnitudes (None if unphysical)."""
     n = len(lin.theta)
     k = np.nan_to_num(lin.stiffness().copy())
     if n == 1:
         k = np.array([k[0], 0.0])
     try:
-        ch = Chain(np.abs(lin.mass), np.abs(lin.damping()), np.abs(k), boundary if n > 1 else "fixed")
-        return ch.natural_frequencies_hz()
+        return Chain(np.abs(lin.mass), np.abs(lin.damping()), np.abs(k), boundary if n > 1 else "fixed")
     except ValueError:
-        return np.array([])
+        return None
+
+
+def natural_frequencies(lin: LinearFit, boundary: str) -> np.ndarray:
+    """Undamped natural frequencies [Hz] of the fitted chain (empty if unphysical)."""
+    ch = fitted_chain(lin, boundary)
+    return ch.natural_frequencies_hz() if ch is not None else np.array([])

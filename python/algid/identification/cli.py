@@ -67,6 +67,13 @@ def add_parser(sub) -> None:
         "frf_fit.png (model vs measured FRFs)",
     )
     p.add_argument(
+        "--resolution",
+        type=float,
+        metavar="HZ",
+        help="bin width of frf.png's H1 estimate (default: half the narrowest half-power bandwidth of the "
+        "estimated modes, as far as the record allows)",
+    )
+    p.add_argument(
         "--boundary",
         choices=("fixed", "free"),
         default="fixed",
@@ -117,6 +124,8 @@ def run(args) -> int:
                 _check_output(path, flag)
         if args.replicates < 2:
             raise IdentifyError(f"--replicates must be >= 2, got {args.replicates}")
+        if args.resolution is not None and not args.resolution > 0:
+            raise IdentifyError(f"--resolution must be > 0 Hz, got {args.resolution:g}")
         if is_frf_source(args.recording):
             result, rec = _identify_frf(args), None
         else:
@@ -141,7 +150,7 @@ def run(args) -> int:
         if args.trace is not None:
             result.write_trace(args.trace)
         if args.plots is not None:
-            _write_figures(result, rec, args.plots, progress)
+            _write_figures(result, rec, args.plots, progress, args.resolution)
     except (RecordingError, IdentifyError) as err:
         print(error_line("identify", err), file=sys.stderr)
         return 2
@@ -176,10 +185,12 @@ def _identify_frf(args):
     return result
 
 
-def _write_figures(result, rec, folder: Path, progress: Progress) -> None:
+def _write_figures(result, rec, folder: Path, progress: Progress, resolution: float | None = None) -> None:
     """``estimates.png`` and ``frf.png`` (the estimated chain's FRF, if it has one, against
-    the recording's H1); for FRFs (``rec`` None) ``frf_fit.png``, the model against them."""
-    from ..frf import recording_h1
+    the recording's H1 in bins of ``resolution`` [Hz], by default fine enough for the
+    estimated modes: :func:`algid.frf.resolution_hz`); for FRFs (``rec`` None)
+    ``frf_fit.png``, the model against them."""
+    from ..frf import recording_h1, resolution_hz
     from ..plotting.frf import save_frf, save_frf_fit
     from ..plotting.identify import save_figures
 
@@ -192,7 +203,9 @@ def _write_figures(result, rec, folder: Path, progress: Progress) -> None:
         save_figures(result, folder)
         modal, _ = result.modes()
         chain = Chain.from_packed(result.theta, result.n, result.boundary) if modal is not None else None
-        save_frf(recording_h1(rec), folder, chain)
+        if resolution is None and chain is not None:
+            resolution = resolution_hz(chain)
+        save_frf(recording_h1(rec, resolution=resolution), folder, chain)
         if result.transient is not None:
             from ..plotting.transient import save_transient
 

@@ -6,8 +6,9 @@ recording and the linear chain:
 * ``residuals_time.png`` — when: the equation error of every DOF over time, before and
   after the reported effect, with its withheld RMS per window;
 * ``residuals_spectrum.png`` — at which frequencies: spectra of the measured acceleration
-  and of the equation errors against the white sensor-noise floor, natural frequencies
-  marked, the signal band on which the gap is scored shaded;
+  and of the equation errors against the sensor noise's spectrum in the same units and
+  scaling (:func:`noise_spectrum`), natural frequencies marked, the signal band on which the
+  gap is scored shaded;
 * ``restoring_force.png`` — against deformation: for every spring, the force the linear
   spring carries plus the unexplained force of the adjacent equations, against the
   spring's deformation (a straight line when the spring is linear);
@@ -28,6 +29,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from matplotlib.ticker import FormatStrFormatter, LogLocator, MaxNLocator, NullFormatter
 from scipy.signal import welch
 
 from ..chain import spring_deformation, spring_sides, springs
@@ -44,10 +46,14 @@ C_MEAS = "#999999"
 PER_UNIT_MASS = {"m": "-", "c": "1/s", "k": "1/s^2"}
 
 
-def _subsample(N: int, max_points: int = 6000, seed: int = 0) -> np.ndarray:
+def _subsample(*columns: np.ndarray, max_points: int = 6000, seed: int = 0) -> np.ndarray:
+    """Indices of at most ``max_points`` random samples and the extremes of every column
+    (so the axes drawn cover the data)."""
+    N = columns[0].size
     if N <= max_points:
         return np.arange(N)
-    return np.sort(np.random.default_rng(seed).choice(N, max_points, replace=False))
+    extremes = [g(c) for c in columns for g in (np.argmin, np.argmax)]
+    return np.unique(np.concatenate([np.random.default_rng(seed).choice(N, max_points, replace=False), extremes]))
 
 
 def _label(d) -> str:
@@ -103,10 +109,11 @@ def fig_residuals_spectrum(d):
     P = d.P
     before, after = d.residuals()
     fs = 1.0 / P.dt
-    nper = min(4 * P.L, 4096, P.y.shape[0])
+    nper = spectrum_segment(d)
     f, Sa = welch(P.y, fs=fs, nperseg=nper, axis=0)
     _, Sb = welch(before, fs=fs, nperseg=nper, axis=0)
     _, Sf = welch(after, fs=fs, nperseg=nper, axis=0)
+    noise = noise_spectrum(d, nper)
     n = P.n
     fig, axes = subplots(n, 1, figsize=(9, 1.9 * n + 0.9), sharex=True, squeeze=False)
     for i, ax in enumerate(axes[:, 0]):
@@ -120,8 +127,7 @@ def fig_residuals_spectrum(d):
         ax.loglog(f[1:], Sb[1:, i], color=C_BEFORE, lw=0.8, label="error, linear model")
         if d.best is not None:
             ax.loglog(f[1:], Sf[1:, i], color=C_AFTER, lw=0.8, label="error, " + _label(d))
-        floor = d.where["per_dof"][i]["noise_floor_fullband"] * np.sqrt(np.mean(P.y[:, i] ** 2))
-        ax.axhline(floor**2 / (fs / 2), color="k", ls="--", lw=0.8, label="sensor-noise floor")
+        ax.loglog(f[1:], noise[1:, i], color="k", ls="--", lw=0.8, label="sensor noise (noise model)")
         ax.axvspan(
             f[1],
             d.band.f_hi,
@@ -141,6 +147,41 @@ def fig_residuals_spectrum(d):
     return fig
 
 
+def spectrum_segment(d) -> int:
+    """Welch segment [samples] of the residual spectra: four windows (at most 4096 samples),
+    or longer for bins narrower than the fitted chain's modes (:func:`algid.frf.resolution_hz`),
+    at most a quarter of the record."""
+    from ..diagnosis.engine import fitted_chain
+    from ..frf import resolution_hz, segment_samples
+
+    N = d.P.y.shape[0]
+    chain = fitted_chain(d.lin, d.P.boundary)
+    wanted = segment_samples(N, d.P.dt, resolution_hz(chain)) if chain is not None else 0
+    return int(min(max(min(4 * d.P.L, 4096), wanted), N // 4))
+
+
+def noise_spectrum(d, nperseg: int) -> np.ndarray:
+    """(F, n) one-sided PSD of the sensor noise in every equation error [target unit^2/Hz],
+    Welch with ``nperseg`` like the residual spectra: for derived accelerations the noise
+    model's white motion noise carried through the analysis
+    (:func:`algid.diagnosis.engine.equation_noise`) plus the force sensor's floor; for
+    measured accelerations the white floor the diagnosis reads off the equation errors."""
+    from ..diagnosis.engine import equation_noise
+
+    P, levels = d.P, d.extra.get("noise_levels")
+    fs = 1.0 / P.dt
+    F = nperseg // 2 + 1
+    if levels is None or levels.motion_sigma is None:
+        floor = np.array([row["noise_floor_fullband"] for row in d.where["per_dof"]]) * np.sqrt(np.mean(P.y**2, axis=0))
+        return np.broadcast_to(floor**2 / (fs / 2), (F, P.n)).copy()
+    E = equation_noise(P, d.lin, levels.motion_sigma, levels.order, np.random.default_rng(0))
+    _, S = welch(E, fs=fs, nperseg=nperseg, axis=0)
+    for e in np.nonzero(P.forced)[0]:
+        theta_u = 1.0 if force_form(P, e) else float(d.lin.theta_a[e][0])
+        S[:, e] += theta_u**2 * levels.force_psd[e]
+    return S
+
+
 def _binned(z, r, bins=30):
     edges = np.quantile(z, np.linspace(0, 1, bins + 1))
     idx = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, bins - 1)
@@ -153,9 +194,9 @@ def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: s
     law, and below it the unexplained force alone (scatter and binned mean), which is
     where a nonlinearity shows. ``items``: (label, z, linear_force, unexplained, coef_txt)."""
     cols = len(items)
-    fig, axes = subplots(2, cols, figsize=(max(3.3 * cols, 6.0), 5.4), squeeze=False, sharex="col")
+    fig, axes = subplots(2, cols, figsize=(max(3.6 * cols, 6.0), 5.4), squeeze=False, sharex="col")
     for c, (label, z, lin_f, r, coef_txt) in enumerate(items):
-        idx = _subsample(z.size)
+        idx = _subsample(z, lin_f + r, r)
         top, bot = axes[0, c], axes[1, c]
         top.plot(z[idx] * xscale, (lin_f + r)[idx], ".", ms=1.2, color=C_MEAS, alpha=0.5)
         zz = np.array([z.min(), z.max()])
@@ -167,13 +208,11 @@ def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: s
         zb, rb = _binned(z, r)
         bot.plot(zb * xscale, rb, "-", color=C_BEFORE, lw=1.6, label="binned mean")
         bot.axhline(0.0, color="k", lw=0.6)
-        lo, hi = np.percentile(r, [0.5, 99.5])
-        pad = 0.3 * (hi - lo)
-        bot.set_ylim(min(lo, rb.min()) - pad, max(hi, rb.max()) + pad)
         bot.legend(fontsize=7, loc="upper left")
         bot.set_xlabel(xlabel)
         for ax in (top, bot):
             ax.grid(alpha=0.3)
+            ax.xaxis.set_major_locator(MaxNLocator(nbins=5 if cols < 3 else 4))
     axes[0, 0].set_ylabel(f"{ylabel} [{force_unit}]")
     axes[1, 0].set_ylabel(f"unexplained force [{force_unit}]")
     fig.suptitle(title, fontsize=10)
@@ -181,14 +220,22 @@ def _force_panels(title: str, items: list, xlabel: str, xscale: float, ylabel: s
     return fig
 
 
+def _states(d) -> tuple[np.ndarray, np.ndarray]:
+    """Displacements and velocities (N, n) the candidates were fitted against: measured
+    when the record has positions, else reconstructed by the linear fit."""
+    ctx = d.extra.get("ctx")
+    return (ctx.x, ctx.v) if ctx is not None else (d.lin.x, d.lin.v)
+
+
 def fig_restoring_force(d):
     P, lin = d.P, d.lin
+    x, _ = _states(d)
     force_resid = lin.resid_force
     expl = {s["spring"]: s["explained"] for s in d.where["amplitude"]["springs"]}
     kfit = lin.stiffness()
     items = []
     for j in springs(P.n, P.boundary):
-        dj = spring_deformation(lin.x, j, P.n)
+        dj = spring_deformation(x, j, P.n)
         k = kfit[0] if P.n == 1 else kfit[j - 1]
         # Unexplained force attributed to the spring: + in eq. j, - in eq. j-1 (mean of sides).
         r = np.mean([-s * force_resid[:, e] for e, s in spring_sides(P.n, j)], axis=0)
@@ -212,9 +259,10 @@ def fig_damping_force(d):
     force_resid = lin.resid_force
     expl = {s["dof"]: s["explained"] for s in d.where["amplitude"]["masses"]}
     c = lin.damping()
+    _, velocity = _states(d)
     items = []
     for i in range(P.n):
-        v = lin.v[:, i]
+        v = velocity[:, i]
         items.append(
             (
                 f"DOF {i + 1}: binned law explains {expl.get(i + 1, 0):.0%}",
@@ -274,6 +322,9 @@ def fig_ranking(d, top: int = 12):
         ax.axvline(nf, color="k", ls="--", lw=1, label=f"sensor-noise floor (in band) {nf:.3g}")
     ax.set_yticks(y, labels, fontsize=8)
     ax.set_xscale("log")
+    ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(f"withheld gap (NRMS acceleration equation error, 0-{d.band.f_hi:.3g} Hz); blue = beyond noise")
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title(f"Candidates ranked - diagnosis: {d.effect}", fontsize=10)
