@@ -22,7 +22,8 @@ the force's "signal" at a few hertz. So, decided once from the record (:func:`an
 * **Modes** (:func:`response_modes`): peaks of the response's power spectrum averaged over the
   segments (one FFT per segment, from its hit on), standing :data:`PEAK_PROMINENCE` times above
   their surroundings and :data:`PEAK_FLOOR` times above the spectrum's median, between
-  :data:`MIN_CYCLES` cycles per segment and :data:`TOP_SHARE` of the sampling rate.
+  :data:`MIN_CYCLES` cycles of the longest segment and :data:`TOP_SHARE` of the sampling rate
+  (a hit soon followed by another still leaves the slow modes to the long decays).
 * **Band**: given (``--band LO:HI``), or around the ``n`` lowest modes for a chain of ``n`` DOF,
   its edges at the geometric means of neighbouring modes (below the first, as far under it as the
   upper edge is above the last). The modes outside are *residual modes*: they are filtered out,
@@ -237,8 +238,7 @@ def response_modes(y: np.ndarray, dt: float, hits: list[Hit], segs: list[tuple[i
         z = y[h.start : stop] - np.mean(y[h.start : stop])
         P += np.abs(np.fft.rfft(z, N)) ** 2
     f = np.fft.rfftfreq(N, dt)
-    shortest = min(stop - h.start for h, (_, stop) in zip(hits, segs)) * dt
-    keep = (f >= MIN_CYCLES / shortest) & (f <= TOP_SHARE / dt)
+    keep = (f >= MIN_CYCLES / (N * dt)) & (f <= TOP_SHARE / dt)  # resolved in the longest decay
     if np.count_nonzero(keep) < 3:
         return ()
     idx = np.nonzero(keep)[0]
