@@ -162,8 +162,8 @@ def test_diagnose_report_json_and_figures_in_the_recording_units(tmp_path, capsy
     assert doc["recording_units"] == {"time": "s", "force": "N", "displacement": "m"} | units
     k3 = "V/V^3" if units else "N/m^3"
     assert doc["units"]["k_cubic"] == k3 and re.search(rf"fitted: k_cubic = \S+ \+- \S+ {re.escape(k3)}\n", stdout)
-    header = "m [V s^2/V]  c [V s/V]   springs [V/V]" if units else "m [kg]      c [N s/m]   springs [N/m]"
-    assert f"  DOF   {header}\n" in stdout
+    header = "m [V s^2/V], c [V s/V], springs [V/V]" if units else "m [kg], c [N s/m], springs [N/m]"
+    assert f"Linear chain, the windowed equation-error fit ({header}):\n" in stdout
     assert sorted(f.name for f in (tmp_path / "figs").iterdir()) == sorted(FIGURES)
     d = diagnose(load_recording(path))
     figures = {name: _texts(make(d)) for name, make in FIGURES.items()}

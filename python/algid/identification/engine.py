@@ -109,6 +109,33 @@ def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing
     return plan, run, unc
 
 
+def _checked(boundary: str, replicates: int, effects) -> list:
+    """The arguments of :func:`identify` checked; ``effects`` as a list."""
+    if boundary not in ("fixed", "free"):
+        raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
+    if int(replicates) < 2:
+        raise ValueError(f"replicates must be >= 2, got {replicates}")
+    return [effects] if isinstance(effects, str) else list(effects)
+
+
+def _recording_fields(rec, boundary, nm, kind, hum, screened, transient) -> dict:
+    """The fields of an :class:`Identification` that describe the record (stages 0-2)."""
+    return dict(
+        n=rec.n,
+        boundary=boundary,
+        dt=float(rec.dt),
+        samples=int(rec.t.size),
+        noise=nm,
+        motion=kind,
+        path=rec.path,
+        hum_hz=tuple(hum),
+        units=parameter_units(rec),
+        recording_notes=tuple(rec.notes),
+        screened=screened,
+        transient=transient,
+    )
+
+
 def identify(
     rec: Recording,
     boundary: str = "fixed",
@@ -165,12 +192,7 @@ def identify(
         if effects:
             raise ValueError("effects cannot be estimated on a base-excited record (a support motion a0)")
         rec, scale = augment(rec)
-    if boundary not in ("fixed", "free"):
-        raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
-    if int(replicates) < 2:
-        raise ValueError(f"replicates must be >= 2, got {replicates}")
-    if isinstance(effects, str):
-        effects = [effects]
+    effects = _checked(boundary, replicates, effects)
     rec, screened = screen(rec, reach=0 if rec.a is not None else DEFAULT_DIFF_POINTS // 2)
     missing = screened.rows
     rec, hum = without_hum(rec)
@@ -182,20 +204,7 @@ def identify(
     kind, motion = recording_motion(rec)
     nm = analyse(rec.u, motion, dt, kind)
     forced = np.any(rec.u != 0.0, axis=0)
-    common = dict(
-        n=n,
-        boundary=boundary,
-        dt=dt,
-        samples=int(rec.t.size),
-        noise=nm,
-        motion=kind,
-        path=rec.path,
-        hum_hz=tuple(hum),
-        units=parameter_units(rec),
-        recording_notes=tuple(rec.notes),
-        screened=screened,
-        transient=transient,
-    )
+    common = _recording_fields(rec, boundary, nm, kind, hum, screened, transient)
     effect_note = ""
     if effects:
         _progress(progress, "diagnose", None)
