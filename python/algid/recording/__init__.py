@@ -180,18 +180,14 @@ def load_recording(
 
 
 def _header_names(rec: Recording) -> list[str]:
-    """Column names, with the unit of every signal whose unit is not SI (``u1 [V]``)."""
+    """Column names with the unit of every signal (``t [s]``, ``u1 [N]``, ``x1 [V]``)."""
     roles = {"u": "force", "a": "acceleration", "v": "velocity", "x": "displacement"}
-    names = []
-    for name in rec.columns():
-        label = rec.units.get(roles.get(name[0], "time"), "s")
-        names.append(name if label == SI_UNITS[roles.get(name[0], "time")] else f"{name} [{label}]")
-    return names
+    return [f"{name} [{rec.units.get(roles.get(name[0], 'time'), 's')}]" for name in rec.columns()]
 
 
 def save_recording(path: str | Path, rec: Recording) -> Path:
     """Write ``rec`` to ``path`` (``.csv`` with 17 significant digits, or ``.npz``); the
-    columns are named ``t, u1.., a1..`` with the unit of every non-SI signal (``u1 [V]``).
+    columns are named ``t, u1.., a1..`` with the unit of every signal (``t [s]``, ``u1 [V]``).
 
     Returns the path written. ``load_recording(save_recording(p, rec))`` reproduces
     ``rec`` exactly for ``.npz`` and to the last bit for ``.csv`` (``%.17g``), units included.

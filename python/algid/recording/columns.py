@@ -44,12 +44,14 @@ class Layout:
 
     ``groups`` maps ``"t"`` (absent when the file has no time column) to ``[position]`` and
     ``"u"``, ``"a"``, ``"v"``, ``"x"`` to the positions of DOF 1..n; ``units`` gives the unit
-    each of those columns declares (None when it declares none)."""
+    each of those columns declares (None when it declares none), ``names`` their names in the
+    file (without the unit)."""
 
     n: int
     groups: dict[str, list[int]]
     units: dict[str, list[str | None]]
     ignored: list[str] = field(default_factory=list)
+    names: dict[str, list[str]] = field(default_factory=dict)
 
     def positions(self) -> list[int]:
         """The positions read, in file order."""
@@ -150,7 +152,8 @@ def resolve(
     n = len(out["u"])
     declared = declared or [None] * len(names)
     units = {key: [split_name(names[p])[1] or declared[p] for p in cols] for key, cols in out.items()}
-    return Layout(n=n, groups=out, units=units, ignored=ignored)
+    read = {key: [split_name(names[p])[0] for p in cols] for key, cols in out.items()}
+    return Layout(n=n, groups=out, units=units, ignored=ignored, names=read)
 
 
 def _complete(groups: dict[str, dict[int, int]], source: str) -> dict[str, list[int]]:

@@ -11,7 +11,7 @@ import numpy as np
 from ..messages import quote
 from .columns import ROLE_KEYS, Layout
 from .core import Recording, RecordingError, check_finite, file_time
-from .units import ROLES, conversion_note, to_si
+from .units import ROLES, SI_UNITS, UnitError, conversion_note, to_si
 
 
 def role_units(units: dict | None) -> dict[str, str]:
@@ -32,9 +32,10 @@ def _convert(key: str, arr: np.ndarray, declared: list[str | None], source: str,
     role = ROLES[key]
     labels = set()
     for col, unit in enumerate(declared):
-        factor, label = to_si(role, unit)
-        if key == "t" and factor is None:
-            raise RecordingError(f"{source}: time in {quote(unit)}, not a unit of time")
+        try:
+            factor, label = to_si(role, unit)
+        except UnitError as err:
+            raise RecordingError(f"{source}: {err}") from None
         if factor is not None and factor != 1.0:
             arr[:, col] *= factor
             note = conversion_note(role, unit, factor)
@@ -44,6 +45,22 @@ def _convert(key: str, arr: np.ndarray, declared: list[str | None], source: str,
     if len(labels) > 1:
         raise RecordingError(f"{source}: {role} columns in different units: {', '.join(sorted(labels))}")
     return labels.pop()
+
+
+def si_assumed(layout: Layout, given: dict[str, str]) -> list[str]:
+    """The note naming the columns read without a unit (in the header, the file or ``units``),
+    taken as SI: ``no unit for t, u1, a1: SI assumed (s, N, m/s^2)``."""
+    bare: dict[str, list[str]] = {}
+    for key in ROLES:
+        units = layout.units.get(key, [])
+        if ROLES[key] not in given:
+            names = [name for name, unit in zip(layout.names.get(key, []), units) if unit is None]
+            if names:
+                bare[ROLES[key]] = names
+    if not bare:
+        return []
+    columns = ", ".join(name for names in bare.values() for name in names)
+    return [f"no unit for {columns}: SI assumed ({', '.join(SI_UNITS[role] for role in bare)})"]
 
 
 def assemble(
@@ -61,7 +78,7 @@ def assemble(
     time and replaces a time column (:func:`.core.file_time`)."""
     given = role_units(units)
     order = {p: j for j, p in enumerate(layout.positions())}
-    notes = layout.notes()
+    notes = layout.notes() + si_assumed(layout, given)
     labels: dict[str, str] = {}
     parts: dict[str, np.ndarray] = {}
     for key, cols in layout.groups.items():
