@@ -629,6 +629,7 @@ def diagnose(
     given: list[str] | None = None,
     quick: bool = False,
     notch: bool = True,
+    **reading,
 ) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
 
@@ -652,12 +653,15 @@ def diagnose(
         faster, with rougher parameters (:func:`algid.identify`'s fit check).
     notch : bool
         Notch the mains hum out first (False: the caller has, as :func:`algid.identify` does).
+    **reading
+        How to read a path or a DataFrame, as ``algid diagnose``'s options say (``force``,
+        ``accel``, ``units``, ``rate``...: :func:`algid.recording.options.reading_options`).
 
     Returns
     -------
     Diagnosis
     """
-    rec = as_recording(rec)
+    rec = as_recording(rec, **reading)
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     clock = time.perf_counter()

@@ -99,6 +99,7 @@ def identify(
     seed: int = 0,
     progress: ProgressFn = None,
     effects: Sequence[str] = (),
+    **reading,
 ) -> Identification:
     """Identify the chain of a whole recording, with one standard deviation per parameter
     and a verdict on each.
@@ -124,12 +125,17 @@ def identify(
         ``cubic_stiffness:2``...; ``auto`` takes the effect the diagnosis reports. The
         estimator is then the diagnosis's integral equations, and ``estimator`` and
         ``replicates`` do not apply.
+    **reading
+        How to read a path or a DataFrame, as ``algid identify``'s options say: ``time``,
+        ``force``, ``accel``, ``velocity``, ``displacement`` (column names, ``"F1,F2"`` or a
+        list), ``columns``, ``units`` (``"acceleration=g"`` or a dict), ``rate`` [Hz] or ``dt``
+        [s], ``group`` (:func:`algid.recording.options.reading_options`).
 
     Returns
     -------
     Identification
     """
-    rec = as_recording(rec)
+    rec = as_recording(rec, **reading)
     if boundary not in ("fixed", "free"):
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     if int(replicates) < 2:

@@ -50,6 +50,8 @@ class Recording:
         ``velocity``, ``displacement``); SI for every role not given. Time is always in s;
         a label that is not SI (``"V"``, ``"counts"``) says what the numbers are.
     notes : what the reader did that the user should know (columns ignored, units converted).
+    missing : (T,) bool or None: the instants whose missing samples the reader bridged
+        (:mod:`.gaps`); :func:`algid.identify` leaves them out of its estimates.
 
     Raises
     ------
@@ -67,6 +69,7 @@ class Recording:
     v: np.ndarray | None = None
     units: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    missing: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -100,6 +103,11 @@ class Recording:
         self.path = None if self.path is None else Path(self.path)
         self.units = _unit_labels(self.units, self)
         self.notes = list(self.notes)
+        if self.missing is not None:
+            missing = np.asarray(self.missing, dtype=bool)
+            if missing.shape != (T,):
+                raise RecordingError(f"missing has shape {missing.shape}, expected ({T},) to match t")
+            self.missing = missing if missing.any() else None
 
     @property
     def duration_s(self) -> float:

@@ -72,28 +72,61 @@ def _units(text: str) -> dict[str, str]:
     return out
 
 
-def _interval(args) -> float | None:
-    value, flag = (args.rate, "--rate") if args.rate is not None else (args.dt, "--dt")
+def _interval(rate: float | None, dt: float | None) -> float | None:
+    if rate is not None and dt is not None:
+        raise RecordingError("give the sampling rate or the interval, not both (--rate HZ or --dt S)")
+    value, flag = (rate, "--rate") if rate is not None else (dt, "--dt")
     if value is None:
         return None
+    value = float(value)
     if not math.isfinite(value) or value <= 0:
         raise RecordingError(f"{flag} must be a positive number, got {value}")
     return 1.0 / value if flag == "--rate" else value
 
 
-def recording_options(args) -> dict:
-    """The keyword arguments of :func:`algid.recording.load_recording` the options give."""
-    columns = _mapping_file(args.columns) if args.columns is not None else {}
-    for option, role in _ROLE_OPTIONS.items():
-        value = getattr(args, option)
+def _names(value) -> list[str]:
+    """``"F1,F2"`` or ``["F1", "F2"]`` -> ``["F1", "F2"]``."""
+    items = value.split(",") if isinstance(value, str) else list(value)
+    return [str(name).strip() for name in items]
+
+
+#: The keywords :func:`reading_options` takes (the options of :func:`add_recording_options`).
+READING = ("time", *list(_ROLE_OPTIONS)[1:], "columns", "units", "rate", "dt", "group")
+
+
+def reading_options(
+    time=None,
+    force=None,
+    accel=None,
+    velocity=None,
+    displacement=None,
+    columns=None,
+    units=None,
+    rate=None,
+    dt=None,
+    group=None,
+) -> dict:
+    """The keyword arguments of :func:`algid.recording.load_recording` that the command line's
+    options give, as the options are written: ``force="F1,F2"`` (or a list), ``accel``,
+    ``velocity``, ``displacement``, ``time`` column names; ``columns`` a role -> names mapping
+    or the path of a JSON file holding one; ``units`` ``"acceleration=g,force=kN"`` or a dict;
+    ``rate`` [Hz] or ``dt`` [s]; ``group`` the HDF5 group."""
+    mapping = dict(columns) if isinstance(columns, dict) else _mapping_file(Path(columns)) if columns else {}
+    named = {"time": time, "force": force, "accel": accel, "velocity": velocity, "displacement": displacement}
+    for option, value in named.items():
         if value is not None:
-            columns[role] = [name.strip() for name in value.split(",")]
+            mapping[_ROLE_OPTIONS[option]] = _names(value)
     return {
-        "columns": columns or None,
-        "units": _units(args.units) if args.units else None,
-        "dt": _interval(args),
-        "group": args.group,
+        "columns": mapping or None,
+        "units": (_units(units) if isinstance(units, str) else dict(units)) if units else None,
+        "dt": _interval(rate, dt),
+        "group": group,
     }
+
+
+def recording_options(args) -> dict:
+    """The keyword arguments of :func:`algid.recording.load_recording` the parsed options give."""
+    return reading_options(**{name: getattr(args, name, None) for name in READING})
 
 
 def print_notes(rec, command: str, quiet: bool = False) -> None:

@@ -1,6 +1,6 @@
 """From the columns a reader read to a :class:`Recording`: time from the file or from the
-sampling interval, units converted to SI where they can be (and listed in a note), every
-value checked with the file line it came from."""
+sampling interval, units converted to SI where they can be (and listed in a note), short gaps
+of missing samples bridged (:mod:`.gaps`), every value checked with the file line it came from."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import numpy as np
 from ..messages import quote
 from .columns import ROLE_KEYS, Layout
 from .core import Recording, RecordingError, check_finite, file_time
+from .gaps import bridge_gaps
 from .units import ROLES, SI_UNITS, UnitError, conversion_note, to_si
 
 
@@ -84,25 +85,25 @@ def assemble(
     for key, cols in layout.groups.items():
         arr = data[:, [order[p] for p in cols]]
         declared = [given.get(ROLES[key], u) for u in layout.units[key]]
-        try:
-            check_finite(key, arr, lines)
-        except RecordingError as err:
-            raise RecordingError(f"{source}: {err}") from None
+        if key == "t":  # a signal's missing samples are bridged below, a missing timestamp is an error
+            try:
+                check_finite(key, arr, lines)
+            except RecordingError as err:
+                raise RecordingError(f"{source}: {err}") from None
         labels[ROLES[key]] = _convert(key, arr, declared, source, notes)
         parts[key] = arr
     try:
-        t, note = file_time(parts["t"][:, 0] if "t" in parts else None, dt, data.shape[0], lines)
+        t, note = file_time(parts.pop("t")[:, 0] if "t" in parts else None, dt, data.shape[0], lines)
         notes += [note] if note else []
+        parts, missing, gap_notes = bridge_gaps(parts, lines, layout.names)
         return Recording(
             t=t,
-            u=parts["u"],
-            a=parts.get("a"),
-            v=parts.get("v"),
-            x=parts.get("x"),
+            **parts,
             dt=dt,
             path=path,
             units={role: label for role, label in labels.items() if role != "time"},
-            notes=notes,
+            notes=notes + gap_notes,
+            missing=missing,
         )
     except RecordingError as err:
         raise RecordingError(f"{source}: {err}") from None
