@@ -83,7 +83,11 @@ def bridge_gaps(
     runs.sort()
     shown = ", ".join(f"{c} at {_where(s, lines)}" for s, _, c in runs[:3]) + (" ..." if len(runs) > 3 else "")
     count = sum(length for _, length, _ in runs)
-    plural = {"value": "s" if count > 1 else "", "gap": "s" if len(runs) > 1 else "", "sample": "s" if longest[1] > 1 else ""}
+    plural = {
+        "value": "s" if count > 1 else "",
+        "gap": "s" if len(runs) > 1 else "",
+        "sample": "s" if longest[1] > 1 else "",
+    }
     note = (
         f"{count} missing value{plural['value']} (NaN or inf) in {len(runs)} gap{plural['gap']} of at most "
         f"{longest[1]} sample{plural['sample']} bridged by straight lines ({shown}); identify leaves those instants out"
