@@ -50,7 +50,8 @@ def add_recording_options(parser) -> None:
     g.add_argument("--group", metavar="NAME", help="HDF5 group holding the datasets (default: the root)")
 
 
-def _mapping_file(path: Path) -> dict:
+def mapping_file(path: Path) -> dict:
+    """The role -> column names mapping a ``--columns`` JSON file holds."""
     try:
         mapping = json.loads(path.read_text(encoding="utf-8"))
     except OSError as err:
@@ -111,7 +112,7 @@ def reading_options(
     ``velocity``, ``displacement``, ``time`` column names; ``columns`` a role -> names mapping
     or the path of a JSON file holding one; ``units`` ``"acceleration=g,force=kN"`` or a dict;
     ``rate`` [Hz] or ``dt`` [s]; ``group`` the HDF5 group."""
-    mapping = dict(columns) if isinstance(columns, dict) else _mapping_file(Path(columns)) if columns else {}
+    mapping = dict(columns) if isinstance(columns, dict) else mapping_file(Path(columns)) if columns else {}
     named = {"time": time, "force": force, "accel": accel, "velocity": velocity, "displacement": displacement}
     for option, value in named.items():
         if value is not None:
@@ -124,9 +125,14 @@ def reading_options(
     }
 
 
+def given_options(args) -> dict:
+    """The reading options given on the command line, by keyword of :func:`reading_options`."""
+    return {name: getattr(args, name) for name in READING if getattr(args, name, None) is not None}
+
+
 def recording_options(args) -> dict:
     """The keyword arguments of :func:`algid.recording.load_recording` the parsed options give."""
-    return reading_options(**{name: getattr(args, name, None) for name in READING})
+    return reading_options(**given_options(args))
 
 
 def print_notes(rec, command: str, quiet: bool = False) -> None:
