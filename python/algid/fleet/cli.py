@@ -3,8 +3,8 @@
 Every recording the inputs name (files, folders, glob patterns) read with the options of
 ``algid identify`` (``--force``, ``--accel``, ``--units``, ``--rate``...; per glob pattern from
 ``--layouts``), identified, and with ``--diagnose`` diagnosed, on Dask: an embedded
-``LocalCluster`` of ``--workers`` processes, or the cluster of ``--scheduler tcp://host:port``. Writes ``DIR/results/part-*.parquet`` (one
-row per recording, resumable), ``DIR/summary.csv`` (one row per machine) and
+``LocalCluster`` of ``--workers`` processes, or the cluster of ``--scheduler tcp://host:port``.
+Writes ``DIR/results/part-*.parquet`` (one row per recording, resumable), ``DIR/summary.csv`` (one row per machine) and
 ``DIR/histories.png``, ``DIR/verdicts.png``. A progress bar on a terminal; the failed
 recordings (at most :data:`SHOWN_FAILURES`) and the count ok / failed / skipped on stderr.
 Exit codes: 0 when the batch ran (failed recordings are rows with their error), 3 when no
