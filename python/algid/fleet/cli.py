@@ -38,7 +38,10 @@ DESCRIPTION = (
 def add_parser(sub) -> None:
     """Register ``algid batch``."""
     summary = "identify (and diagnose) folders of recordings on Dask, results to Parquet"
-    p = sub.add_parser("batch", help=summary, description=DESCRIPTION)
+    from ..cli import example
+
+    epilog = example("algid batch rigs/ --out results/ --force F1 --accel acc1 --units acceleration=g")
+    p = sub.add_parser("batch", help=summary, description=DESCRIPTION, epilog=epilog)
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="recording files, folders or glob patterns")
     p.add_argument(
         "--out", type=Path, required=True, metavar="DIR", help="output folder (created; resumed if it exists)"
@@ -48,10 +51,8 @@ def add_parser(sub) -> None:
     p.add_argument("--workers", type=int, metavar="N", help="processes of the embedded cluster (default: cores)")
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
     p.add_argument("--estimator", choices=ESTIMATORS, default="auto", help="as algid identify --estimator")
-    p.add_argument("--replicates", type=int, default=REPLICATES, help=f"bootstrap replicates (default {REPLICATES})")
-    p.add_argument(
-        "--part-rows", type=int, default=PART_ROWS, metavar="N", help=f"rows per Parquet part (default {PART_ROWS})"
-    )
+    p.add_argument("--replicates", type=int, default=REPLICATES, metavar="N", help="bootstrap replicates")
+    p.add_argument("--part-rows", type=int, default=PART_ROWS, metavar="N", help="rows per Parquet part")
     p.add_argument("--quiet", action="store_true", help="no progress, no summary")
     add_recording_options(p)
     p.add_argument(

@@ -17,11 +17,11 @@ import sys
 from pathlib import Path
 
 from ..chain import Chain
-from ..cli import STREAMS, error_line
+from ..cli import STREAMS, error_line, example
 from ..messages import quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
-from ..recording.options import add_recording_options, print_notes, recording_options
+from ..recording.options import RECORDING_HELP, add_recording_options, print_notes, recording_options
 from .plan import ESTIMATORS
 from .surrogate import REPLICATES
 
@@ -39,13 +39,13 @@ def add_parser(sub) -> None:
         "one standard deviation each and a verdict (valid, or why not), and the modes of the "
         "estimated chain (natural frequency, damping ratio). The estimator is chosen from the "
         "recording unless --estimator says otherwise.",
-        epilog=STREAMS,
+        epilog=f"{STREAMS}\n\n{example('algid identify rig.csv --force F1 --accel acc1 --units acceleration=g')}",
     )
     p.add_argument(
         "recording",
         type=Path,
-        help="CSV/TSV/TXT (optionally .gz, .bz2, .xz, .zip), .npz, HDF5 or UFF 58 with time, forces u1..un "
-        "and accelerations a1..an (or velocities v1..vn, displacements x1..xn)",
+        metavar="RECORDING",
+        help=RECORDING_HELP,
     )
     p.add_argument(
         "--json",
@@ -53,7 +53,7 @@ def add_parser(sub) -> None:
         metavar="OUT",
         help="write the estimates, uncertainties, verdicts and modes as JSON to OUT ('-': stdout)",
     )
-    p.add_argument("--trace", type=Path, help="write the estimate history (with sigma_ columns) as CSV")
+    p.add_argument("--trace", type=Path, metavar="CSV", help="write the estimate history (with sigma_ columns) as CSV")
     p.add_argument(
         "--plots",
         type=Path,
@@ -71,13 +71,14 @@ def add_parser(sub) -> None:
         "--estimator",
         choices=ESTIMATORS,
         default="auto",
-        help="single growing window, continuous windows, or chosen from the recording (default)",
+        help="single growing window, continuous windows, or chosen from the recording",
     )
     p.add_argument(
         "--replicates",
         type=int,
+        metavar="N",
         default=REPLICATES,
-        help=f"bootstrap replicates for the uncertainties (default {REPLICATES})",
+        help="bootstrap replicates for the uncertainties",
     )
     p.add_argument(
         "--effect",

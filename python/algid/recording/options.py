@@ -16,12 +16,28 @@ from .core import RecordingError
 _ROLE_OPTIONS = {"time": "t", "force": "u", "accel": "a", "velocity": "v", "displacement": "x"}
 
 
+#: The help of the RECORDING argument of ``algid identify`` and ``algid diagnose``.
+RECORDING_HELP = (
+    "CSV/TSV/TXT (optionally .gz, .bz2, .xz, .zip), .npz, HDF5 or UFF 58 with time, forces u1..un and "
+    "accelerations a1..an (or velocities v1..vn, displacements x1..xn)"
+)
+
+
+def known_units() -> str:
+    """``"force N, kN, mN, lbf; acceleration m/s^2, ..., g; ...; raw V, mV, uV, counts"``."""
+    from .units import LABELS, TO_SI
+
+    roles = "; ".join(f"{role} {', '.join(units)}" for role, units in TO_SI.items())
+    return f"{roles}; raw (kept as labels) {', '.join(LABELS)}"
+
+
 def add_recording_options(parser) -> None:
     """Register the recording options on an ``argparse`` (sub)parser."""
     g = parser.add_argument_group(
         "reading the recording",
         "Columns are found by their names (t or time, u1..un, a1..an, v1..vn, x1..xn, each with an "
-        "optional unit: 'Time [s]', 'a1 (m/s^2)'); these options name them otherwise.",
+        "optional unit: 'Time [s]', 'a1 (m/s^2)'); these options name them otherwise. A column without "
+        f"a unit is taken as SI (with a note). Known units: {known_units()}.",
     )
     g.add_argument("--time", metavar="COL", help="the time column")
     g.add_argument("--force", metavar="COLS", help="the force columns of DOF 1..n, comma-separated")
@@ -37,8 +53,9 @@ def add_recording_options(parser) -> None:
     g.add_argument(
         "--units",
         metavar="ROLE=UNIT[,ROLE=UNIT]",
-        help="units of the signals, overriding the header, e.g. force=V,displacement=V; "
-        "mm, um, g, kN, ms and the like are converted to SI, other units (V, counts) kept as labels",
+        help="units of the signals, overriding the header, e.g. acceleration=g,force=kN; the known units "
+        "are converted to SI, raw units (V, counts) kept as labels, any other name is an error unless "
+        "declared a label (force=lbs:label)",
     )
     rate = g.add_mutually_exclusive_group()
     rate.add_argument(
