@@ -10,7 +10,7 @@ relative error over all identified parameters (interior springs fused) at t0 + 0
 0.1, 0.5 s, and the first time after which it stays below 1 % and below 1e-6. Also the
 quadrature comparison of the numpy reference (P = 2 trapezoid-like ... 8).
 
-The default run is the published one (README.md, "Accuracy"); it writes
+The default run is the published one (docs/theory.md, "Accuracy"); it writes
 bench/results/accuracy.json (``--json /tmp/accuracy.json`` to keep that file):
 
     python bench/accuracy.py [--json bench/results/accuracy.json]

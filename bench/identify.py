@@ -37,7 +37,7 @@ Sections (all through the Python entry point the command line calls):
   valid, and the largest |error| / sigma of a valid estimate on those.
 
 The default (one seed, blind seeds 0:10) runs every section on fewer records and writes to
-the temporary folder; the published figures (docs/identify.md, README.md) take three seeds
+the temporary folder; the published figures (docs/identify.md) take three seeds
 and 150 blind cases, 17 minutes here (the machine busy with other work):
 
     python bench/identify.py                                    # one seed, blind seeds 0:10

@@ -4,7 +4,7 @@ of measured data.
 Measures: top-1 effect, location, main parameter and gap shrink of the diagnosis on three
 kinds of rig with sensor and drive nuisances, false alarms, answers ``none`` on real effects,
 the wall time per diagnosis. The default (30 seeds, 0:30) is a quick look and writes to
-``WORK`` only; the published figures (docs/diagnosis.md, README.md, about 20 min) are::
+``WORK`` only; the published figures (docs/diagnosis.md, about 20 min) are::
 
     python bench/realistic_blind.py --seeds 20000:20300 --work /tmp/realistic-20k \
         --results bench/results/realistic_blind.json

@@ -161,19 +161,28 @@ def test_noisy_demo_tracks_and_reports_the_drift(noisy):
 
 
 def test_the_readme_states_what_the_default_demo_prints():
-    """The README's figures of `algid demo` are the ones the default run prints (issue 37)."""
+    """The figures of `algid demo` in the README's quick start and in docs/demo.md are the ones
+    the default run prints (issue 37)."""
     pytest.importorskip("algid._core")
     from pathlib import Path
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    row = re.search(
-        r"\| `algid demo` \(continuous mode, noise-free\) \| ([0-9.]+) s; all stay within 1 % from ([0-9.]+) s "
-        r"\| ([0-9.]+) % of the 5 mm stroke \|",
+    repo = Path(__file__).resolve().parents[1]
+    readme = (repo / "README.md").read_text(encoding="utf-8")
+    page = (repo / "docs" / "demo.md").read_text(encoding="utf-8")
+    said = re.search(
+        r"all estimates\s+first within 1 % at ([0-9.]+) s, all stay within 1 % from ([0-9.]+) s, peak tracking error "
+        r"after 1 s\s+([0-9.]+) % of the 5 mm stroke",
         readme,
     )
-    assert row, "the README's demo row"
+    row = re.search(
+        r"\| `algid demo` \(continuous-time control, noise-free\) \| ([0-9.]+) s; all stay within 1 % from ([0-9.]+) s "
+        r"\| ([0-9.]+) % of the 5 mm stroke \|",
+        page,
+    )
+    assert said and row, "the README's quick start and the demo page's row"
     _, s = demo.run_scenario(drift=False)
     printed = (s["all_first_within_1pct_s"], s["all_stay_within_1pct_s"], s["tracking"]["peak_after_1s_pct_stroke"])
-    for text, value in zip(row.groups(), printed):
-        half_digit = 0.5 * 10.0 ** -len(text.split(".")[1])
-        assert abs(float(text) - value) <= half_digit + 1e-12, (text, value)
+    for found in (said, row):
+        for text, value in zip(found.groups(), printed):
+            half_digit = 0.5 * 10.0 ** -len(text.split(".")[1])
+            assert abs(float(text) - value) <= half_digit + 1e-12, (text, value)

@@ -324,7 +324,7 @@ def test_cli_json_contract_and_figures(tmp_path):
     "content,needle",
     [
         ("t,u1\n0,1\n", "missing columns a1"),
-        ("t,u1,a1\n" + "".join(f"{k}e-3,1,{'nan' if k == 3 else 2}\n" for k in range(20)), "NaN"),
+        ("t,u1,a1\n" + "".join(f"{k}e-3,1,{'nan' if k >= 3 else 2}\n" for k in range(20)), "misses 17 samples"),
         ("", "empty file"),
     ],
 )

@@ -135,7 +135,7 @@ def _malformed():
     decreasing = [list(r) for r in rows]
     decreasing[3][0], decreasing[4][0] = decreasing[4][0], decreasing[3][0]
     with_nan = [list(r) for r in rows]
-    with_nan[6][1] = float("nan")
+    with_nan[6][0] = float("nan")  # a timestamp: a signal's missing samples are bridged
     ragged = _csv("t,u1,a1", rows).splitlines()
     ragged[4] = ",".join(ragged[4].split(",")[:2])
     return [
@@ -147,7 +147,7 @@ def _malformed():
         (_csv("t,u1", [r[:2] for r in rows]), "missing columns"),
         (_csv("t,u1,a1", nonuniform), "uniform"),
         (_csv("t,u1,a1", decreasing), "increasing"),
-        (_csv("t,u1,a1", with_nan), "nan"),
+        (_csv("t,u1,a1", with_nan), "column t has NaN"),
         ("\n".join(ragged) + "\n", "row"),
     ]
 

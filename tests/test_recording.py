@@ -86,8 +86,12 @@ ERRORS = [
     (_csv_text(cols=["t", "u2", "a2"]), "missing column u1"),
     ("t,u1,a1\n" + "".join(f"{k}e-3,1,2\n" for k in range(9)) + "9e-3,1\n", "ragged row at line 11"),
     ("t,u1,a1\n" + "".join(f"{k}e-3,1,2\n" for k in range(9)) + "9e-3,1,abc\n", "cannot parse 'abc'"),
-    ("t,u1,a1\n" + "".join(f"{k}e-3,1,{'nan' if k == 4 else 2}\n" for k in range(10)), "column a1 has NaN at line 6"),
-    ("t,u1,a1\n" + "".join(f"{k}e-3,{'inf' if k == 2 else 1},2\n" for k in range(10)), "column u1 has inf at line 4"),
+    ("t,u1,a1\n" + "".join(f"{'nan' if k == 4 else f'{k}e-3'},1,2\n" for k in range(10)), "column t has NaN at line 6"),
+    ("t,u1,a1\n" + "".join(f"{k}e-3,{'inf' if k % 3 else 1},2\n" for k in range(30)), "67 % of the samples miss"),
+    (
+        "t,u1,a1\n" + "".join(f"{k}e-3,1,{'nan' if 5 <= k < 15 else 2}\n" for k in range(30)),
+        "a1 misses 10 samples in a row from line 7",
+    ),
     ("t,u1,a1\n" + "".join(f"{k}e-3,1,2\n" for k in (0, 1, 2, 3, 3, 4, 5, 6, 7, 8)), "not increasing at line 6"),
     ("t,u1,a1\n" + "".join(f"{k}e-3,1,2\n" for k in (0, 1, 2, 3, 4, 5, 6, 8, 9, 10)), "non-uniform time"),
     ("t,u1,a1\n0,1,2\n0.001,1,2\n", "too short"),
@@ -148,9 +152,9 @@ def test_npz_errors(tmp_path):
     with pytest.raises(RecordingError, match="mismatched n: force columns u1..u2 but displacement"):
         load_recording(p)
     a = np.ones(10)
-    a[7] = np.nan
+    a[3:] = np.nan
     np.savez(p, t=t, u1=np.ones(10), a1=a)
-    with pytest.raises(RecordingError, match="column a1 has NaN at sample 7"):
+    with pytest.raises(RecordingError, match="70 % of the samples miss a value"):
         load_recording(p)
     np.savez(p)
     with pytest.raises(RecordingError, match="empty file"):

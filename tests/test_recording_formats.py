@@ -108,7 +108,8 @@ def test_units_that_are_not_si_are_labels_and_survive_a_round_trip(tmp_path):
         back = load_recording(save_recording(tmp_path / f"back{ext}", rec))
         assert back.units == rec.units
         np.testing.assert_array_equal(back.x, rec.x)
-    assert (tmp_path / "back.csv").read_text().splitlines()[0] == "t,u1 [V],x1 [V]"
+    assert (tmp_path / "back.csv").read_text().splitlines()[0] == "t [s],u1 [V],x1 [V]"
+    assert rec.notes == ["no unit for t: SI assumed (s)"] and back.notes == []
     # the option overrides the header: a plain file labelled as volts
     plain = load_recording(save_recording(tmp_path / "plain.csv", Recording(t=t, u=u, x=a)), units={"force": "V"})
     assert parameter_units(plain) == {"m": "V s^2/m", "c": "V s/m", "k": "V/m"}
@@ -295,7 +296,7 @@ def _rows(k_max=20, sep=",", fields=("1", "2")):
 HOSTILE = [
     ("t;u1;a1\n" + _rows(sep=";") + "0,02;1\n", "ragged row at line 22: 2 fields"),
     ("t\tu1\ta1\n" + _rows(sep="\t", fields=("1", "x")), "line 2, column 'a1': cannot parse 'x'"),
-    ("t [samples],u1,a1\n" + _rows(), "time in 'samples', not a unit of time"),
+    ("t [samples],u1,a1\n" + _rows(), "unknown unit 'samples' for time"),
     ("t,u1 [N],u2 [V],a1,a2\n" + _rows(fields=("1", "2", "3", "4")), "force columns in different units: N, V"),
     ("t,time,u1,a1\n" + _rows(fields=("0", "1", "2")), "two time columns, 't' and 'time'"),
     ("t,u1 [N],u1 [V],a1\n" + _rows(fields=("1", "2", "3")), "duplicate column 'u1'"),

@@ -22,6 +22,38 @@ STREAMS = (
 )
 
 
+class HelpFormatter(argparse.HelpFormatter):
+    """Every subcommand's help alike: an option's default said as ``(default: X)`` unless its
+    help says it; paragraphs of a description or epilog filled apart, a line indented by two
+    blanks (an example) kept as written."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        unset = action.default is None or action.default is False or action.default in ([], argparse.SUPPRESS)
+        if "default" in text or unset or not action.option_strings:
+            return text
+        return f"{text} (default: %(default)s)"
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        out = []
+        for para in text.split("\n\n"):
+            lines = para.splitlines()
+            if any(line.startswith("  ") for line in lines):
+                out.append("\n".join(indent + line for line in lines))
+            else:
+                out.append(super()._fill_text(para, width, indent))
+        return "\n\n".join(out)
+
+
+def example(*lines: str) -> str:
+    """The epilog paragraph of a subcommand's examples: ``example:`` and each command line."""
+    return "example:\n" + "\n".join(f"  {line}" for line in lines)
+
+
+#: Options whose value is a comma-separated list (a blank instead of a comma gets a hint).
+COMMA_LISTS = ("--force", "--accel", "--velocity", "--displacement", "--units")
+
+
 def error_text(err: BaseException) -> str:
     """What went wrong, in one line: the message of an input error, else the exception's type
     and message."""
@@ -55,7 +87,19 @@ def build_parser() -> argparse.ArgumentParser:
     identify_cli.add_parser(sub)
     diagnosis_cli.add_parser(sub)
     batch_cli.add_parser(sub)
+    for command in sub.choices.values():
+        command.formatter_class = HelpFormatter
     return parser
+
+
+def _unrecognised(argv: list[str], extras: list[str]) -> str:
+    """The error for arguments no option took, with a hint when a blank split a comma list
+    (``--force F1 F2``)."""
+    text = f"unrecognized arguments: {' '.join(extras)}"
+    at = argv.index(extras[0]) if extras[0] in argv else -1
+    if at >= 2 and argv[at - 2] in COMMA_LISTS:
+        text += f" (a list is comma-separated: {argv[at - 2]} {argv[at - 1]},{extras[0]})"
+    return text
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -79,7 +123,12 @@ def _run(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args, extras = parser.parse_known_args(argv)
+    command = getattr(args, "command", None)
+    if extras:  # said with the subcommand's usage line, not the top level's
+        sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        (sub.choices[command] if command else parser).error(_unrecognised(argv, extras))
     if getattr(args, "func", None) is None:
         parser.print_help()
         return 2

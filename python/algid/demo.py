@@ -99,6 +99,11 @@ from .progress import Progress
 
 __all__ = ["add_parser", "run", "demo_chain", "run_scenario", "summarize", "settle_time", "format_summary", "jsonable"]
 
+#: The controller's ``--mode`` and the ``--estimator`` in words that keep them apart (both
+#: have a "continuous"): the summary's and the figures' titles.
+CONTROL_WORDS = {"continuous": "continuous-time control", "sampled": "sampled control"}
+ESTIMATOR_WORDS = {"single": "single-window estimator", "continuous": "continuous estimator"}
+
 #: Relative accuracy an estimate must reach [-].
 TOLERANCE = 0.01
 
@@ -478,7 +483,7 @@ def _fmt_t(x: float) -> str:
 def format_summary(s: dict[str, Any]) -> str:
     """The human-readable report."""
     lines = [
-        f"algid demo: n = {s['n']}, {s['mode']} mode, fs = {s['fs_hz']:.0f} Hz, "
+        f"algid demo: n = {s['n']}, {CONTROL_WORDS[s['mode']]}, fs = {s['fs_hz']:.0f} Hz, "
         f"{s['duration_s']:.1f} s"
         + (f", actuator lag {1e3 * s['actuator_lag_s']:g} ms" if s.get("actuator_lag_s") else "")
         + ", accelerometers "
@@ -489,7 +494,7 @@ def format_summary(s: dict[str, Any]) -> str:
             + ", ".join(f"{v:.1f}" for v in s["accel_snr_achieved_db"])
             + " dB)"
         ),
-        f"estimator: {s.get('estimator', 'single')}"
+        f"{ESTIMATOR_WORDS[s.get('estimator', 'single')]}"
         + (
             f" (running estimate served from {s['continuous_running_from_s']:.3f} s)"
             if s.get("continuous_running_from_s") is not None
@@ -569,11 +574,14 @@ def _percent(fraction: float, digits: int) -> str:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``algid demo`` on an argparse sub-parser collection."""
+    from .cli import example
+
     p = subparsers.add_parser(
         "demo",
         help="reproduce the paper's closed-loop experiment (Table 1, 5 s)",
         description="Closed-loop tracking of the Table 1 chain with on-line estimates "
         "substituted at 0.1 s; prints a table and writes PNG figures.",
+        epilog=example("algid demo --mode sampled --noise-db 40 --out demo-sampled/"),
     )
     p.add_argument(
         "--mode",
@@ -581,7 +589,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default="continuous",
         help="controller inside the ODE (paper) or held at the sample rate (DAC)",
     )
-    p.add_argument("--noise-db", type=float, default=None, help="SNR of the accelerometers [dB] (default: noise-free)")
+    p.add_argument(
+        "--noise-db",
+        type=float,
+        metavar="DB",
+        default=None,
+        help="SNR of the accelerometers [dB] (default: noise-free)",
+    )
     p.add_argument(
         "--estimator",
         choices=("single", "continuous", "auto"),
@@ -592,26 +606,29 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--excitation",
         type=float,
+        metavar="N",
         default=None,
-        help="probe multisine amplitude per line [N] (default 0.05 with --noise-db or in sampled mode, 0 otherwise)",
+        help="probe multisine amplitude per line [N] (default: 0.05 with --noise-db or in sampled mode, 0 otherwise)",
     )
     p.add_argument(
         "--actuator-lag-ms",
         type=float,
+        metavar="MS",
         default=0.0,
-        help="time constant of a first-order actuator behind the command [ms] (default 0); "
+        help="time constant of a first-order actuator behind the command [ms] (default: 0); "
         "in sampled mode the controller identifies it from its commands and the measured forces",
     )
     p.add_argument(
         "--velocity-pole",
         type=float,
+        metavar="RAD_S",
         default=None,
-        help="sampled mode: position feedback in eq. 10 [rad/s] (default 40; 0: the paper's eq. 10)",
+        help="sampled mode: position feedback in eq. 10 [rad/s] (default: 40; 0: the paper's eq. 10)",
     )
-    p.add_argument("--n", type=int, default=3, help="number of DOF (default 3, Table 1)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
-    p.add_argument("--duration", type=float, default=5.0, help="record length [s] (default 5)")
-    p.add_argument("--out", default="./algid-demo/", help="output folder (default ./algid-demo/)")
+    p.add_argument("--n", type=int, metavar="N", default=3, help="number of DOF (default: 3, Table 1)")
+    p.add_argument("--seed", type=int, metavar="N", default=0, help="seed of the sensor noise")
+    p.add_argument("--duration", type=float, metavar="S", default=5.0, help="record length [s]")
+    p.add_argument("--out", metavar="DIR", default="./algid-demo/", help="output folder")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
     p.set_defaults(func=run)
     return p

@@ -367,4 +367,4 @@ def without_hum(rec):
         return rec, []
     key = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
     clean = {"t": rec.t, "u": notch(rec.u, rec.dt, lines), key: notch(y, rec.dt, lines)}
-    return Recording(**clean, path=rec.path, units=rec.units, notes=rec.notes), lines
+    return Recording(**clean, path=rec.path, units=rec.units, notes=rec.notes, missing=rec.missing), lines

@@ -13,11 +13,11 @@ import json
 import sys
 from pathlib import Path
 
-from ..cli import STREAMS
+from ..cli import STREAMS, example
 from ..messages import one_line, quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
-from ..recording.options import add_recording_options, print_notes, recording_options
+from ..recording.options import RECORDING_HELP, add_recording_options, print_notes, recording_options
 from ..recording.transient import add_band_option
 
 
@@ -30,12 +30,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "frequency, amplitude), fit every candidate unmodelled effect at every location "
         "on training windows, score it on withheld windows and report the best one that "
         "shrinks the gap beyond noise.",
-        epilog=STREAMS,
+        epilog=f"{STREAMS}\n\n{example('algid diagnose rig.csv --force F1 --accel acc1 --plots figures/')}",
     )
     p.add_argument(
         "recording",
         metavar="RECORDING",
-        help="CSV/TSV/TXT (optionally compressed), .npz, HDF5 or UFF 58 with time, u1..un, a1..an (or v, x)",
+        help=RECORDING_HELP,
     )
     p.add_argument("--json", metavar="OUT", help="write the JSON result to OUT ('-': stdout)")
     p.add_argument("--plots", metavar="DIR", help="write the diagnosis figures (PNG) into DIR")

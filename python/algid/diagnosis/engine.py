@@ -664,6 +664,7 @@ def diagnose(
     quick: bool = False,
     notch: bool = True,
     band_hz: tuple[float, float] | None = None,
+    **reading,
 ) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
 
@@ -689,12 +690,15 @@ def diagnose(
         Notch the mains hum out first (False: the caller has, as :func:`algid.identify` does).
     band_hz : (low, high) [Hz] or None
         Impact records: the band of the modes the chain holds (:mod:`algid.recording.transient`).
+    **reading
+        How to read a path or a DataFrame, as ``algid diagnose``'s options say (``force``,
+        ``accel``, ``units``, ``rate``...: :func:`algid.recording.options.reading_options`).
 
     Returns
     -------
     Diagnosis
     """
-    rec = as_recording(rec)
+    rec = as_recording(rec, **reading)
     if rec.base is not None:
         raise RecordingError(
             "a base-excited record (support motion a0): the diagnosis's equations have the wall at rest; "

@@ -1,9 +1,10 @@
-"""``algid batch INPUTS... --out DIR [--diagnose] [--scheduler ADDRESS] [--workers N]``.
+"""``algid batch INPUTS... --out DIR [--diagnose] [--workers N] [reading options] [--layouts FILE]``.
 
-Every recording the inputs name (files, folders, glob patterns) identified, and with
-``--diagnose`` diagnosed, on Dask: an embedded ``LocalCluster`` of ``--workers`` processes,
-or the cluster of ``--scheduler tcp://host:port``. Writes ``DIR/results/part-*.parquet`` (one
-row per recording, resumable), ``DIR/summary.csv`` (one row per machine) and
+Every recording the inputs name (files, folders, glob patterns) read with the options of
+``algid identify`` (``--force``, ``--accel``, ``--units``, ``--rate``...; per glob pattern from
+``--layouts``), identified, and with ``--diagnose`` diagnosed, on Dask: an embedded
+``LocalCluster`` of ``--workers`` processes, or the cluster of ``--scheduler tcp://host:port``.
+Writes ``DIR/results/part-*.parquet`` (one row per recording, resumable), ``DIR/summary.csv`` (one row per machine) and
 ``DIR/histories.png``, ``DIR/verdicts.png``. A progress bar on a terminal; the failed
 recordings (at most :data:`SHOWN_FAILURES`) and the count ok / failed / skipped on stderr.
 Exit codes: 0 when the batch ran (failed recordings are rows with their error), 3 when no
@@ -18,6 +19,7 @@ from pathlib import Path
 
 from ..identification.plan import ESTIMATORS
 from ..identification.surrogate import REPLICATES
+from ..recording.options import add_recording_options, given_options, mapping_file, reading_options
 from .engine import PART_ROWS
 
 #: Failed recordings named on stderr; the rest are in the results' ``error`` column.
@@ -36,7 +38,10 @@ DESCRIPTION = (
 def add_parser(sub) -> None:
     """Register ``algid batch``."""
     summary = "identify (and diagnose) folders of recordings on Dask, results to Parquet"
-    p = sub.add_parser("batch", help=summary, description=DESCRIPTION)
+    from ..cli import example
+
+    epilog = example("algid batch rigs/ --out results/ --force F1 --accel acc1 --units acceleration=g")
+    p = sub.add_parser("batch", help=summary, description=DESCRIPTION, epilog=epilog)
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="recording files, folders or glob patterns")
     p.add_argument(
         "--out", type=Path, required=True, metavar="DIR", help="output folder (created; resumed if it exists)"
@@ -46,11 +51,18 @@ def add_parser(sub) -> None:
     p.add_argument("--workers", type=int, metavar="N", help="processes of the embedded cluster (default: cores)")
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
     p.add_argument("--estimator", choices=ESTIMATORS, default="auto", help="as algid identify --estimator")
-    p.add_argument("--replicates", type=int, default=REPLICATES, help=f"bootstrap replicates (default {REPLICATES})")
-    p.add_argument(
-        "--part-rows", type=int, default=PART_ROWS, metavar="N", help=f"rows per Parquet part (default {PART_ROWS})"
-    )
+    p.add_argument("--replicates", type=int, default=REPLICATES, metavar="N", help="bootstrap replicates")
+    p.add_argument("--part-rows", type=int, default=PART_ROWS, metavar="N", help="rows per Parquet part")
     p.add_argument("--quiet", action="store_true", help="no progress, no summary")
+    add_recording_options(p)
+    p.add_argument(
+        "--layouts",
+        type=Path,
+        metavar="FILE",
+        help="for folders of mixed layouts: a JSON or TOML file mapping glob patterns to the options above, "
+        'e.g. {"rig_a/*.csv": {"force": "F1", "accel": "acc1", "units": "acceleration=g"}}; a file takes the '
+        "first pattern that matches it, over the command line's options",
+    )
     p.set_defaults(func=run)
 
 
@@ -79,11 +91,21 @@ def run(args) -> int:
     from ..cli import error_line
     from .deps import require
     from .engine import batch
+    from .inputs import read_layouts
 
     for flag, value in (("--workers", args.workers), ("--part-rows", args.part_rows)):
         if value is not None and value < 1:
             print(error_line("batch", ValueError(f"{flag} must be >= 1, got {value}")), file=sys.stderr)
             return 2
+    reading = given_options(args)
+    try:
+        if "columns" in reading:
+            reading["columns"] = mapping_file(reading["columns"])
+        reading_options(**reading)  # bad options fail here, before a worker starts
+        layouts = read_layouts(args.layouts) if args.layouts is not None else None
+    except ValueError as err:
+        print(error_line("batch", err), file=sys.stderr)
+        return 2
     require()
     logging.getLogger("distributed").setLevel(logging.ERROR)
     bar = _bar(args.quiet)
@@ -95,6 +117,7 @@ def run(args) -> int:
 
     options = {"diagnose": args.diagnose, "boundary": args.boundary, "estimator": args.estimator}
     options.update(replicates=args.replicates, part_rows=args.part_rows, progress=progress if bar is not None else None)
+    options.update(reading=reading, layouts=layouts)
     try:
         if args.scheduler:
             from distributed import Client

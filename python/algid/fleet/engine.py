@@ -20,6 +20,7 @@ and its in-memory logs short (:data:`WORKER_CONFIG`).
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import time
@@ -27,7 +28,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from ..identification.surrogate import REPLICATES
-from .inputs import expand
+from .inputs import expand, read_layouts
 from .store import ResultStore
 from .task import Options, run_one
 
@@ -164,6 +165,8 @@ def batch(
     part_rows: int = PART_ROWS,
     part_seconds: float = PART_SECONDS,
     progress: ProgressFn = None,
+    reading: dict | None = None,
+    layouts: str | Path | list | None = None,
 ):
     """Identify (and with ``diagnose`` diagnose) every recording ``paths`` name, on Dask.
 
@@ -175,6 +178,11 @@ def batch(
     client : a ``distributed.Client`` to run on; None starts a ``LocalCluster`` of
         ``workers`` processes for the batch and closes it after.
     diagnose, boundary, estimator, replicates : as ``algid diagnose`` / ``algid identify``.
+    reading : how to read every file, as ``algid identify``'s options say (``{"force": "F1",
+        "accel": "acc1", "units": "acceleration=g", "rate": 2048}``,
+        :func:`algid.recording.options.reading_options`).
+    layouts : for folders of mixed layouts, glob pattern -> reading options over ``reading``: a
+        JSON or TOML file (:func:`.inputs.read_layouts`) or its ``[[pattern, reading], ...]``.
     part_rows, part_seconds : a part file is written every ``part_rows`` rows or
         ``part_seconds`` [s], whichever comes first.
     progress : called after every recording with the counts ``{"ok", "failed", "skipped"}`` and
@@ -190,7 +198,16 @@ def batch(
 
     require()
     found = expand(paths)
-    options = Options(boundary, estimator, REPLICATES if replicates is None else int(replicates), bool(diagnose))
+    if isinstance(layouts, (str, Path)):
+        layouts = read_layouts(layouts)
+    options = Options(
+        boundary,
+        estimator,
+        REPLICATES if replicates is None else int(replicates),
+        bool(diagnose),
+        json.dumps(reading or {}, sort_keys=True),
+        json.dumps(layouts or []),
+    )
     store = ResultStore(out)
     writer = _Writer(store, part_rows, part_seconds)
     if client is not None:

@@ -4,10 +4,12 @@ glob patterns (``**`` included), each recording once, in a stable order."""
 from __future__ import annotations
 
 import glob
+import json
 from pathlib import Path
 
-from ..messages import quote_path
+from ..messages import quote, quote_path
 from ..recording import EXTENSIONS, readable
+from ..recording.options import READING, mapping_file
 
 
 class InputError(ValueError):
@@ -45,3 +47,37 @@ def expand(inputs) -> list[Path]:
             raise InputError(f"no recordings ({EXTENSIONS}) in {quote_path(path)}")
         found.update(dict.fromkeys(p.resolve() for p in hits))
     return sorted(found)
+
+
+def read_layouts(path: Path) -> list[list]:
+    """``[[pattern, reading], ...]`` from a JSON or TOML file mapping glob patterns to the reading
+    options of the files they match (``{"rig_a/*.csv": {"force": "F1", "accel": "acc1", "units":
+    "acceleration=g"}}``), in the file's order; a ``columns`` name is a ``--columns`` JSON file
+    beside it. Raises :class:`InputError` on an unreadable file or an unknown option."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise InputError(f"--layouts: cannot read {quote_path(path)} ({err.strerror or err})") from None
+    try:
+        if path.suffix.lower() == ".toml":
+            import tomllib
+
+            table = tomllib.loads(text)
+        else:
+            table = json.loads(text)
+    except ValueError as err:
+        raise InputError(f"--layouts: {quote_path(path)} is not {path.suffix.lower()[1:] or 'JSON'} ({err})") from None
+    if not isinstance(table, dict) or not all(isinstance(v, dict) for v in table.values()):
+        raise InputError(f"--layouts: {quote_path(path)} must map glob patterns to tables of options")
+    layouts = []
+    for pattern, reading in table.items():
+        unknown = sorted(set(reading) - set(READING))
+        if unknown:
+            raise InputError(
+                f"--layouts: {quote(pattern)}: unknown option {quote(unknown[0])} (known: {', '.join(READING)})"
+            )
+        if isinstance(reading.get("columns"), str):
+            reading = {**reading, "columns": mapping_file(path.parent / reading["columns"])}
+        layouts.append([pattern, reading])
+    return layouts

@@ -25,7 +25,7 @@ import json
 import os
 import time
 from dataclasses import asdict, dataclass
-from pathlib import Path
+from pathlib import Path, PurePath
 
 from ..identification.surrogate import REPLICATES
 from ..parallel import threads
@@ -42,12 +42,19 @@ class Options:
     estimator : ``auto``, ``window`` or ``continuous`` (:func:`algid.identify`).
     replicates : bootstrap replicates of the uncertainties.
     diagnose : also run :func:`algid.diagnosis.diagnose`.
+    reading : JSON of the reading options of every file (the keywords of
+        :func:`algid.recording.options.reading_options`: ``{"force": "F1", "units": "acceleration=g"}``).
+    layouts : JSON of ``[[pattern, reading], ...]``: a file that a glob pattern matches (from the
+        right, :meth:`pathlib.PurePath.match`) is read with the first such pattern's options over
+        ``reading`` (:func:`.inputs.read_layouts`).
     """
 
     boundary: str = "fixed"
     estimator: str = "auto"
     replicates: int = REPLICATES
     diagnose: bool = False
+    reading: str = "{}"
+    layouts: str = "[]"
 
     def __post_init__(self) -> None:
         from ..identification.plan import ESTIMATORS
@@ -58,6 +65,21 @@ class Options:
             raise ValueError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {self.estimator!r}")
         if self.replicates < 2:
             raise ValueError(f"replicates must be >= 2, got {self.replicates}")
+        self.reading_for("")  # the options are known keywords with readable values
+
+    def reading_for(self, path) -> dict:
+        """The keyword arguments of :func:`algid.recording.load_recording` for the file at ``path``."""
+        from ..recording.options import reading_options
+
+        given = json.loads(self.reading)
+        for pattern, layout in json.loads(self.layouts):
+            if path and PurePath(path).match(pattern):
+                given = {**given, **layout}
+                break
+        try:
+            return reading_options(**given)
+        except TypeError as err:
+            raise ValueError(f"reading options: {err}") from None
 
     def fingerprint(self) -> bytes:
         """The options and the algid version, canonically serialised."""
@@ -119,7 +141,7 @@ def _analyse(path: Path, options: Options) -> dict:
     from ..recording import load_recording
 
     clock = time.perf_counter()
-    rec = load_recording(path)
+    rec = load_recording(path, **options.reading_for(path))
     row = {"load_s": time.perf_counter() - clock}
     clock = time.perf_counter()
     result = identify(rec, options.boundary, options.estimator, replicates=options.replicates)

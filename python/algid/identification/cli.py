@@ -17,12 +17,12 @@ import sys
 from pathlib import Path
 
 from ..chain import Chain
-from ..cli import STREAMS, error_line
+from ..cli import STREAMS, error_line, example
 from ..messages import quote_path
 from ..progress import Progress
 from ..recording import RecordingError, load_recording
 from ..recording.frf_file import is_frf_source
-from ..recording.options import add_recording_options, print_notes, recording_options
+from ..recording.options import RECORDING_HELP, add_recording_options, print_notes, recording_options
 from ..recording.transient import add_band_option
 from .plan import ESTIMATORS
 from .surrogate import REPLICATES
@@ -41,14 +41,14 @@ def add_parser(sub) -> None:
         "one standard deviation each and a verdict (valid, or why not), and the modes of the "
         "estimated chain (natural frequency, damping ratio). The estimator is chosen from the "
         "recording unless --estimator says otherwise.",
-        epilog=STREAMS,
+        epilog=f"{STREAMS}\n\n{example('algid identify rig.csv --force F1 --accel acc1 --units acceleration=g')}",
     )
     p.add_argument(
         "recording",
         type=Path,
-        help="CSV/TSV/TXT (optionally .gz, .bz2, .xz, .zip), .npz, HDF5 or UFF 58 with time, forces u1..un "
-        "and accelerations a1..an (or velocities v1..vn, displacements x1..xn); or FRFs: UFF 58 of function "
-        "type 4, or .npz with frequency_hz, frf, quantity (docs/identify.md)",
+        metavar="RECORDING",
+        help=RECORDING_HELP + "; with a support motion a0 (v0, x0) for base excitation, forces then optional; "
+        "or FRFs: UFF 58 of function type 4, or .npz with frequency_hz, frf, quantity (docs/identify.md)",
     )
     p.add_argument(
         "--json",
@@ -56,7 +56,7 @@ def add_parser(sub) -> None:
         metavar="OUT",
         help="write the estimates, uncertainties, verdicts and modes as JSON to OUT ('-': stdout)",
     )
-    p.add_argument("--trace", type=Path, help="write the estimate history (with sigma_ columns) as CSV")
+    p.add_argument("--trace", type=Path, metavar="CSV", help="write the estimate history (with sigma_ columns) as CSV")
     p.add_argument(
         "--plots",
         type=Path,
@@ -83,13 +83,14 @@ def add_parser(sub) -> None:
         "--estimator",
         choices=ESTIMATORS,
         default="auto",
-        help="single growing window, continuous windows, or chosen from the recording (default)",
+        help="single growing window, continuous windows, or chosen from the recording",
     )
     p.add_argument(
         "--replicates",
         type=int,
+        metavar="N",
         default=REPLICATES,
-        help=f"bootstrap replicates for the uncertainties (default {REPLICATES})",
+        help="bootstrap replicates for the uncertainties",
     )
     p.add_argument(
         "--effect",

@@ -145,6 +145,7 @@ def identify(
     progress: ProgressFn = None,
     effects: Sequence[str] = (),
     band_hz: tuple[float, float] | None = None,
+    **reading,
 ) -> Identification:
     """Identify the chain of a whole recording, with one standard deviation per parameter
     and a verdict on each.
@@ -174,6 +175,11 @@ def identify(
         Impact records: the band whose modes the chain holds (default: around the ``n`` lowest
         modes of the response, :mod:`algid.recording.transient`); the modes outside are filtered
         out and reported as residual modes.
+    **reading
+        How to read a path or a DataFrame, as ``algid identify``'s options say: ``time``,
+        ``force``, ``accel``, ``velocity``, ``displacement`` (column names, ``"F1,F2"`` or a
+        list), ``columns``, ``units`` (``"acceleration=g"`` or a dict), ``rate`` [Hz] or ``dt``
+        [s], ``group`` (:func:`algid.recording.options.reading_options`).
 
     Returns
     -------
@@ -186,7 +192,7 @@ def identify(
         if effects or estimator != "auto":
             raise ValueError("--effect and --estimator apply to time recordings, not to FRFs")
         return identify_frf(rec, boundary)
-    rec = as_recording(rec)
+    rec = as_recording(rec, **reading)
     scale, base = "", rec.base is not None
     if base:  # the support is DOF 0 of the chain estimated, dropped at the end (:mod:`.base`)
         if effects:

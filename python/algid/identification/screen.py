@@ -107,7 +107,8 @@ def _bridged(y: np.ndarray, bad: np.ndarray) -> np.ndarray:
 
 def screen(rec, reach: int = 0):
     """``(recording, Screened)``: the recording with its screened samples bridged, and what
-    was screened. ``reach``: samples on either side of a screened instant that the
+    was screened; the rows the estimators must not see include the samples the reader bridged
+    (:attr:`Recording.missing`). ``reach``: samples on either side of a screened instant that the
     estimators must not see either (the half-width of a derivative stencil)."""
     T = rec.t.size
     fields = {}
@@ -128,13 +129,14 @@ def screen(rec, reach: int = 0):
             values.extend(arr[at, j].tolist())
         if out is not None:
             fields[role] = out
-    if not samples:
-        return rec, Screened(rows=np.zeros(T, bool))
-    order = np.argsort(samples, kind="stable")
-    samples = np.asarray(samples)[order]
+    gaps = np.zeros(T, bool) if getattr(rec, "missing", None) is None else rec.missing
     rows = np.zeros(T, bool)
-    for s in np.unique(samples):
+    order = np.argsort(samples, kind="stable")
+    samples = np.asarray(samples, dtype=int)[order]
+    for s in np.union1d(np.unique(samples), np.flatnonzero(gaps)):
         rows[max(0, s - reach) : s + reach + 1] = True
+    if not samples.size:
+        return rec, Screened(rows=rows)
     found = Screened(
         samples=samples,
         channels=tuple(np.asarray(channels)[order].tolist()),

@@ -59,10 +59,12 @@ def _families(res: Any) -> list[tuple[str, np.ndarray, np.ndarray, list[str]]]:
 
 def _title(res: Any, summary: dict[str, Any]) -> str:
     """What ran: DOF, mode, noise, estimator (and whether the estimates were substituted)."""
+    from ..demo import CONTROL_WORDS, ESTIMATOR_WORDS
+
     title = (
-        f"n = {res.chain.n}, {res.mode} mode, "
+        f"n = {res.chain.n}, {CONTROL_WORDS[res.mode]}, "
         + ("noise-free" if summary["noise_db"] is None else f"accel SNR {summary['noise_db']:.0f} dB")
-        + (f", {summary['estimator']} estimator" if summary.get("estimator") else "")
+        + (f", {ESTIMATOR_WORDS[summary['estimator']]}" if summary.get("estimator") else "")
     )
     if summary.get("estimates_substituted_s", 0.0) is None:
         title += "; estimates never substituted"

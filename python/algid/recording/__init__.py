@@ -27,8 +27,10 @@ parentheses (``Time [s]``, ``a1 (m/s^2)``, ``x1[mm]``); or any names mapped to r
 
 Units (:mod:`algid.recording.units`): from the header or from ``units`` (``{"force": "V",
 "displacement": "V"}``). Convertible units (mm, um, in, g, kN, lbf, ms, ...) are converted to
-SI, with a note; others (V, counts) are kept and carried as labels, and
-:func:`parameter_units` gives the units the identified m, c, k are then in.
+SI, with a note; a column without a unit is taken as SI, with a note; raw units (V, mV, counts)
+and names declared ``UNIT:label`` are kept and carried as labels, and :func:`parameter_units`
+gives the units the identified m, c, k are then in; any other unit name is an error naming the
+nearest known ones.
 
 Validation (every failure raises :class:`RecordingError` with a one-line message naming
 the problem and, where it has one, the offending line / column):
@@ -40,7 +42,10 @@ the problem and, where it has one, the offending line / column):
   (:attr:`Recording.base`); no signal named twice; a DOF
   number beyond the number of columns is refused before anything is allocated;
 * every row has as many fields as the header and every field read parses as a number;
-* no NaN or inf anywhere;
+* no NaN or inf in the time column; in a signal, gaps of up to
+  :data:`~.gaps.MAX_GAP_SAMPLES` missing samples (NaN, inf) are bridged and noted
+  (:mod:`algid.recording.gaps`), a longer gap or more than :data:`~.gaps.MAX_MISSING_SHARE` of
+  the instants missing is an error;
 * at least :data:`MIN_SAMPLES` samples; time strictly increasing and uniform:
   ``max |t[k+1] - t[k] - dt| <= UNIFORM_RTOL * dt`` with ``dt = (t[-1] - t[0]) / (T - 1)``
   (0.1 %). A file's time column whose steps vary by up to
@@ -117,14 +122,19 @@ def readable(path) -> bool:
     return True
 
 
-def as_recording(source) -> Recording:
+def as_recording(source, **reading) -> Recording:
     """``source`` itself when it is a :class:`Recording`, else :func:`load_recording` of it (a
-    path or a DataFrame, with the default column names and units); a clear ``TypeError`` for
-    anything else."""
+    path or a DataFrame) read as the command line's options say: ``force="F1"``,
+    ``accel="acc1"``, ``units="acceleration=g"``, ``rate=2048``... (the keywords of
+    :func:`.options.reading_options`); a clear ``TypeError`` for anything else."""
+    from .options import reading_options
+
     if isinstance(source, Recording):
+        if any(value is not None for value in reading.values()):
+            raise TypeError(f"{', '.join(reading)}: options for reading a file or a DataFrame, not a Recording")
         return source
     if isinstance(source, (str, os.PathLike)) or hasattr(source, "columns"):
-        return load_recording(source)
+        return load_recording(source, **reading_options(**reading))
     raise TypeError(f"expected a Recording, a path or a pandas DataFrame, got {type(source).__name__}")
 
 
@@ -184,19 +194,18 @@ def load_recording(
 
 
 def _header_names(rec: Recording) -> list[str]:
-    """Column names, with the unit of every signal whose unit is not SI (``u1 [V]``)."""
+    """Column names with the unit of every signal (``t [s]``, ``u1 [N]``, ``x1 [V]``)."""
     roles = {"u": "force", "a": "acceleration", "v": "velocity", "x": "displacement"}
     names = []
     for name in rec.columns():
         role = roles.get(name[0], "time")
-        label = rec.units.get(role, SI_UNITS[role])  # a support motion of another kind than the DOFs': SI
-        names.append(name if label == SI_UNITS[role] else f"{name} [{label}]")
+        names.append(f"{name} [{rec.units.get(role, SI_UNITS[role])}]")  # a support motion of another kind: SI
     return names
 
 
 def save_recording(path: str | Path, rec: Recording) -> Path:
     """Write ``rec`` to ``path`` (``.csv`` with 17 significant digits, or ``.npz``); the
-    columns are named ``t, u1.., a1..`` with the unit of every non-SI signal (``u1 [V]``).
+    columns are named ``t, u1.., a1..`` with the unit of every signal (``t [s]``, ``u1 [V]``).
 
     Returns the path written. ``load_recording(save_recording(p, rec))`` reproduces
     ``rec`` exactly for ``.npz`` and to the last bit for ``.csv`` (``%.17g``), units included.

@@ -49,7 +49,7 @@ class Layout:
     ``forced`` (all of them unless the record has a support motion) and ``"base"`` (a
     base-excited record) to the position of the support's motion ``a0``, ``v0`` or ``x0``,
     whose kind is ``base``; ``units`` gives the unit each of those columns declares (None
-    when it declares none)."""
+    when it declares none), ``names`` their names in the file (without the unit)."""
 
     n: int
     groups: dict[str, list[int]]
@@ -57,6 +57,7 @@ class Layout:
     ignored: list[str] = field(default_factory=list)
     base: str | None = None  #: "a", "v" or "x": the support motion's kind (None: no support motion)
     forced: list[int] = field(default_factory=list)  #: DOFs (0-based) with a force column
+    names: dict[str, list[str]] = field(default_factory=dict)
 
     def positions(self) -> list[int]:
         """The positions read, in file order."""
@@ -166,7 +167,8 @@ def resolve(
     n = len(out["a"] if "a" in out else out["v"] if "v" in out else out["x"])
     declared = declared or [None] * len(names)
     units = {key: [split_name(names[p])[1] or declared[p] for p in cols] for key, cols in out.items()}
-    return Layout(n=n, groups=out, units=units, ignored=ignored, base=next(iter(base), None), forced=forced)
+    read = {key: [split_name(names[p])[0] for p in cols] for key, cols in out.items()}
+    return Layout(n=n, groups=out, units=units, ignored=ignored, names=read, base=next(iter(base), None), forced=forced)
 
 
 def _complete(groups: dict[str, dict[int, int]], source: str, base: bool = False) -> dict[str, list[int]]:

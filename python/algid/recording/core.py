@@ -55,6 +55,8 @@ class Recording:
         record (a shake table), or None (the wall stands still); its kind is ``base_kind``:
         ``"a"`` acceleration, ``"v"`` velocity or ``"x"`` displacement, in SI units or in the
         unit of the DOFs' motion of the same kind.
+    missing : (T,) bool or None: the instants whose missing samples the reader bridged
+        (:mod:`.gaps`); :func:`algid.identify` leaves them out of its estimates.
 
     Raises
     ------
@@ -74,6 +76,7 @@ class Recording:
     notes: list[str] = field(default_factory=list)
     base: np.ndarray | None = None
     base_kind: str = "a"
+    missing: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -116,6 +119,11 @@ class Recording:
         self.path = None if self.path is None else Path(self.path)
         self.units = _unit_labels(self.units, self)
         self.notes = list(self.notes)
+        if self.missing is not None:
+            missing = np.asarray(self.missing, dtype=bool)
+            if missing.shape != (T,):
+                raise RecordingError(f"missing has shape {missing.shape}, expected ({T},) to match t")
+            self.missing = missing if missing.any() else None
 
     @property
     def duration_s(self) -> float:

@@ -1,6 +1,6 @@
 """From the columns a reader read to a :class:`Recording`: time from the file or from the
-sampling interval, units converted to SI where they can be (and listed in a note), every
-value checked with the file line it came from."""
+sampling interval, units converted to SI where they can be (and listed in a note), short gaps
+of missing samples bridged (:mod:`.gaps`), every value checked with the file line it came from."""
 
 from __future__ import annotations
 
@@ -11,7 +11,8 @@ import numpy as np
 from ..messages import quote
 from .columns import ROLE_KEYS, Layout
 from .core import Recording, RecordingError, check_finite, file_time
-from .units import ROLES, SI_UNITS, conversion_note, to_si
+from .gaps import bridge_gaps
+from .units import ROLES, SI_UNITS, UnitError, conversion_note, to_si
 
 
 def role_units(units: dict | None) -> dict[str, str]:
@@ -32,9 +33,10 @@ def _convert(key: str, arr: np.ndarray, declared: list[str | None], source: str,
     role = ROLES[key]
     labels = set()
     for col, unit in enumerate(declared):
-        factor, label = to_si(role, unit)
-        if key == "t" and factor is None:
-            raise RecordingError(f"{source}: time in {quote(unit)}, not a unit of time")
+        try:
+            factor, label = to_si(role, unit)
+        except UnitError as err:
+            raise RecordingError(f"{source}: {err}") from None
         if factor is not None and factor != 1.0:
             arr[:, col] *= factor
             note = conversion_note(role, unit, factor)
@@ -44,6 +46,22 @@ def _convert(key: str, arr: np.ndarray, declared: list[str | None], source: str,
     if len(labels) > 1:
         raise RecordingError(f"{source}: {role} columns in different units: {', '.join(sorted(labels))}")
     return labels.pop()
+
+
+def si_assumed(layout: Layout, given: dict[str, str]) -> list[str]:
+    """The note naming the columns read without a unit (in the header, the file or ``units``),
+    taken as SI: ``no unit for t, u1, a1: SI assumed (s, N, m/s^2)``."""
+    bare: dict[str, list[str]] = {}
+    for key in ROLES:
+        units = layout.units.get(key, [])
+        if ROLES[key] not in given:
+            names = [name for name, unit in zip(layout.names.get(key, []), units) if unit is None]
+            if names:
+                bare[ROLES[key]] = names
+    if not bare:
+        return []
+    columns = ", ".join(name for names in bare.values() for name in names)
+    return [f"no unit for {columns}: SI assumed ({', '.join(SI_UNITS[role] for role in bare)})"]
 
 
 def assemble(
@@ -61,17 +79,18 @@ def assemble(
     time and replaces a time column (:func:`.core.file_time`)."""
     given = role_units(units)
     order = {p: j for j, p in enumerate(layout.positions())}
-    notes = layout.notes()
+    notes = layout.notes() + si_assumed(layout, given)
     labels: dict[str, str] = {}
     parts: dict[str, np.ndarray] = {}
     for key, cols in layout.groups.items():
         arr = data[:, [order[p] for p in cols]]
         kind = layout.base if key == "base" else key
         declared = [given.get(ROLES[kind], u) for u in layout.units[key]]
-        try:
-            check_finite(f"{kind}0" if key == "base" else key, arr, lines)
-        except RecordingError as err:
-            raise RecordingError(f"{source}: {err}") from None
+        if key == "t":  # a signal's missing samples are bridged below, a missing timestamp is an error
+            try:
+                check_finite(key, arr, lines)
+            except RecordingError as err:
+                raise RecordingError(f"{source}: {err}") from None
         label = _convert(kind, arr, declared, source, notes)
         parts[key] = arr
         if key == "base":
@@ -81,8 +100,9 @@ def assemble(
     if "base" in parts:
         _check_base_unit(source, layout.base, base_label, labels)
     try:
-        t, note = file_time(parts["t"][:, 0] if "t" in parts else None, dt, data.shape[0], lines)
+        t, note = file_time(parts.pop("t")[:, 0] if "t" in parts else None, dt, data.shape[0], lines)
         notes += [note] if note else []
+        parts, missing, gap_notes = bridge_gaps(parts, lines, layout.names)
         return Recording(
             t=t,
             u=_forces(parts.get("u"), layout, data.shape[0]),
@@ -94,7 +114,8 @@ def assemble(
             dt=dt,
             path=path,
             units={role: label for role, label in labels.items() if role != "time"},
-            notes=notes,
+            notes=notes + gap_notes,
+            missing=missing,
         )
     except RecordingError as err:
         raise RecordingError(f"{source}: {err}") from None

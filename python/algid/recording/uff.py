@@ -67,9 +67,9 @@ def _names(series: list[dict], by_id: bool) -> list[str]:
 
 
 def _label(text) -> str | None:
-    """A UFF unit label, None when blank or ``NONE``."""
+    """A UFF unit label, None when blank, ``NONE`` or a number (``0``: pyuff's default, no unit)."""
     text = str(text or "").strip()
-    return None if text.upper() in ("", "NONE") else text
+    return None if text.upper() in ("", "NONE") or text.lstrip("+-").replace(".", "", 1).isdigit() else text
 
 
 def read_uff(path: Path, columns=None, units=None, dt=None):

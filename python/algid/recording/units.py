@@ -2,13 +2,17 @@
 rest, and the units the identified m, c, k are in.
 
 A signal in a convertible unit (``mm``, ``um``, ``g`` for an acceleration in standard
-gravities, ``kN``, ``ms``) is converted to SI when read. A unit that is not a physical unit
-of the role (``V``, ``mV``, ``counts``) is kept as it is: the numbers stay as recorded and
-the label travels with the recording, so that results say ``V/V`` where the data are volts.
-Time must be in a unit of time.
+gravities, ``kN``, ``ms``; every one in :data:`TO_SI`) is converted to SI when read. A
+sensor's raw unit (:data:`LABELS`: ``V``, ``mV``, ``counts``), or any name declared as a
+label with ``:label`` (``lbs:label``), is kept as it is: the numbers stay as recorded and the
+label travels with the recording, so that results say ``V/V`` where the data are volts. Any
+other name is an error that names the nearest known units (``gee``: did you mean ``g``?), never a
+silent label. Time must be in a unit of time.
 """
 
 from __future__ import annotations
+
+import difflib
 
 #: Array name of each signal -> its role.
 ROLES = {"t": "time", "u": "force", "a": "acceleration", "v": "velocity", "x": "displacement"}
@@ -29,25 +33,59 @@ TO_SI = {
 }
 
 
+#: Raw sensor units kept as labels without being declared (``:label`` declares any other).
+LABELS = ("V", "mV", "uV", "counts")
+#: The suffix that declares a unit name a label (``--units force=lbs:label``).
+LABEL_SUFFIX = ":label"
+
+
+class UnitError(ValueError):
+    """A unit name that is neither a known unit of its role nor a declared label."""
+
+
+def accepted_units(role: str) -> str:
+    """``"N, kN, mN, lbf"``: the units of ``role`` converted to SI, for messages and help."""
+    return ", ".join(TO_SI[role])
+
+
 def normalise(label: str) -> str:
-    """A unit label in one spelling: ``"m/s²"``, ``"m s^-2"``, ``"m/s**2"``, ``"m/s2"`` -> ``"m/s^2"``;
+    """A unit label in one spelling: ``"m/s²"``, ``"m s^-2"``, ``"m/s**2"``, ``"m/s2"``, ``"m/s/s"`` -> ``"m/s^2"``;
     ``"µm"`` -> ``"um"``; surrounding blanks dropped."""
     s = " ".join(str(label).split())
     s = s.replace("µ", "u").replace("μ", "u").replace("²", "^2").replace("**", "^")
     s = s.replace(" s^-2", "/s^2").replace(" s^-1", "/s").replace(" / ", "/")
-    if s.endswith("/s2"):
-        s = s[:-1] + "^2"
+    for tail in ("/s2", "/s/s"):
+        if s.endswith(tail):
+            s = s[: -len(tail)] + "/s^2"
     return s
+
+
+def _unknown(role: str, unit: str) -> UnitError:
+    """The error for a unit name of ``role`` that is neither known nor declared a label, with
+    the nearest known names (case aside: ``G`` -> ``g``)."""
+    known = [*TO_SI[role], *(LABELS if role != "time" else ())]
+    by_case = [k for k in known if k.lower() == unit.lower()]
+    near = by_case or difflib.get_close_matches(unit, known, n=3, cutoff=0.5)
+    hint = f": did you mean {' or '.join(near)}?" if near else ""
+    labels = f"; raw units {', '.join(LABELS)}, or any name as UNIT{LABEL_SUFFIX}" if role != "time" else ""
+    return UnitError(f"unknown unit {unit!r} for {role}{hint} (known: {accepted_units(role)}{labels})")
 
 
 def to_si(role: str, label: str | None) -> tuple[float | None, str]:
     """``(factor, SI label)`` that converts a signal of ``role`` in ``label`` to SI, or
-    ``(None, label)`` for a unit kept as a label. No label means SI."""
+    ``(None, label)`` for a raw unit (:data:`LABELS`) or a declared label (``lbs:label``).
+    No label means SI. Raises :class:`UnitError` on any other name."""
     if label is None or not str(label).strip():
         return 1.0, SI_UNITS[role]
     unit = normalise(label)
+    if unit.endswith(LABEL_SUFFIX) and role != "time":
+        return None, unit[: -len(LABEL_SUFFIX)].strip()
     factor = TO_SI[role].get(unit)
-    return (None, unit) if factor is None else (factor, SI_UNITS[role])
+    if factor is not None:
+        return factor, SI_UNITS[role]
+    if unit in LABELS and role != "time":
+        return None, unit
+    raise _unknown(role, unit)
 
 
 def conversion_note(role: str, label: str, factor: float) -> str:
