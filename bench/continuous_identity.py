@@ -27,7 +27,6 @@ SAMPLES = 8000
 
 def chain_matrices(m, c, k):
     """M, C, K of eq. 1 with walls at both ends (k has n + 1 springs)."""
-    n = m.size
     K = np.diag(k[:-1] + k[1:]) - np.diag(k[1:-1], 1) - np.diag(k[1:-1], -1)
     return np.diag(m), np.diag(c), K
 
