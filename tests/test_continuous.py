@@ -197,7 +197,7 @@ def test_runtime_size_and_instruction_sets_agree(noisy_record):
 
     for n in (3, 11):
         est = algid.ContinuousEstimator(n, DT)
-        assert type(est._impl).__name__ == "ContinuousEstimatorDynamic" and est.estimate.shape == (3 * n + 1,)
+        assert type(est._impl).__name__ == "WeakFormContinuousEstimatorDynamic" and est.estimate.shape == (3 * n + 1,)
     a, u, _ = noisy_record
     cfg = algid.ContinuousConfig()
     wide = chain_core().ContinuousEstimatorDynamic(cfg, 3).run(a, u)
@@ -216,7 +216,7 @@ def test_arguments_are_checked():
     with pytest.raises(ValueError, match="window_s"):
         algid.ContinuousEstimator(3, DT, window_s=0.01)
     with pytest.raises(ValueError, match="prefilter"):
-        algid.ContinuousEstimator(3, DT, prefilter_hz=600.0)
+        algid.ContinuousEstimator(3, DT, method="algebraic", prefilter_hz=600.0)
     with pytest.raises(ValueError, match="stagger"):
         algid.ContinuousEstimator(3, DT, stagger=8)
     with pytest.raises(ValueError, match="method"):

@@ -162,7 +162,7 @@ struct BatchSubject : EstimatorSubject<N, Scalar> {  // the same estimator, fed 
 #if ALGID_BENCH_HAVE_CONTINUOUS
 template <int N, class Scalar, bool Dyn = false>
 struct ContinuousSubject {
-  using Est = algid::ContinuousEstimator<Dyn ? algid::Dynamic : N, Scalar>;
+  using Est = algid::WeakFormContinuousEstimator<Dyn ? algid::Dynamic : N, Scalar>;
   static constexpr int kDofs = N;
   static constexpr bool kContinuous = true;
   static constexpr bool kChunked = false;
@@ -356,7 +356,7 @@ void bench_n(const char* scalar, int samples, int windows, double overhead) {
     // One uninterrupted signal: 2 segments (batch and single pass) per window. Segments are a
     // whole number of result periods (window samples / stagger) long, so that sample index k
     // has the same place in the harvest schedule in every segment (max_path needs that).
-    const typename algid::ContinuousEstimator<N, Scalar>::Config cfg{};
+    const typename algid::WeakFormContinuousEstimator<N, Scalar>::Config cfg{};
     const int period = static_cast<int>(std::lround(cfg.window_s / static_cast<Scalar>(algid_bench::kDt))) /
                        cfg.stagger;
     const int segment = (samples + period - 1) / period * period;

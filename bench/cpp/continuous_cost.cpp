@@ -30,8 +30,8 @@ double quantile(const std::vector<double>& sorted, double p) {
   return sorted[static_cast<std::size_t>(p * static_cast<double>(sorted.size() - 1))];
 }
 
-template <int N>
-void measure(algid::WindowMethod method, int seconds, int reps) {
+template <int N, class Est>
+void measure(const char* method, int seconds, int reps) {
   const int T = seconds * 1000;
   auto sig = algid_bench::make_signals<N, double>(T, 7, algid_bench::kDt, false);
   std::mt19937 gen(11);
@@ -56,9 +56,8 @@ void measure(algid::WindowMethod method, int seconds, int reps) {
   double raw_max = 0, sink = 0;
   long skip = 0;
   for (int r = 0; r < reps; ++r) {
-    typename algid::ContinuousEstimator<N>::Config cfg;
-    cfg.method = method;
-    auto est = std::make_unique<algid::ContinuousEstimator<N>>(cfg);
+    const typename Est::Config cfg{};
+    auto est = std::make_unique<Est>(cfg);
     skip = est->window_samples() + est->settle_samples() + 16;
     for (int t = 0; t < T; ++t) {
       const auto t0 = Clock::now();
@@ -79,7 +78,7 @@ void measure(algid::WindowMethod method, int seconds, int reps) {
       "{\"method\": \"%s\", \"n\": %d, \"median_ns\": %.1f, \"mean_ns\": %.1f, \"p99_ns\": %.1f, \"p999_ns\": %.1f, "
       "\"max_path_ns\": %.1f, \"max_over_median\": %.2f, \"raw_max_ns\": %.1f, \"samples\": %zu, \"reps\": %d, "
       "\"sink\": %d}\n",
-      method == algid::WindowMethod::kWeakForm ? "weak_form" : "algebraic", N, quantile(b, 0.5), mean,
+      method, N, quantile(b, 0.5), mean,
       quantile(b, 0.99), quantile(b, 0.999), b.back(), b.back() / quantile(b, 0.5), raw_max, b.size(), reps,
       sink == 0.5 ? 1 : 0);
   std::fflush(stdout);
@@ -93,10 +92,11 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--seconds")) seconds = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
   }
-  for (auto m : {algid::WindowMethod::kWeakForm, algid::WindowMethod::kAlgebraic}) {
-    measure<3>(m, seconds, reps);
-    measure<5>(m, seconds, reps);
-    measure<10>(m, seconds, reps);
-  }
+  measure<3, algid::WeakFormContinuousEstimator<3>>("weak_form", seconds, reps);
+  measure<5, algid::WeakFormContinuousEstimator<5>>("weak_form", seconds, reps);
+  measure<10, algid::WeakFormContinuousEstimator<10>>("weak_form", seconds, reps);
+  measure<3, algid::AlgebraicContinuousEstimator<3>>("algebraic", seconds, reps);
+  measure<5, algid::AlgebraicContinuousEstimator<5>>("algebraic", seconds, reps);
+  measure<10, algid::AlgebraicContinuousEstimator<10>>("algebraic", seconds, reps);
   return 0;
 }

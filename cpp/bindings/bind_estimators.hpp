@@ -269,12 +269,88 @@ void bind_chain(py::module_& m, const char* name, bool module_local) {
   bind_common<Est>(cls);
 }
 
-/// Bind ContinuousEstimator<N> (N may be Dynamic) as `name`.
-template <int N>
+/// What ContinuousEstimator::record() reports besides its histories, kept for numpy: the
+/// change events and the window results.
+template <class Est>
+struct ContinuousLog {
+  const Est& e;
+  std::vector<typename Est::Event> events;
+  std::vector<double> windows, variances, misfits;
+  std::vector<std::int64_t> samples;
+
+  void event(const typename Est::Event& ev) { events.push_back(ev); }
+  void window(long sample) {
+    windows.insert(windows.end(), e.last_window().data(), e.last_window().data() + e.params());
+    variances.insert(variances.end(), e.last_variance().data(), e.last_variance().data() + e.params());
+    samples.push_back(sample);
+    misfits.push_back(e.last_misfit());
+  }
+};
+
+/// A vector as a numpy array of `columns` columns (1: a vector).
+template <class T>
+py::array_t<T> to_numpy(const std::vector<T>& v, py::ssize_t columns = 1) {
+  const py::ssize_t rows = static_cast<py::ssize_t>(v.size()) / columns;
+  py::array_t<T> out = columns == 1 ? py::array_t<T>(rows) : py::array_t<T>({rows, columns});
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+/// ContinuousEstimator::record() of a whole record with the GIL released, as numpy arrays.
+template <class Est>
+py::dict run_continuous(Est& e, const Array& accel, const Array& force, long stride) {
+  const int n = e.dofs(), P = e.params();
+  require_record(accel, force, n);
+  if (stride < 1) throw py::value_error("stride must be >= 1");
+  const py::ssize_t T = accel.shape(0), rows = (T + stride - 1) / stride;
+  py::array_t<std::int8_t> status(T);
+  Array estimate({rows, static_cast<py::ssize_t>(P)}), sigma({rows, static_cast<py::ssize_t>(P)});
+  py::array_t<std::int64_t> row_sample(rows);
+  const algid::ContinuousHistories<double> histories{status.mutable_data(), estimate.mutable_data(),
+                                                     sigma.mutable_data(), row_sample.mutable_data(), stride};
+  ContinuousLog<Est> log{e, {}, {}, {}, {}, {}};
+  const Busy busy(&e);
+  {
+    py::gil_scoped_release release;
+    e.record(accel.data(), force.data(), static_cast<long>(T), histories, log);
+  }
+  const py::ssize_t E = static_cast<py::ssize_t>(log.events.size());
+  py::array_t<std::int64_t> ev_sample(E), ev_param(E), ev_kind(E);
+  Array ev_before(E), ev_after(E);
+  for (py::ssize_t i = 0; i < E; ++i) {
+    const auto& ev = log.events[static_cast<std::size_t>(i)];
+    ev_sample.mutable_data()[i] = ev.sample;
+    ev_param.mutable_data()[i] = ev.param;
+    ev_kind.mutable_data()[i] = static_cast<int>(ev.kind);
+    ev_before.mutable_data()[i] = ev.before;
+    ev_after.mutable_data()[i] = ev.after;
+  }
+  py::dict out;
+  out["status"] = status;
+  out["estimate"] = estimate;
+  out["sigma"] = sigma;
+  out["sample"] = row_sample;
+  out["event_sample"] = ev_sample;
+  out["event_param"] = ev_param;
+  out["event_kind"] = ev_kind;
+  out["event_before"] = ev_before;
+  out["event_after"] = ev_after;
+  out["windows"] = to_numpy(log.windows, P);
+  out["window_sample"] = to_numpy(log.samples);
+  out["window_variance"] = to_numpy(log.variances, P);
+  out["window_misfit"] = to_numpy(log.misfits);
+  return out;
+}
+
+/// Bind a ContinuousEstimator type `Est` (constructed from the Python ContinuousConfig,
+/// ContinuousOptions) as `name`.
+template <class Est, class Options>
 void bind_continuous(py::module_& m, const char* name, bool module_local) {
-  using Est = algid::ContinuousEstimator<N, double>;
   py::class_<Est> cls(m, name, "Continuous estimator of an n-DOF chain (C++ core).", py::module_local(module_local));
-  cls.def(py::init(&make<Est, algid::ContinuousConfigError>), py::arg("config"), py::arg("n"))
+  cls.def(py::init([](const Options& o, int n) {
+            return make<Est, algid::ContinuousConfigError>(o.template config<Est>(), n);
+          }),
+          py::arg("config"), py::arg("n"))
       .def_property_readonly("params", &Est::params)
       .def_readonly_static("capacity", &Est::kCapacity)
       .def_readonly_static("max_stagger", &Est::kMaxStagger)
@@ -293,10 +369,8 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
       .def_property_readonly("noise_rms",
                              [](const Est& e) {
                                idle(e);
-                               const int C = 2 * e.dofs();
-                               Array out(C);
-                               for (int c = 0; c < C; ++c)
-                                 out.mutable_data()[c] = e.weak_form() ? e.weak_form()->noise_rms(c) : -1.0;
+                               Array out(2 * e.dofs());
+                               for (int c = 0; c < 2 * e.dofs(); ++c) out.mutable_data()[c] = e.noise_rms(c);
                                return out;
                              })
       .def_property_readonly("ready", [](const Est& e) { return idle(e).ready(); })
@@ -331,87 +405,18 @@ void bind_continuous(py::module_& m, const char* name, bool module_local) {
           "window_spread",
           [](const Est& e, int j) { return idle(e).window_spread(require_index(j, e.params(), "param")); },
           py::arg("param"))
+      .def("run", &run_continuous<Est>, py::arg("accel"), py::arg("force"), py::arg("stride") = 1,
+           "Feed a whole record (T, n) in C++ with the GIL released; returns histories and events.");
+  cls.def_property_readonly("n", &Est::dofs)
       .def(
-          "run",
-          [](Est& e, const Array& accel, const Array& force, long stride) {
-            const int n = e.dofs(), P = e.params();
-            require_record(accel, force, n);
-            if (stride < 1) throw py::value_error("stride must be >= 1");
-            const py::ssize_t T = accel.shape(0), rows = (T + stride - 1) / stride;
-            py::array_t<std::int8_t> status(T);
-            Array estimate({rows, static_cast<py::ssize_t>(P)}), sigma({rows, static_cast<py::ssize_t>(P)});
-            py::array_t<std::int64_t> row_sample(rows);
-            std::vector<typename Est::Event> events;
-            std::vector<double> windows;
-            std::vector<std::int64_t> window_sample;
-            std::vector<double> misfits, variances;
-            const double* a = accel.data();
-            const double* f = force.data();
-            auto* st = status.mutable_data();
-            double* pe = estimate.mutable_data();
-            double* ps = sigma.mutable_data();
-            auto* pr = row_sample.mutable_data();
-            const long first = e.samples();
+          "update",
+          [](Est& e, const Array& accel, const Array& force) {
+            require_sample(accel, force, e.dofs());
             const Busy busy(&e);
-            {
-              py::gil_scoped_release release;
-              py::ssize_t row = 0;
-              for (py::ssize_t t = 0; t < T; ++t) {
-                const long results = e.window_results();
-                st[t] = static_cast<std::int8_t>(e.update(a + t * n, f + t * n));
-                for (int i = 0; i < e.events(); ++i) events.push_back(e.event(i));
-                if (e.window_results() != results) {
-                  windows.insert(windows.end(), e.last_window().data(), e.last_window().data() + P);
-                  variances.insert(variances.end(), e.last_variance().data(), e.last_variance().data() + P);
-                  window_sample.push_back(first + t);
-                  misfits.push_back(e.last_misfit());
-                }
-                if (t % stride == 0) {
-                  std::copy(e.estimate().data(), e.estimate().data() + P, pe + row * P);
-                  std::copy(e.sigma().data(), e.sigma().data() + P, ps + row * P);
-                  pr[row++] = first + t;
-                }
-              }
-            }
-            const py::ssize_t E = static_cast<py::ssize_t>(events.size());
-            py::array_t<std::int64_t> ev_sample(E), ev_param(E), ev_kind(E);
-            Array ev_before(E), ev_after(E);
-            for (py::ssize_t i = 0; i < E; ++i) {
-              const auto& ev = events[static_cast<std::size_t>(i)];
-              ev_sample.mutable_data()[i] = ev.sample;
-              ev_param.mutable_data()[i] = ev.param;
-              ev_kind.mutable_data()[i] = static_cast<int>(ev.kind);
-              ev_before.mutable_data()[i] = ev.before;
-              ev_after.mutable_data()[i] = ev.after;
-            }
-            const py::ssize_t R = static_cast<py::ssize_t>(window_sample.size());
-            Array win({R, static_cast<py::ssize_t>(P)});
-            std::copy(windows.begin(), windows.end(), win.mutable_data());
-            py::array_t<std::int64_t> win_sample(R);
-            std::copy(window_sample.begin(), window_sample.end(), win_sample.mutable_data());
-            py::dict out;
-            out["status"] = status;
-            out["estimate"] = estimate;
-            out["sigma"] = sigma;
-            out["sample"] = row_sample;
-            out["event_sample"] = ev_sample;
-            out["event_param"] = ev_param;
-            out["event_kind"] = ev_kind;
-            out["event_before"] = ev_before;
-            out["event_after"] = ev_after;
-            out["windows"] = win;
-            out["window_sample"] = win_sample;
-            Array win_var({R, static_cast<py::ssize_t>(P)});
-            std::copy(variances.begin(), variances.end(), win_var.mutable_data());
-            out["window_variance"] = win_var;
-            Array misfit(R);
-            std::copy(misfits.begin(), misfits.end(), misfit.mutable_data());
-            out["window_misfit"] = misfit;
-            return out;
+            return static_cast<int>(e.update(accel.data(), force.data()));
           },
-          py::arg("accel"), py::arg("force"), py::arg("stride") = 1,
-          "Feed a whole record (T, n) in C++ with the GIL released; returns histories and events.");
-  bind_common<Est>(cls);
+          py::arg("accel"), py::arg("force"))
+      .def_property_readonly("samples", [](const Est& e) { return idle(e).samples(); });
 }
 
 /// The chain sizes compiled as fixed-size instantiations (any other n runs the Dynamic one).

@@ -142,7 +142,7 @@ struct Driver {
   }
   void check(const Sample& s, algid::Status status) {
     note(s.finite(), s.tampered, status);
-    if constexpr (!std::is_same_v<Est, algid::ContinuousEstimator<Dynamic>>) {
+    if constexpr (!std::is_same_v<Est, algid::WeakFormContinuousEstimator<Dynamic>>) {
       for (int i = 0; i < n; ++i)
         if (est.valid()(i) && !(std::isfinite(est.mass()(i)) && std::isfinite(est.damping()(i))))
           fail("valid flags an estimate that is not a number", n);
@@ -172,7 +172,7 @@ void run_chunk(Driver<Est>& d, Input& in, Sample& s) {
     std::copy(s.u.begin(), s.u.end(), u.begin() + t * d.n);
   }
   d.fed += k;
-  if constexpr (std::is_same_v<Est, algid::ContinuousEstimator<Dynamic>>) {
+  if constexpr (std::is_same_v<Est, algid::WeakFormContinuousEstimator<Dynamic>>) {
     for (long t = 0; t < k; ++t) {
       const auto i = static_cast<std::size_t>(t);
       d.note(finite[i], tampered[i], d.est.update(a.data() + t * d.n, u.data() + t * d.n));
@@ -219,7 +219,7 @@ void program(Driver<Est>& d, Input& in) {
       s.special(in);
       for (int j = 0; j < k; ++j) d.feed(s);
     } else if (op == 3) {
-      if constexpr (std::is_same_v<Est, algid::ContinuousEstimator<Dynamic>>)
+      if constexpr (std::is_same_v<Est, algid::WeakFormContinuousEstimator<Dynamic>>)
         d.est.reset();
       else
         d.est.reseed();
@@ -256,7 +256,7 @@ void chain(int n, Input& in) {
 }
 
 void continuous(int n, Input& in) {
-  using Est = algid::ContinuousEstimator<Dynamic>;
+  using Est = algid::WeakFormContinuousEstimator<Dynamic>;
   Est::Config cfg;
   cfg.dt = kDt;
   cfg.window_s = kWindowS;

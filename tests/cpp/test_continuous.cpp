@@ -21,6 +21,7 @@
 #include <cstring>
 #include <memory>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 namespace {
@@ -130,12 +131,12 @@ struct Record {
 
 // update() and reset() under the guard, for ContinuousEstimator<N> and (kDynamic)
 // ContinuousEstimator<Dynamic>(config, N), whose construction allocates.
-template <int N, class Scalar, bool kDynamic = false>
-void no_allocation_in_hot_path(algid::WindowMethod method = algid::WindowMethod::kWeakForm) {
-  using Est = algid::ContinuousEstimator<kDynamic ? algid::Dynamic : N, Scalar>;
+template <int N, class Scalar, bool kDynamic = false, bool kAlgebraic = false>
+void no_allocation_in_hot_path() {
+  using Est = std::conditional_t<kAlgebraic, algid::AlgebraicContinuousEstimator<kDynamic ? algid::Dynamic : N, Scalar>,
+                                 algid::WeakFormContinuousEstimator<kDynamic ? algid::Dynamic : N, Scalar>>;
   typename Est::Config cfg;
   cfg.dt = Scalar(kDt);
-  cfg.method = method;
   auto est = std::make_unique<Est>(cfg, N);  // configuration phase: may allocate
   static_assert(noexcept(est->update(std::declval<const Scalar*>(), std::declval<const Scalar*>())), "update noexcept");
   static_assert(noexcept(est->reset()), "reset noexcept");
@@ -167,7 +168,7 @@ void no_allocation_in_hot_path(algid::WindowMethod method = algid::WindowMethod:
   }
   std::printf("  %s N=%d %s %s: %ld allocations in update()/reset(), %ld events\n", kDynamic ? "Dynamic" : "fixed", N,
               sizeof(Scalar) == 4 ? "float" : "double",
-              method == algid::WindowMethod::kWeakForm ? "weak form" : "algebraic", allocations, events);
+              kAlgebraic ? "algebraic" : "weak form", allocations, events);
   CHECK(!threw);
   CHECK(allocations == 0);
   CHECK(events >= 1);  // the restart path did run under the guard
@@ -179,8 +180,8 @@ void no_allocation_in_hot_path(algid::WindowMethod method = algid::WindowMethod:
 // estimates, sigmas, window results, events and their contents, per-parameter tracks).
 void dynamic_equals_fixed() {
   constexpr int N = 3;
-  using Fixed = algid::ContinuousEstimator<N>;
-  using Dyn = algid::ContinuousEstimator<algid::Dynamic>;
+  using Fixed = algid::WeakFormContinuousEstimator<N>;
+  using Dyn = algid::WeakFormContinuousEstimator<algid::Dynamic>;
   const auto same = [](double a, double b) {
     return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof(double)) == 0;
   };
@@ -222,7 +223,7 @@ void dynamic_equals_fixed() {
 }
 
 void configuration_is_validated() {
-  using Est = algid::ContinuousEstimator<3>;
+  using Est = algid::WeakFormContinuousEstimator<3>;
   auto rejected = [](auto mutate, algid::ContinuousConfigError expect) {
     Est::Config c;
     mutate(c);
@@ -248,11 +249,6 @@ void configuration_is_validated() {
   rejected([](Est::Config& c) { c.min_windows = 2; }, E::kBadMinWindows);
   rejected([](Est::Config& c) { c.overlap_efficiency = 0; }, E::kBadEfficiency);
   rejected([](Est::Config& c) { c.horizon_s = -1; }, E::kBadHorizon);
-  rejected([](Est::Config& c) { c.prefilter_hz = 450; }, E::kBadPrefilter);  // >= 0.45 fs
-  rejected([](Est::Config& c) { c.prefilter_hz = -2; }, E::kBadPrefilter);
-  rejected([](Est::Config& c) { c.prefilter_hz = 1e-300; }, E::kBadPrefilter);  // start-up of ~1e300 samples
-  rejected([](Est::Config& c) { c.prefilter_hz = 1e-4; }, E::kBadPrefilter);  // below 1e-6 / dt
-  rejected([](Est::Config& c) { c.prefilter_order = 3; }, E::kBadPrefilter);
   rejected([](Est::Config& c) { c.band_hz = 1; }, E::kBadBand);      // Q = 0.5 harmonics < 2
   rejected([](Est::Config& c) { c.band_hz = 460; }, E::kBadBand);    // >= 0.45 fs
   rejected([](Est::Config& c) { c.accel_noise = -2; }, E::kBadNoise);
@@ -261,6 +257,22 @@ void configuration_is_validated() {
   rejected([](Est::Config& c) { c.long_window_s = NAN; }, E::kBadLongWindow);
   rejected([](Est::Config& c) { c.long_window_s = 0.01; }, E::kBadLongWindow);  // 10 samples < 32
   CHECK(Est::validate(Est::Config{}) == E::kNone);
+  // The algebraic windows' own fields.
+  using Alg = algid::AlgebraicContinuousEstimator<3>;
+  auto algebraic_rejected = [](auto mutate, algid::ContinuousConfigError expect) {
+    Alg::Config c;
+    mutate(c);
+    CHECK(Alg::validate(c) == expect);
+  };
+  algebraic_rejected([](Alg::Config& c) { c.window_s = 0.01; }, E::kBadWindow);  // 10 samples < P + 16
+  algebraic_rejected([](Alg::Config& c) { c.validity.min_samples = 0; }, E::kBadMinSamples);
+  algebraic_rejected([](Alg::Config& c) { c.prefilter_hz = 450; }, E::kBadPrefilter);  // >= 0.45 fs
+  algebraic_rejected([](Alg::Config& c) { c.prefilter_hz = -2; }, E::kBadPrefilter);
+  algebraic_rejected([](Alg::Config& c) { c.prefilter_hz = 1e-300; }, E::kBadPrefilter);  // start-up of ~1e300 samples
+  algebraic_rejected([](Alg::Config& c) { c.prefilter_hz = 1e-4; }, E::kBadPrefilter);  // below 1e-6 / dt
+  algebraic_rejected([](Alg::Config& c) { c.prefilter_order = 3; }, E::kBadPrefilter);
+  algebraic_rejected([](Alg::Config& c) { c.overlap_efficiency = 0; }, E::kBadEfficiency);
+  CHECK(Alg::validate(Alg::Config{}) == E::kNone);
 }
 
 double median(std::vector<double> v) {
@@ -274,9 +286,8 @@ double median(std::vector<double> v) {
 // detector off so no restart interferes.
 void schedule_and_aggregation_match_oracle() {
   constexpr int N = 3;
-  using Est = algid::ContinuousEstimator<N>;
+  using Est = algid::AlgebraicContinuousEstimator<N>;
   Est::Config cfg;
-  cfg.method = algid::WindowMethod::kAlgebraic;
   cfg.detect = false;
   cfg.amortize = false;     // compare right at the window end
   cfg.prefilter_hz = 0;     // raw samples into the windows (the prefilter is checked against scipy in Python)
@@ -345,7 +356,7 @@ std::vector<double> rel_errors(const Est& est, const Record<N>& rec, long s) {
 
 void constant_system_no_alarm_and_accuracy() {
   constexpr int N = 3;
-  using Est = algid::ContinuousEstimator<N>;
+  using Est = algid::WeakFormContinuousEstimator<N>;
   auto est = std::make_unique<Est>(Est::Config{});
   const Record<N> rec(21, 60000, -1, 0, 1.0, 40.0);
   long events = 0;
@@ -372,7 +383,7 @@ void constant_system_no_alarm_and_accuracy() {
 
 void step_is_tracked() {
   constexpr int N = 3;
-  using Est = algid::ContinuousEstimator<N>;
+  using Est = algid::WeakFormContinuousEstimator<N>;
   const int spring = 1;              // k_2
   const int param = 2 * N + spring;  // its index in estimate()
   for (double snr : {0.0, 40.0}) {
@@ -410,7 +421,7 @@ void step_is_tracked() {
 
 void free_end_and_single_dof() {
   {
-    using Est = algid::ContinuousEstimator<2>;
+    using Est = algid::WeakFormContinuousEstimator<2>;
     Est::Config c;
     c.boundary = algid::Boundary::kFree;
     Est est(c);
@@ -418,7 +429,7 @@ void free_end_and_single_dof() {
     CHECK(est.sigma()(Est::kParams - 1) == 0.0);
   }
   {
-    using Est = algid::ContinuousEstimator<1>;
+    using Est = algid::WeakFormContinuousEstimator<1>;
     Est est(Est::Config{});
     const Record<1> rec(3, 2000, -1, 0, 1.0, 0.0);
     algid::Status st = algid::Status::kWarmup;
@@ -434,9 +445,8 @@ void prefilter_keeps_the_model() {
   // results still return the parameters (the same LTI filter on both sides of eq. 1), and
   // windows start after the settle time ln(1e6) / decay.
   constexpr int N = 3;
-  using Est = algid::ContinuousEstimator<N>;
+  using Est = algid::AlgebraicContinuousEstimator<N>;
   Est::Config cfg;
-  cfg.method = algid::WindowMethod::kAlgebraic;
   cfg.amortize = false;
   auto est = std::make_unique<Est>(cfg);
   CHECK_NEAR(est->prefilter_hz(), 50.0, 1e-9);
@@ -514,7 +524,7 @@ void weak_form_is_exact(algid::Boundary boundary) {
 // same schedule on its own window results.
 void joint_solve_is_spread() {
   constexpr int N = 3;
-  using Est = algid::ContinuousEstimator<N>;
+  using Est = algid::WeakFormContinuousEstimator<N>;
   Est::Config config;
   config.long_window_s = 0;
   auto est = std::make_unique<Est>(config);
@@ -557,14 +567,14 @@ void joint_solve_is_spread() {
 // within 4 sigma of the truth.
 void long_windows_report_where_more_certain() {
   constexpr int N = 3;
-  using Est = algid::ContinuousEstimator<N>;
+  using Est = algid::WeakFormContinuousEstimator<N>;
   Est::Config none;
   none.long_window_s = 0;
   auto both = std::make_unique<Est>(Est::Config{});
   auto short_only = std::make_unique<Est>(none);
-  CHECK(short_only->long_windows() == nullptr);
-  CHECK(both->long_windows() != nullptr);
-  CHECK(both->long_windows()->window_samples() == 3 * both->weak_form()->window_samples());
+  CHECK(short_only->windows().long_windows() == nullptr);
+  CHECK(both->windows().long_windows() != nullptr);
+  CHECK(both->windows().long_windows()->window_samples() == 3 * both->windows().short_windows().window_samples());
   const Record<N> rec(24, 40000, -1, 0, 1.0, 40.0);
   for (long s = 0; s < rec.T; ++s) {
     both->update(rec.a(s), rec.u(s));
@@ -588,6 +598,75 @@ void long_windows_report_where_more_certain() {
   CHECK(from_long >= 1);
   CHECK(worst_ratio < 1.05);
   CHECK(worst_z < 4.0);
+}
+
+// record() against update() sample by sample (both window sources, a step, a bad sample): the
+// same statuses, the same estimates and sigmas in every stride-th row, the same window results
+// and events, to the bit; and record() allocates nothing of its own.
+template <class Est>
+void record_equals_update(const char* name) {
+  constexpr int N = 3;
+  Record<N> rec(17, 8000, 5000, 1, 0.8, 40.0);
+  rec.accel[static_cast<std::size_t>(3210 * N)] = NAN;
+  const long T = rec.T, stride = 7, rows = (T + stride - 1) / stride;
+  auto a = std::make_unique<Est>(typename Est::Config{});
+  auto b = std::make_unique<Est>(typename Est::Config{});
+  std::vector<std::int8_t> status(static_cast<std::size_t>(T));
+  std::vector<double> estimate(static_cast<std::size_t>(rows * Est::kParams)), sigma(estimate.size());
+  std::vector<std::int64_t> sample(static_cast<std::size_t>(rows));
+  const algid::ContinuousHistories<double> out{status.data(), estimate.data(), sigma.data(), sample.data(), stride};
+  struct Log {
+    const Est* e;
+    long windows = 0, events = 0;
+    double window_sum = 0;
+    std::vector<typename Est::Event> list;
+    void window(long) {
+      ++windows;
+      for (int j = 0; j < e->params(); ++j)
+        if (std::isfinite(e->last_window()(j))) window_sum += e->last_window()(j);
+    }
+    void event(const typename Est::Event& ev) { list.push_back(ev); }
+  } log{b.get(), 0, 0, 0.0, {}};
+  log.list.reserve(1000);
+  long allocations = -1;
+  {
+    NoAllocationScope scope;
+    b->record(rec.accel.data(), rec.force.data(), T, out, log);
+    allocations = scope.allocations();
+  }
+  long differences = 0, windows = 0;
+  double window_sum = 0;
+  std::size_t events = 0;
+  for (long t = 0; t < T; ++t) {
+    const long before = a->window_results();
+    differences += static_cast<std::int8_t>(a->update(rec.a(t), rec.u(t))) != status[static_cast<std::size_t>(t)];
+    if (a->window_results() != before) {
+      ++windows;
+      for (int j = 0; j < a->params(); ++j)
+        if (std::isfinite(a->last_window()(j))) window_sum += a->last_window()(j);
+    }
+    for (int e = 0; e < a->events(); ++e, ++events) {
+      const auto& x = a->event(e);
+      differences += events >= log.list.size() || log.list[events].sample != x.sample ||
+                     log.list[events].param != x.param || !(log.list[events].after == x.after);
+    }
+    if (t % stride != 0) continue;
+    const long row = t / stride;
+    differences += sample[static_cast<std::size_t>(row)] != t;
+    for (int j = 0; j < Est::kParams; ++j) {
+      const double e = estimate[static_cast<std::size_t>(row * Est::kParams + j)];
+      const double s = sigma[static_cast<std::size_t>(row * Est::kParams + j)];
+      differences += !(e == a->estimate()(j) || (std::isnan(e) && std::isnan(a->estimate()(j))));
+      differences += !(s == a->sigma()(j) || (std::isnan(s) && std::isnan(a->sigma()(j))));
+    }
+  }
+  differences += windows != log.windows || !(window_sum == log.window_sum) || events != log.list.size();
+  std::printf("  record() of %s against update(): %ld differing values, %ld windows, %zu events, %ld allocations\n",
+              name, differences, windows, events, allocations);
+  CHECK(differences == 0);
+  CHECK(windows > 40);
+  CHECK(events >= 1);
+  CHECK(allocations == 0);
 }
 
 }  // namespace
@@ -624,8 +703,8 @@ int main() {
   no_allocation_in_hot_path<3, float>();
   no_allocation_in_hot_path<1, double, true>();  // (n = 10 and float: test_realtime)
   no_allocation_in_hot_path<3, double, true>();
-  no_allocation_in_hot_path<3, double>(algid::WindowMethod::kAlgebraic);
-  no_allocation_in_hot_path<3, double, true>(algid::WindowMethod::kAlgebraic);
+  no_allocation_in_hot_path<3, double, false, true>();
+  no_allocation_in_hot_path<3, double, true, true>();
   weak_form_is_exact<3>(algid::Boundary::kFixed);
   weak_form_is_exact<2>(algid::Boundary::kFree);
   weak_form_is_exact<1>(algid::Boundary::kFixed);
@@ -640,5 +719,7 @@ int main() {
   prefilter_keeps_the_model();
   dropout_rules<2>();
   dropout_rules<algid::Dynamic>();
+  record_equals_update<algid::WeakFormContinuousEstimator<3>>("the weak form");
+  record_equals_update<algid::AlgebraicContinuousEstimator<3>>("algebraic windows");
   return algid_test::finish("test_continuous");
 }

@@ -161,7 +161,7 @@ void continuous_rounds(int n, unsigned seed, int rounds) {
 // input; a channel that was quiet for a window and then moves 1e10 times more is a new level,
 // relearnt after one window of rejected samples (never a dead estimator).
 void outlier_guard() {
-  using Est = algid::ContinuousEstimator<2>;
+  using Est = algid::WeakFormContinuousEstimator<2>;
   const algid_test::SineChainN truth(2, 9);
   const algid_test::Samples rec(truth, 8000, kDt);
   auto est = std::make_unique<Est>(Est::Config{});
@@ -197,7 +197,7 @@ int main() {
   chain_rounds<algid::ChainEstimator<1>>(1, 2, 60);
   chain_rounds<algid::ChainEstimator<Dynamic>>(5, 3, 40);
   chain_rounds<algid::ChainEstimator<Dynamic>>(11, 4, 20);
-  continuous_rounds<algid::ContinuousEstimator<3>>(3, 5, 8);
-  continuous_rounds<algid::ContinuousEstimator<Dynamic>>(2, 6, 6);
+  continuous_rounds<algid::WeakFormContinuousEstimator<3>>(3, 5, 8);
+  continuous_rounds<algid::WeakFormContinuousEstimator<Dynamic>>(2, 6, 6);
   return algid_test::finish("test_fuzz");
 }

@@ -76,7 +76,7 @@ void chain(const char* label) {
 
 template <class Scalar, int N>
 void continuous(const char* label) {
-  using Est = algid::ContinuousEstimator<N, Scalar>;
+  using Est = algid::WeakFormContinuousEstimator<N, Scalar>;
   typename Est::Config cfg;
   cfg.dt = Scalar(1e-3);
   check(Est::validate(cfg, 3) == algid::ContinuousConfigError::kNone, "validate accepts the configuration");

@@ -155,7 +155,7 @@ void run_does_not_allocate(int n) {
 // path) and reset() under the guard; construction allocates (counted).
 template <class Scalar>
 void continuous_dynamic_does_not_allocate(int n) {
-  using Est = algid::ContinuousEstimator<Dynamic, Scalar>;
+  using Est = algid::WeakFormContinuousEstimator<Dynamic, Scalar>;
   typename Est::Config cfg;
   cfg.dt = Scalar(1e-3);
   long constructed = -1;
@@ -205,14 +205,13 @@ void continuous_dynamic_does_not_allocate(int n) {
 // windows (the default) size their buffers from the window and the band at construction, on
 // the heap (their update() allocates nothing: test_continuous).
 void continuous_fixed_construction_does_not_allocate() {
-  using Est = algid::ContinuousEstimator<3>;
+  using Est = algid::AlgebraicContinuousEstimator<3>;
   alignas(Est) static unsigned char storage[sizeof(Est)];
   long allocations = -1;
   bool threw = false;
   try {
     NoAllocationScope scope;
     Est::Config cfg;
-    cfg.method = algid::WindowMethod::kAlgebraic;
     Est* est = new (storage) Est(cfg);
     const double a[3] = {1, 2, 3};
     for (int s = 0; s < 100; ++s) est->update(a, a);
