@@ -118,6 +118,26 @@ def test_isolated_nans_are_bridged_noted_and_left_out_of_identify(tmp_path, rig_
     np.testing.assert_allclose(res.stiffness, RIG.stiffness, rtol=1e-3)
 
 
+def test_empty_fields_are_missing_samples(tmp_path, rig_signals):
+    """A logger that writes nothing for a dropped sample (``,,`` or ``""``): the same as NaN."""
+    t, u, a = rig_signals
+    nan_path = write_rig(tmp_path / "nan.csv", t, u, a, missing=((301, 0), (900, 1)))
+    text = nan_path.read_text().replace(",nan,", ",,", 1).replace(",nan\n", ',""\n', 1)
+    assert text.count("nan") == 0
+    (tmp_path / "empty.csv").write_text(text)
+    mapping = {"u": ["F1", "F2"], "a": ["acc1", "acc2"]}
+    empty, nans = load_recording(tmp_path / "empty.csv", columns=mapping), load_recording(nan_path, columns=mapping)
+    assert np.flatnonzero(empty.missing).tolist() == [301, 900]
+    np.testing.assert_array_equal(empty.a, nans.a)
+    assert any("2 missing values" in n for n in empty.notes)
+
+
+def test_diagnose_prints_no_nan(capsys, rig_csv):
+    code, out, err = _cli(capsys, "diagnose", rig_csv, *MAPPED)
+    assert code == 0, err
+    assert not re.search(r"\bnan\b", out.lower()), out
+
+
 def test_a_long_gap_or_a_mostly_missing_record_is_refused(tmp_path, rig_signals):
     t, u, a = rig_signals
     gap = write_rig(tmp_path / "gap.csv", t, u, a, missing=[(k, 1) for k in range(1000, 1050)])

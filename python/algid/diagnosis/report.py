@@ -133,10 +133,15 @@ def _chain_lines(cm: dict | None, units: dict, title: str, indent: str = "  ") -
     return out
 
 
+def _z(z: float) -> str:
+    """A candidate's significance, ``   n/a`` where it has none (its fit did not move the gap)."""
+    return f"{z:6.1f}" if np.isfinite(z) else "   n/a"
+
+
 def _fmt_params(params: dict, std: dict | None = None, units: dict = SI) -> str:
     parts = []
     for k, v in params.items():
-        s = f"{k} = {v:.4g}"
+        s = f"{k} = {v:.4g}" if np.isfinite(v) else f"{k} = n/a"
         if std and std.get(k) is not None and np.isfinite(std[k]):
             s += f" +- {std[k]:.2g}"
         parts.append(s + f" {units.get(k, '')}".rstrip())
@@ -265,7 +270,7 @@ def to_text(d, source: str = "") -> str:
         mark = "*" if s.significant else " "
         L.append(
             f"  {mark} {s.fit.effect:<18s} {location_text(s.fit.location):<9s} {s.gap_after:.4g}  "
-            f"z={s.z:6.1f}  {_fmt_params(s.fit.params, units=d.units)}"
+            f"z={_z(s.z)}  {_fmt_params(s.fit.params, units=d.units)}"
         )
     if len(d.ranking) > 10:
         L.append(f"  ... {len(d.ranking) - 10} more in the JSON")

@@ -114,13 +114,25 @@ class _Chunks:
                 raise RecordingError(f"{self.source}: ragged row at line {lineno}: {count} fields, header has {width}")
         rows = [t.replace(",", ".") for t in texts] if self.decimal == "," else texts
         try:
-            block = np.loadtxt(
-                rows, delimiter=self.sep, usecols=self.layout.positions(), ndmin=2, dtype=float, comments=None
-            )
+            block = self._parse(rows)
         except ValueError:
-            self._locate(texts, linenos)
+            try:  # a logger's empty field is a missing sample: NaN, bridged or refused by the gap rules
+                block = self._parse([self._empty_as_nan(t) for t in rows])
+            except ValueError:
+                self._locate(texts, linenos)
         self.chunks.append(block)
         self.lines.append(np.asarray(linenos, dtype=np.int64))
+
+    def _parse(self, rows: list[str]) -> np.ndarray:
+        return np.loadtxt(
+            rows, delimiter=self.sep, usecols=self.layout.positions(), ndmin=2, dtype=float, comments=None
+        )
+
+    def _empty_as_nan(self, text: str) -> str:
+        """A row with its empty fields (``,,``, ``""``) read as NaN."""
+        if self.sep is None:
+            return text
+        return self.sep.join("nan" if f.strip().strip('"') == "" else f for f in text.split(self.sep))
 
     def _locate(self, texts: list[str], linenos: list[int]) -> None:
         """Raise the one-line error naming the first field that is not a number."""
@@ -128,6 +140,8 @@ class _Chunks:
             fields = self.fields(text)
             for col in self.layout.positions():
                 field = fields[col].strip().strip('"')
+                if field == "":  # read as a missing sample (NaN)
+                    continue
                 try:
                     if "_" in field:  # Python's float reads digit separators; files do not
                         raise ValueError(field)
