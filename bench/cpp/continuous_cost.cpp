@@ -78,9 +78,8 @@ void measure(const char* method, int seconds, int reps) {
       "{\"method\": \"%s\", \"n\": %d, \"median_ns\": %.1f, \"mean_ns\": %.1f, \"p99_ns\": %.1f, \"p999_ns\": %.1f, "
       "\"max_path_ns\": %.1f, \"max_over_median\": %.2f, \"raw_max_ns\": %.1f, \"samples\": %zu, \"reps\": %d, "
       "\"sink\": %d}\n",
-      method, N, quantile(b, 0.5), mean,
-      quantile(b, 0.99), quantile(b, 0.999), b.back(), b.back() / quantile(b, 0.5), raw_max, b.size(), reps,
-      sink == 0.5 ? 1 : 0);
+      method, N, quantile(b, 0.5), mean, quantile(b, 0.99), quantile(b, 0.999), b.back(), b.back() / quantile(b, 0.5),
+      raw_max, b.size(), reps, sink == 0.5 ? 1 : 0);
   std::fflush(stdout);
 }
 

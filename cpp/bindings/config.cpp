@@ -36,14 +36,15 @@ void bind_window_fields(Class& cls) {
 }
 
 // A field of both estimators' configurations: read from the weak form's, written to both.
-#define ALGID_BOTH(field, doc)                                                                   \
-  def_property(                                                                                   \
-      #field, [](const Options& o) { return o.weak.field; },                                      \
+#define ALGID_BOTH(field, doc)                               \
+  def_property(                                              \
+      #field, [](const Options& o) { return o.weak.field; }, \
       [](Options& o, decltype(o.weak.field) v) { o.weak.field = o.algebraic_config.field = v; }, doc)
 // A field of one estimator's configuration (`weak` or `algebraic_config`).
-#define ALGID_ONE(config, field, doc) \
-  def_property(                        \
-      #field, [](const Options& o) { return o.config.field; }, [](Options& o, decltype(o.config.field) v) { o.config.field = v; }, doc)
+#define ALGID_ONE(config, field, doc)                          \
+  def_property(                                                \
+      #field, [](const Options& o) { return o.config.field; }, \
+      [](Options& o, decltype(o.config.field) v) { o.config.field = v; }, doc)
 
 void bind_continuous_options(py::module_& m) {
   using Options = ContinuousOptions;
@@ -74,8 +75,9 @@ void bind_continuous_options(py::module_& m) {
           [](Options& o, double v) { o.algebraic_config.validity.min_hadamard = v; },
           "algebraic: lowest doubly equilibrated Hadamard ratio of a trusted system, in [0, 1)")
       .def_readwrite("window_s", &Options::window_s, "window length L [s]; -1: 0.5 (weak form), 0.3 (algebraic)")
-      .def_readwrite("overlap_efficiency", &Options::overlap_efficiency,
-                     "independent fraction of the staggered window results, (0, 1]; -1: 0.25 (weak form), 0.5 (algebraic)")
+      .def_readwrite(
+          "overlap_efficiency", &Options::overlap_efficiency,
+          "independent fraction of the staggered window results, (0, 1]; -1: 0.25 (weak form), 0.5 (algebraic)")
       .ALGID_BOTH(stagger, "windows in flight K, started L/K apart")
       .ALGID_BOTH(block, "window results per block median")
       .ALGID_BOTH(confirm, "window results in the step test; 0: 2K+1")
@@ -86,7 +88,8 @@ void bind_continuous_options(py::module_& m) {
       .ALGID_BOTH(min_relative_spread, "floor of the per-window spread relative to |estimate|")
       .ALGID_BOTH(min_windows, "window results since a restart before the tests are armed")
       .ALGID_BOTH(horizon_s, "forgetting time constant of the block mean [s]; 0: none")
-      .ALGID_ONE(algebraic_config, prefilter_hz, "algebraic: low-pass on accelerations and forces [Hz]; -1: 0.05/dt, 0: off")
+      .ALGID_ONE(algebraic_config, prefilter_hz,
+                 "algebraic: low-pass on accelerations and forces [Hz]; -1: 0.05/dt, 0: off")
       .ALGID_ONE(algebraic_config, prefilter_order, "algebraic: Butterworth order of the prefilter: 2 or 4")
       .ALGID_ONE(weak, band_hz, "weak form: highest test-function frequency [Hz]; -1: 0.05/dt")
       .ALGID_ONE(weak, accel_noise, "weak form: acceleration noise RMS [m/s^2]; -1: estimated")
@@ -94,9 +97,10 @@ void bind_continuous_options(py::module_& m) {
       .ALGID_ONE(weak, bias_compensation, "weak form: subtract the regressor-noise term of the normal equations")
       .ALGID_ONE(weak, joint_efficiency,
                  "weak form: sigma = sqrt(diag(N^-1) / joint_efficiency) (overlap of the windows' information)")
-      .ALGID_ONE(weak, long_window_s,
-                 "weak form: length of a second, longer set of windows with a joint sum of its own [s] (each "
-                 "parameter reported from the joint sum with the smaller uncertainty); -1: three times window_s, 0: none")
+      .ALGID_ONE(
+          weak, long_window_s,
+          "weak form: length of a second, longer set of windows with a joint sum of its own [s] (each "
+          "parameter reported from the joint sum with the smaller uncertainty); -1: three times window_s, 0: none")
       .ALGID_ONE(weak, gls, "weak form: rows weighted by their noise covariance (False: unweighted)")
       .ALGID_ONE(weak, joint, "weak form: estimate from the summed window normal equations (False: block medians)")
       .ALGID_BOTH(detect, "run the change detector")

@@ -167,8 +167,7 @@ void no_allocation_in_hot_path() {
     threw = true;
   }
   std::printf("  %s N=%d %s %s: %ld allocations in update()/reset(), %ld events\n", kDynamic ? "Dynamic" : "fixed", N,
-              sizeof(Scalar) == 4 ? "float" : "double",
-              kAlgebraic ? "algebraic" : "weak form", allocations, events);
+              sizeof(Scalar) == 4 ? "float" : "double", kAlgebraic ? "algebraic" : "weak form", allocations, events);
   CHECK(!threw);
   CHECK(allocations == 0);
   CHECK(events >= 1);  // the restart path did run under the guard
@@ -289,8 +288,8 @@ void schedule_and_aggregation_match_oracle() {
   using Est = algid::AlgebraicContinuousEstimator<N>;
   Est::Config cfg;
   cfg.detect = false;
-  cfg.amortize = false;     // compare right at the window end
-  cfg.prefilter_hz = 0;     // raw samples into the windows (the prefilter is checked against scipy in Python)
+  cfg.amortize = false;  // compare right at the window end
+  cfg.prefilter_hz = 0;  // raw samples into the windows (the prefilter is checked against scipy in Python)
   auto est = std::make_unique<Est>(cfg);
   const Record<N> rec(11, 8000, -1, 0, 1.0, 40.0);
   const long M = est->window_samples();
@@ -367,8 +366,8 @@ void constant_system_no_alarm_and_accuracy() {
     if (s == 10000 - 1) {
       const auto e = rel_errors<N>(*est, rec, s);
       for (int i = 0; i < N; ++i) {
-        CHECK(e[static_cast<std::size_t>(i)] < 0.005);          // masses within 0.5 % at 10 s
-        CHECK(e[static_cast<std::size_t>(N + i)] < 0.05);       // dampings: weakly excited by this signal
+        CHECK(e[static_cast<std::size_t>(i)] < 0.005);  // masses within 0.5 % at 10 s
+        CHECK(e[static_cast<std::size_t>(N + i)] < 0.05);  // dampings: weakly excited by this signal
       }
       for (int j = 0; j <= N; ++j) CHECK(e[static_cast<std::size_t>(2 * N + j)] < 0.005);  // springs
     }
@@ -384,7 +383,7 @@ void constant_system_no_alarm_and_accuracy() {
 void step_is_tracked() {
   constexpr int N = 3;
   using Est = algid::WeakFormContinuousEstimator<N>;
-  const int spring = 1;              // k_2
+  const int spring = 1;  // k_2
   const int param = 2 * N + spring;  // its index in estimate()
   for (double snr : {0.0, 40.0}) {
     auto est = std::make_unique<Est>(Est::Config{});

@@ -107,7 +107,9 @@ class AlgebraicWindows {
 
   /// Configure (the configuration must be valid: see validate()). Allocates for N = Dynamic.
   AlgebraicWindows(const Config& config, int n)
-      : config_(config), n_(n), windows_(make_windows(window_config(config), n, std::make_index_sequence<MaxStagger>{})) {
+      : config_(config),
+        n_(n),
+        windows_(make_windows(window_config(config), n, std::make_index_sequence<MaxStagger>{})) {
     filter_.configure_channels(2 * n_);
     io_.resize(2 * n_);
     result_.setZero(3 * n_ + 1);

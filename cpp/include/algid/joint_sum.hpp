@@ -298,8 +298,9 @@ class JointSums {
 
   std::unique_ptr<JointSum> make(long hop, long short_hop, int block, Scalar horizon_s, Scalar dt) const {
     const long ring = (block * short_hop + hop - 1) / hop;
-    const double forget =
-        horizon_s > Scalar(0) ? std::exp(-static_cast<double>(hop) * static_cast<double>(dt / horizon_s)) : 1.0;
+    const double forget = horizon_s > Scalar(0)
+                              ? std::exp(-static_cast<double>(hop) * static_cast<double>(dt / horizon_s))
+                              : 1.0;
     return std::make_unique<JointSum>(params_, static_cast<int>(std::max<long>(ring, 2 * stagger_ + 1)), forget);
   }
 

@@ -38,8 +38,8 @@ template <class Scalar>
 struct TrackConfig {
   int block = 16;                              ///< window results per block median (<= Capacity)
   Scalar min_relative_spread = Scalar(1e-2);   ///< floor of the per-window spread relative to |estimate|
-  int min_windows = 8;                         ///< window results since a restart before the spread is trusted and the tests armed
-  Scalar horizon_s = Scalar(0);                ///< forgetting time constant of the block mean [s]; 0: none
+  int min_windows = 8;  ///< window results since a restart before the spread is trusted and the tests armed
+  Scalar horizon_s = Scalar(0);  ///< forgetting time constant of the block mean [s]; 0: none
 
   /// Check the fields for a ring of `capacity`. @realtime no allocation, no throw
   ContinuousConfigError validate(int capacity) const noexcept {
@@ -75,7 +75,8 @@ class RobustTracks {
     const Scalar block_s = static_cast<Scalar>(config_.block) * static_cast<Scalar>(window_samples) /
                            static_cast<Scalar>(stagger) * dt;
     forget_ = config_.horizon_s > Scalar(0) ? std::exp(-block_s / config_.horizon_s) : Scalar(1);
-    block_scale_ = detail::kMedianInefficiency<Scalar> / std::sqrt(static_cast<Scalar>(config_.block) * overlap_efficiency);
+    block_scale_ = detail::kMedianInefficiency<Scalar> /
+                   std::sqrt(static_cast<Scalar>(config_.block) * overlap_efficiency);
   }
 
   /// Empty every track; the estimates and sigmas start at the given values. @realtime no allocation, no throw
@@ -165,7 +166,8 @@ class RobustTracks {
         scratch_[static_cast<std::size_t>(kept++)] = t.value[slot];
     }
     if (kept == 0)
-      scratch_[static_cast<std::size_t>(kept++)] = t.value[static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity)];
+      scratch_[static_cast<std::size_t>(kept++)] =
+          t.value[static_cast<std::size_t>((t.head - 1 + Capacity) % Capacity)];
     for (int i = 0; i < kept; ++i) {
       const std::size_t slot = static_cast<std::size_t>((t.head - kept + i + Capacity) % Capacity);
       t.value[slot] = scratch_[static_cast<std::size_t>(i)];
@@ -238,16 +240,16 @@ class RobustTracks {
  private:
   struct Track {
     std::array<Scalar, Capacity> value{};  // window results since the restart, newest at head - 1
-    std::array<Scalar, Capacity> z{};      // their z-scores against the estimate before them
+    std::array<Scalar, Capacity> z{};  // their z-scores against the estimate before them
     int head = 0;
-    int count = 0;    // entries since the restart, <= Capacity
+    int count = 0;  // entries since the restart, <= Capacity
     int z_count = 0;  // consecutive newest entries with a finite z, <= Capacity
-    long since = 0;   // window results aggregated since the restart (kept ones included)
-    long fresh = 0;   // window results that arrived after the restart
+    long since = 0;  // window results aggregated since the restart (kept ones included)
+    long fresh = 0;  // window results that arrived after the restart
     int in_block = 0;  // results in the current block
     Scalar s0 = Scalar(0), s1 = Scalar(0), s2 = Scalar(0), s0sq = Scalar(0);  // block-statistic moments
     std::array<Scalar, Capacity> block_sd{};  // the current block's window sigmas (0: unknown)
-    Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();           // per-window sigma
+    Scalar spread = std::numeric_limits<Scalar>::quiet_NaN();  // per-window sigma
     Scalar relative_spread = std::numeric_limits<Scalar>::quiet_NaN();  // carried over a restart
     bool spread_ok = false;  // spread measured on >= min_windows results: the tests may run
   };

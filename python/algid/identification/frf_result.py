@@ -93,17 +93,7 @@ class FrfIdentification(PackedEstimates):
         :meth:`~.result.Identification.to_json` that apply, and ``frf`` (what was fitted)."""
         d = self.data
         params = [
-            {
-                "name": v.name,
-                "value": _num(self.theta[p]),
-                "sigma": _num(self.sigma[p]),
-                "status": v.status,
-                "valid": v.valid,
-                "reason": v.reason or None,
-                "equation_error": _num(self.equation_error[p]),
-                "force_share": _num(v.share),
-                "sigma_force_share": _num(v.sigma_share),
-            }
+            {**self.parameter_entry(p, v), "equation_error": _num(self.equation_error[p])}
             for p, v in enumerate(self.verdicts)
         ]
         return {

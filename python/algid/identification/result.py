@@ -110,6 +110,19 @@ class PackedEstimates(PackedParameters):
             "reasons": self.reasons,
         }
 
+    def parameter_entry(self, p: int, v) -> dict:
+        """The JSON entry of packed parameter ``p`` with its verdict ``v``."""
+        return {
+            "name": v.name,
+            "value": _num(self.theta[p]),
+            "sigma": _num(self.sigma[p]),
+            "status": v.status,
+            "valid": v.valid,
+            "reason": v.reason or None,
+            "force_share": _num(v.share),
+            "sigma_force_share": _num(v.sigma_share),
+        }
+
     def modes_json(self) -> dict:
         """``modes`` (one object per mode, or None) and, without modes, ``modes_reason``."""
         modal, why = self.modes()
@@ -222,16 +235,9 @@ class Identification(PackedEstimates):
         n = self.n
         params = [
             {
-                "name": v.name,
-                "value": _num(self.theta[p]),
-                "sigma": _num(self.sigma[p]),
-                "status": v.status,
-                "valid": v.valid,
-                "reason": v.reason or None,
+                **self.parameter_entry(p, v),
                 "bias_corrected": _num(self.bias[p]),
                 "method_bias": _num(self.method_bias[p]),
-                "force_share": _num(v.share),
-                "sigma_force_share": _num(v.sigma_share),
             }
             for p, v in enumerate(self.verdicts)
         ]
