@@ -11,7 +11,7 @@ import pytest
 
 import algid
 from algid import reference
-from algid.chain import Chain
+from algid.model.chain import Chain
 
 DT = 1e-3
 

@@ -11,7 +11,7 @@ import pytest
 
 import algid
 from algid import reference
-from algid.chain import TABLE1, Chain
+from algid.model.chain import TABLE1, Chain
 from signals import multisine, relative_errors, simulate_chain
 
 
