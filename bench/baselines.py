@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import lfilter
 
-from algid import reference  # noqa: E402
+from algid.estimator import reference  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------
 # RLS on the integrated regressors

@@ -231,7 +231,7 @@ def cached_quadrature_weights(enabled: bool = True):
     """The numpy reference with its quadrature weights computed once per process: the timed
     calls then exclude their computation (the reference memoises them itself too, so only the
     first call of a process differs)."""
-    from algid import reference
+    from algid.estimator import reference
 
     original = reference.quadrature_weights
     if enabled:

@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from algid import demo
+from algid.control import demo
 
 
 def test_settle_time_against_brute_force():

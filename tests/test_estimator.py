@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import algid
-from algid import reference
+from algid.estimator import reference
 from algid.model.chain import TABLE1, Chain
 from signals import multisine, relative_errors, simulate_chain
 

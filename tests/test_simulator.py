@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.signal import cont2discrete
 
-from algid import reference
+from algid.estimator import reference
 from algid.model.chain import TABLE1, Chain
 from algid.simulator import EFFECT_NAMES, Effect, SensorNoise, simulate
 
