@@ -58,7 +58,7 @@ def chain_core(isa: str | None = None):
                 raise RuntimeError(f"this CPU cannot run the {level} build of algid")
             continue
         try:
-            return importlib.import_module(f".{name}", __package__)
+            return importlib.import_module(f"..{name}", __package__)  # the builds sit at the top of algid
         except ImportError:
             if wanted is not None:
                 raise RuntimeError(
