@@ -29,8 +29,8 @@ from scipy.special import erf
 
 HERE = Path(__file__).resolve().parent
 import algid  # noqa: E402
-from algid import reference  # noqa: E402
-from algid.chain import TABLE1, Chain  # noqa: E402
+from algid.estimator import reference  # noqa: E402
+from algid.model.chain import TABLE1, Chain  # noqa: E402
 from algid.simulator.exact import multisine, relative_errors, simulate_chain  # noqa: E402
 
 FS = 1000.0

@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from algid.chain import TABLE1, Chain
 from algid.identification.engine import identify
-from algid.modal import modes
+from algid.model.chain import TABLE1, Chain
+from algid.model.modal import modes
 from algid.simulator.base import SupportMotion, simulate_base
 
 DURATION_S, FS_HZ, SNR_DB = 20.0, 1000.0, 40.0

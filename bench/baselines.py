@@ -9,7 +9,7 @@ regressors as the algebraic estimator: row 1 of eqs. 3-4 for every DOF,
     a_11,i m_i + a_12,i c_i + a_13,i k_i + a_14,i k_{i+1} = b_1,i        (divided by Delta^2),
 
 built on reseeded windows of ``window_s`` (the iterated integrals by the estimator's 8-point
-interpolatory rule, weights from ``algid.reference``; the first ``skip`` samples of each window, where the
+interpolatory rule, weights from ``algid.estimator.reference``; the first ``skip`` samples of each window, where the
 row is nearly zero, are left out), one row per DOF and sample, all DOFs in one joint
 least-squares problem over the 3n+1 parameters (interior springs shared). RLS with
 forgetting factor lambda and an uninformative start is exactly the exponentially weighted
@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import lfilter
 
-from algid import reference  # noqa: E402
+from algid.estimator import reference  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------
 # RLS on the integrated regressors

@@ -32,7 +32,7 @@ ROUND = """
 import json, sys, time
 import numpy as np
 import algid
-from algid.chain import TABLE1, Chain
+from algid.model.chain import TABLE1, Chain
 from algid.simulator import simulate
 out = {}
 for n in %(sizes)r:

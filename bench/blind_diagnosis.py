@@ -67,9 +67,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.diagnosis.candidates import EFFECTS as DIAGNOSED  # noqa: E402
 from algid.diagnosis.candidates import MAIN_PARAM  # noqa: E402
+from algid.model.chain import TABLE1, Chain  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402
 from algid.simulator.effects import EFFECT_LOCATIONS  # noqa: E402
 

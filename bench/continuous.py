@@ -53,8 +53,8 @@ HERE = Path(__file__).resolve().parent
 import baselines  # noqa: E402
 
 import algid  # noqa: E402
-from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.identification import crlb as C  # noqa: E402
+from algid.model.chain import TABLE1, Chain  # noqa: E402
 
 FS = 1000.0
 DT = 1.0 / FS
@@ -420,7 +420,9 @@ def main() -> None:
             "seeds": args.seeds,
             "snr_db": args.snr,
             "band_hz": 20.0,
-            "continuous_defaults": algid.continuous.config_dict(algid.continuous.ContinuousConfig()),
+            "continuous_defaults": algid.estimator.continuous.config_dict(
+                algid.estimator.continuous.ContinuousConfig()
+            ),
             "continuous_options": dict(OPTIONS),
             "baselines": TUNED,
             "ukf_seconds": args.ukf_seconds,
@@ -514,7 +516,7 @@ def main() -> None:
                 print_block(sname, key, block, fam)
         # tracking
         js, jd = tracking_params(sname, n)
-        names = algid.chain.parameter_names(n)
+        names = algid.model.chain.parameter_names(n)
         print(
             f"\n--- {sname}: tracking ({names[js]} -20 % at {STEP_AT:g} s, {names[jd]} -10 % over 60 s), "
             f"noise on accelerations and forces ---",

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import argparse
 
-from algid.chain import TABLE1
 from algid.identification.crlb import crlb, simulate
+from algid.model.chain import TABLE1
 
 
 def main() -> None:

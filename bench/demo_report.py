@@ -48,10 +48,10 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import norm
 
-from algid.chain import TABLE1
-from algid.controller import BezierReference, TrackingController
-from algid.demo import format_summary, jsonable, run_scenario, summarize
+from algid.control.controller import BezierReference, TrackingController
+from algid.control.demo import format_summary, jsonable, run_scenario, summarize
 from algid.identification import crlb
+from algid.model.chain import TABLE1
 from algid.simulator import simulate
 
 

@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.identification import crlb  # noqa: E402
+from algid.model.chain import TABLE1, Chain  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402
 
 FS = 1000.0

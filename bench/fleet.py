@@ -4,7 +4,7 @@ worker processes.
 The fleet: ``--count`` recordings of 3-DOF chains (``--machines`` folders, machine i's chain
 ``Chain.random(3, default_rng(i))``), ``--duration`` s at 1 kHz under the tests' multisine,
 cycling through no effect, a cubic spring and dry friction, and SNRs of 60, 40 and 30 dB
-(:func:`algid.scenarios.write_fleet_recording`); generated once on the same Dask cluster into ``--data``.
+(:func:`algid.simulator.scenarios.write_fleet_recording`); generated once on the same Dask cluster into ``--data``.
 
 For each worker count W (a ``LocalCluster`` of W single-threaded processes, started and warmed
 up by one recording per worker before the clock starts), :func:`algid.batch` over the fleet
@@ -40,7 +40,7 @@ from pathlib import Path
 import algid
 from algid.fleet.engine import local_cluster
 from algid.fleet.task import Options, run_one
-from algid.scenarios import write_fleet_recording
+from algid.simulator.scenarios import write_fleet_recording
 
 
 def generate(client, data: Path, count: int, machines: int, duration_s: float) -> list[Path]:

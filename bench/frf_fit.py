@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from algid import FrfData
-from algid.chain import TABLE1, Chain
 from algid.identification.frf_fit import identify_frf
+from algid.model.chain import TABLE1, Chain
 
 LINES = 2000
 NOISE = 0.01  # rms of the complex noise relative to |H| on every line: 40 dB

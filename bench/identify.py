@@ -8,7 +8,7 @@ Sections (all through the Python entry point the command line calls):
   accelerations, seeds 0..S-1: worst relative error per family (m, c, k), median over the
   seeds; the same records through the paper's single growing window for comparison.
 * ``short``: Table 1, 0.2 s, noise-free: the error at 0.1 s and at the end.
-* ``slow``: the positioning axis of :func:`algid.scenarios.positioning_axis` (5 kg, 25 N s/m,
+* ``slow``: the positioning axis of :func:`algid.simulator.scenarios.positioning_axis` (5 kg, 25 N s/m,
   no spring, bang-bang moves under a saturated PID, 1 um encoder only, 20 s), seeds 0..S-1:
   mass and damping errors, the spring's verdict, valid negative parameters.
 * ``band``: a 2-DOF chain (m 2, 1 kg; c 4, 2 N s/m; k 4800, 2000, 3000 N/m) under random
@@ -58,12 +58,12 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 import algid  # noqa: E402
-from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.identification import crlb as C  # noqa: E402
+from algid.model.chain import TABLE1, Chain  # noqa: E402
 from algid.recording import Recording  # noqa: E402
-from algid.scenarios import positioning_axis  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
 from algid.simulator.exact import multisine, simulate_chain  # noqa: E402
+from algid.simulator.scenarios import positioning_axis  # noqa: E402
 
 FS = 1000.0
 SNRS = (20, 30, 40, 50, 60)

@@ -42,8 +42,8 @@ from pathlib import Path
 import numpy as np
 
 import algid
-from algid.chain import TABLE1
 from algid.diagnosis import diagnose
+from algid.model.chain import TABLE1
 from algid.recording import Recording, save_recording
 from algid.simulator import simulate
 

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from algid.chain import stiffness_matrix  # noqa: E402
+from algid.model.chain import stiffness_matrix  # noqa: E402
 
 TONES_HZ = np.geomspace(1.0, 40.0, 6)
 

@@ -13,7 +13,7 @@ and 11).
 import numpy as np
 
 import algid  # noqa: E402
-from algid.chain import TABLE1  # noqa: E402
+from algid.model.chain import TABLE1  # noqa: E402
 from algid.simulator.exact import multisine, simulate_chain  # noqa: E402
 
 CONFIGS = {

@@ -29,12 +29,12 @@ import blind_diagnosis as B  # noqa: E402
 import identify as I  # noqa: E402
 import realistic_blind as RB  # noqa: E402
 
-from algid.chain import TABLE1  # noqa: E402
 from algid.identification.screen import OUTLIER_RANGE, RANGE_RANK, screen  # noqa: E402
+from algid.model.chain import TABLE1  # noqa: E402
 from algid.recording import Recording  # noqa: E402
 from algid.recording.datasets import f16_chain_recording, silverbox_recording  # noqa: E402
-from algid.scenarios import impact_test, positioning_axis  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
+from algid.simulator.scenarios import impact_test, positioning_axis  # noqa: E402
 
 DATA = HERE.parents[1] / "shared" / "data"
 

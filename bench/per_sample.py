@@ -24,7 +24,7 @@ What it does, in one process so every ratio compares figures from the same run:
 4. times the Python per-sample ``update()``, the batch ``run()`` of the fixed-size and of the
    run-time sized class (GIL released; for every instruction-set build the CPU runs, the
    default one first) and the numpy reference
-   ``algid.reference.estimate`` on the same kind of signals;
+   ``algid.estimator.reference.estimate`` on the same kind of signals;
 5. counts the flops per DOF-sample on an instrumented scalar type (``flop_count``) and measures
    the machine's multiply-add peak (``peak_flops``), giving a lower bound;
 6. measures single-precision accuracy on Table 1 (``float_accuracy``);
@@ -231,7 +231,7 @@ def cached_quadrature_weights(enabled: bool = True):
     """The numpy reference with its quadrature weights computed once per process: the timed
     calls then exclude their computation (the reference memoises them itself too, so only the
     first call of a process differs)."""
-    from algid import reference
+    from algid.estimator import reference
 
     original = reference.quadrature_weights
     if enabled:

@@ -29,12 +29,12 @@ Rigs (probabilities 0.5 / 0.25 / 0.25):
   structural mode above the chain's (0.3; a flexible right support or a light appendage
   at 2-4 times the highest natural frequency and 4-8 times the top of the forcing band,
   at most 0.45 fs, not recorded).
-* ``axis``: the positioning axis of :func:`algid.scenarios.positioning_axis` (mass
+* ``axis``: the positioning axis of :func:`algid.simulator.scenarios.positioning_axis` (mass
   2-10 kg, viscous 10-50 N s/m, no spring, closed-loop bang-bang moves, 20 s, encoder of
   0.5-5 um, position only), the force as the drive commands it with 40-60 dB of current
   noise; an unrecorded constant force (0.7; 2-20 % of the force RMS); effect none,
   ``coulomb_friction``, ``stribeck_friction``, ``quadratic_damping`` or ``input_delay``.
-* ``device``: the displacement-driven device of :func:`algid.scenarios.displacement_driven`
+* ``device``: the displacement-driven device of :func:`algid.simulator.scenarios.displacement_driven`
   (inertia negligible; m 0.02-0.2 kg, c 50-500 N s/m, k 5e3-5e4 N/m, amplitude 1-5 mm,
   40-60 dB on force and displacement, a force offset with probability 0.5); effect none,
   ``coulomb_friction``, ``clearance`` (a backlash: the spring bites beyond a gap of 5-30 %
@@ -100,11 +100,11 @@ from scipy.signal import butter, lfilter
 HERE = Path(__file__).resolve().parent
 import blind_diagnosis as B  # noqa: E402
 
-from algid.chain import Chain  # noqa: E402
+from algid.model.chain import Chain  # noqa: E402
 from algid.recording import Recording, save_recording  # noqa: E402
 from algid.recording import motion as recording_motion  # noqa: E402
-from algid.scenarios import displacement_driven, positioning_axis  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
+from algid.simulator.scenarios import displacement_driven, positioning_axis  # noqa: E402
 
 FS = 1000.0
 DURATION = 10.0

@@ -42,8 +42,8 @@ import numpy as np
 from scipy.signal import lfilter
 
 import algid  # noqa: E402
-from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.identification import crlb  # noqa: E402
+from algid.model.chain import TABLE1, Chain  # noqa: E402
 
 FS_HZ = 1000.0
 

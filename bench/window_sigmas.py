@@ -27,8 +27,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 from soak import FS_HZ, ModalPlant  # noqa: E402
 
 import algid  # noqa: E402
-from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.identification import crlb  # noqa: E402
+from algid.model.chain import TABLE1, Chain  # noqa: E402
 
 
 def record(n: int, snr_db: float, minutes: int, seed: int):

@@ -1,14 +1,14 @@
 """Generated fleets of recordings for the batch tests: machines (folders) of simulated chains
-(:func:`algid.scenarios.write_fleet_recording`, shared with ``bench/fleet.py``), plus
+(:func:`algid.simulator.scenarios.write_fleet_recording`, shared with ``bench/fleet.py``), plus
 malformed and empty files."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from algid.scenarios import FLEET_EFFECTS as EFFECTS
-from algid.scenarios import fleet_recording as recording
-from algid.scenarios import write_fleet_recording as write_recording
+from algid.simulator.scenarios import FLEET_EFFECTS as EFFECTS
+from algid.simulator.scenarios import fleet_recording as recording
+from algid.simulator.scenarios import write_fleet_recording as write_recording
 
 __all__ = ["EFFECTS", "recording", "write_bad", "write_fleet", "write_recording"]
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from algid.chain import TABLE1, Chain
 from algid.identification.base import SCALE_REASON, augment, cumulative_integral
 from algid.identification.engine import identify
 from algid.identification.motion import Motion, chain_forces
-from algid.modal import modes
+from algid.model.chain import TABLE1, Chain
+from algid.model.modal import modes
 from algid.recording import Recording, RecordingError, load_recording, save_recording
 from algid.recording.units import STANDARD_GRAVITY
 from algid.simulator.base import SupportMotion, simulate_base

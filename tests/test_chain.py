@@ -1,11 +1,11 @@
-"""The chain topology of eq. 1 (algid.chain) against the energy form ``K = D^T diag(k) D``."""
+"""The chain topology of eq. 1 (algid.model.chain) against the energy form ``K = D^T diag(k) D``."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from algid.chain import (
+from algid.model.chain import (
     Chain,
     deformation_matrix,
     parameter_names,

@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import pytest
 
-from algid.chain import TABLE1, Chain
+from algid.model.chain import TABLE1, Chain
 from algid.recording import Recording, save_recording
 from signals import multisine, simulate_chain
 
@@ -37,7 +37,7 @@ class _Terminal(io.StringIO):
 
 
 def test_progress_is_silent_off_a_terminal_and_when_quiet():
-    from algid.progress import Progress
+    from algid.messages.progress import Progress
 
     log = io.StringIO()
     p = Progress("identify", stream=log)
@@ -56,7 +56,7 @@ def test_progress_is_silent_off_a_terminal_and_when_quiet():
 
 
 def test_progress_on_a_terminal_is_one_bar_per_stage_cleared_at_the_end():
-    from algid.progress import Progress
+    from algid.messages.progress import Progress
 
     term = _Terminal()
     p = Progress("identify", stream=term)

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import algid
-from algid import reference
-from algid.chain import Chain
+from algid.estimator import reference
+from algid.model.chain import Chain
 
 DT = 1e-3
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from algid.chain import TABLE1
-from algid.controller import DEFAULT_POLES, BezierReference, TrackingController, bezier, pole_placement_gains
+from algid.control.controller import DEFAULT_POLES, BezierReference, TrackingController, bezier, pole_placement_gains
+from algid.model.chain import TABLE1
 from algid.simulator import simulate
 
 

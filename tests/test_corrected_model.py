@@ -10,10 +10,10 @@ import sys
 import numpy as np
 import pytest
 
-from algid.chain import TABLE1, Chain
 from algid.diagnosis import diagnose
 from algid.diagnosis.corrected import corrected_model
 from algid.diagnosis.report import to_json
+from algid.model.chain import TABLE1, Chain
 from algid.recording import save_recording
 from fleet_recordings import EFFECTS, recording
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from algid.chain import TABLE1, Chain  # noqa: E402
 from algid.identification import crlb as C  # noqa: E402
+from algid.model.chain import TABLE1, Chain  # noqa: E402
 from algid.simulator import simulate  # noqa: E402
 
 N = TABLE1.n

@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from algid import demo
+from algid.control import demo
 
 
 def test_settle_time_against_brute_force():
@@ -107,7 +107,7 @@ def test_adapter_serves_growing_window_then_running_estimate():
     the running estimate is ready, the running estimate and its sigma afterwards; valid
     from the relative sigma as documented."""
     algid = pytest.importorskip("algid")
-    from algid.controller import ContinuousAdapter
+    from algid.control.controller import ContinuousAdapter
 
     rng = np.random.default_rng(1)
     T, n = 600, 2

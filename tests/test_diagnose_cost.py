@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from scipy.signal import csd
 
-from algid.chain import TABLE1
 from algid.diagnosis import diagnose
 from algid.diagnosis.core import EqSpec, prepare, window_stats
 from algid.diagnosis.gram import cross_validate_grid, fold_fits, solve_gram, sse
 from algid.diagnosis.model import cross_spectra
+from algid.model.chain import TABLE1
 from algid.recording import Recording
 from algid.simulator import simulate
 

@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from algid.chain import TABLE1, Chain
 from algid.diagnosis import EFFECTS, MAIN_PARAM, diagnose
 from algid.diagnosis.candidates import lowpass
 from algid.diagnosis.core import (
@@ -24,8 +23,9 @@ from algid.diagnosis.core import (
     signal_band,
     window_stats,
 )
+from algid.estimator.reference import iterated_integrals
+from algid.model.chain import TABLE1, Chain
 from algid.recording import Recording, save_recording
-from algid.reference import iterated_integrals
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,6 +1,6 @@
 """``algid diagnose`` on recordings as rigs write them (issue 16): encoder positions, velocities,
 quasi-static devices, closed loops, hum, anti-alias filters, struck structures. Every record
-is generated with its truth (``algid.scenarios``); the checks are on the diagnosis's answers."""
+is generated with its truth (``algid.simulator.scenarios``); the checks are on the diagnosis's answers."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from scipy.signal import butter, lfilter
 
-from algid.chain import TABLE1, Chain
 from algid.diagnosis import diagnose
 from algid.diagnosis.report import to_json
+from algid.model.chain import TABLE1, Chain
 from algid.recording import Recording
-from algid.scenarios import displacement_driven, impact_test, positioning_axis
 from algid.simulator import simulate
+from algid.simulator.scenarios import displacement_driven, impact_test, positioning_axis
 from signals import FRICTION_AND_OFFSET, multisine
 
 

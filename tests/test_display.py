@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import algid
-from algid.chain import TABLE1
 from algid.diagnosis.engine import diagnose
-from algid.display import html_table, number, parameter_rows, recording_fields
+from algid.messages.display import html_table, number, parameter_rows, recording_fields
+from algid.model.chain import TABLE1
 from signals import multisine, simulate_chain
 
 

@@ -51,7 +51,7 @@ def test_api_reference_is_generated_from_the_docstrings(site: Path) -> None:
     api = (site / "api" / "index.html").read_text()
     for anchor in (
         "algid.estimator.ChainEstimator.spring",
-        "algid.continuous.ContinuousEstimator.ready",
+        "algid.estimator.continuous.ContinuousEstimator.ready",
         "algid.recording.Recording",
         "algid.identification.engine.identify",
         "algid.diagnosis.engine.diagnose",

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import algid
-from algid import reference
-from algid.chain import TABLE1, Chain
+from algid.estimator import reference
+from algid.model.chain import TABLE1, Chain
 from signals import multisine, relative_errors, simulate_chain
 
 

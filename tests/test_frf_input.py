@@ -1,6 +1,6 @@
 """FRFs from an analyser: ``algid.load_frf`` (FRF npz, UFF 58 function type 4) and the
 frequency-domain fit behind ``algid identify frf.npz`` (algid.identification.frf_fit).
-Oracle: the chain's FRF by matrix inversion (algid.frf.frf), TABLE1's parameters."""
+Oracle: the chain's FRF by matrix inversion (algid.model.frf.frf), TABLE1's parameters."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import pytest
 
 import algid
 from algid import FrfData, load_frf
-from algid.chain import TABLE1, Chain
 from algid.identification.frf_fit import identify_frf, model_frf
+from algid.model.chain import TABLE1, Chain
 from algid.recording import RecordingError
 from algid.recording.frf_file import is_frf_source, save_frf
 from algid.recording.units import STANDARD_GRAVITY
@@ -211,7 +211,9 @@ def test_frf_fit_figure_plots_the_data_and_the_model():
     res = identify_frf(data)
     fig = frf_fit_figure(res)
     model = model_frf(res.theta, data)
-    np.testing.assert_allclose(model, table1_frf(chain=res.chain())[:, [0, 2]], rtol=1e-9)  # oracle: algid.frf.frf
+    np.testing.assert_allclose(
+        model, table1_frf(chain=res.chain())[:, [0, 2]], rtol=1e-9
+    )  # oracle: algid.model.frf.frf
     axes = np.array(fig.axes).reshape(2, 2)
     for q in range(2):
         mag, pha = (axes[0, q].get_lines(), axes[1, q].get_lines())

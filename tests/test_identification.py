@@ -7,15 +7,15 @@ import numpy as np
 import pytest
 
 import algid
-from algid.chain import TABLE1, Chain
 from algid.identification.motion import Motion, band_limited_motion, chain_forces, equation_error_fit
 from algid.identification.plan import make_plan, natural_frequencies_hz
 from algid.identification.surrogate import replicate_signals
 from algid.identification.verdicts import judge
-from algid.noise import analyse
+from algid.model.chain import TABLE1, Chain
 from algid.recording import Recording, second_derivative
-from algid.scenarios import displacement_driven, positioning_axis
+from algid.recording.noise import analyse
 from algid.simulator import simulate
+from algid.simulator.scenarios import displacement_driven, positioning_axis
 from signals import FRICTION_AND_OFFSET, multisine, relative_errors, simulate_chain
 
 DT = 1e-3

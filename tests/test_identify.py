@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from algid.chain import TABLE1, Chain
+from algid.model.chain import TABLE1, Chain
 from algid.recording import Recording, save_recording
 from signals import FRICTION_AND_OFFSET, multisine, relative_errors, simulate_chain
 
@@ -81,7 +81,7 @@ def test_identify_free_end(tmp_path):
 
 
 def test_invalid_estimates_carry_reasons_on_stderr_and_in_json(tmp_path):
-    from algid.scenarios import positioning_axis
+    from algid.simulator.scenarios import positioning_axis
 
     sc = positioning_axis(seed=5, duration_s=12.0, effects=FRICTION_AND_OFFSET)
     out = tmp_path / "axis.json"

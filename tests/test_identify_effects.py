@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 
 import algid
-from algid.chain import Chain
 from algid.diagnosis import diagnose
 from algid.diagnosis.report import to_json
+from algid.model.chain import Chain
 from algid.recording import Recording
-from algid.scenarios import positioning_axis
 from algid.simulator import simulate
+from algid.simulator.scenarios import positioning_axis
 
 CHAIN = Chain([2.0, 1.0], [4.0, 2.0], [4800.0, 2000.0, 3000.0])
 TRUTH = np.concatenate([CHAIN.mass, CHAIN.damping, CHAIN.stiffness])

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 import algid
-from algid.chain import TABLE1
 from algid.identification.screen import OUTLIER_RANGE, outliers, screen
+from algid.model.chain import TABLE1
 from algid.recording import Recording, save_recording
-from algid.scenarios import impact_test
+from algid.simulator.scenarios import impact_test
 from signals import multisine, simulate_chain
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"

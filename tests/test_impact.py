@@ -47,7 +47,7 @@ def test_a_multisine_force_is_not_a_transient():
 def test_a_bang_bang_axis_is_not_a_transient(seed):
     """The drive's force is zero between moves, but its steps are no hammer's pulses."""
     from algid.recording.transient import transient_record
-    from algid.scenarios import positioning_axis
+    from algid.simulator.scenarios import positioning_axis
 
     assert transient_record(positioning_axis(seed=seed, duration_s=12.0).recording)[1] is None
 

@@ -1,4 +1,4 @@
-"""Modal results, state space and FRFs of a chain (``algid.modal``, ``algid.frf``) against
+"""Modal results, state space and FRFs of a chain (``algid.model.modal``, ``algid.model.frf``) against
 closed forms, an independent eigen-solver, python-control, scipy and Monte Carlo."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from algid import TABLE1, Chain
-from algid.frf import h1_estimate, state_matrices
-from algid.modal import modal_analysis
+from algid.model.frf import h1_estimate, state_matrices
+from algid.model.modal import modal_analysis
 
 SIGMA_REL = 0.01  # relative standard deviation of every parameter in the propagation tests
 
@@ -147,7 +147,7 @@ def _quantities(chain: Chain) -> np.ndarray:
     ],
 )
 def test_perturbation_jacobian_agrees_with_central_differences(chain):
-    from algid.modal import jacobian
+    from algid.model.modal import jacobian
 
     theta = _packed(chain)
     n, J = chain.n, jacobian(chain)
@@ -236,7 +236,7 @@ def test_to_control_without_python_control_is_one_line(monkeypatch):
 def test_recording_h1_is_labelled_in_the_recordings_units(tmp_path):
     from types import SimpleNamespace
 
-    from algid.frf import recording_h1
+    from algid.model.frf import recording_h1
     from algid.plotting.frf import frf_figure, save_frf
 
     rng = np.random.default_rng(3)

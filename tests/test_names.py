@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import algid
-from algid.chain import TABLE1, Chain
+from algid.model.chain import TABLE1, Chain
 from signals import multisine, simulate_chain
 
 ESTIMATORS = (algid.ChainEstimator, algid.ContinuousEstimator)

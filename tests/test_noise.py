@@ -1,4 +1,4 @@
-"""The noise model of a recording (algid.noise): floors, band, encoder resolution, against
+"""The noise model of a recording (algid.recording.noise): floors, band, encoder resolution, against
 signals whose spectra are known in closed form."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.signal import butter, sosfilt
 
-from algid.noise import analyse, channel, encoder_quantum
+from algid.recording.noise import analyse, channel, encoder_quantum
 
 FS = 1000.0
 DT = 1.0 / FS

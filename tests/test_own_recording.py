@@ -17,7 +17,7 @@ import pytest
 
 import algid
 import algid.cli
-from algid.chain import Chain
+from algid.model.chain import Chain
 from algid.recording import RecordingError, load_recording
 from algid.recording.units import STANDARD_GRAVITY
 from signals import multisine, simulate_chain

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from algid.chain import TABLE1
 from algid.diagnosis import diagnose
-from algid.frf import h1_estimate, resolution_hz, segment_samples
+from algid.model.chain import TABLE1
+from algid.model.frf import h1_estimate, resolution_hz, segment_samples
 from algid.plotting.diagnosis import fig_damping_force, fig_ranking, fig_residuals_spectrum, fig_restoring_force
 from algid.plotting.frf import SPAN, frf_figure
-from algid.scenarios import positioning_axis
 from algid.simulator import simulate
+from algid.simulator.scenarios import positioning_axis
 
 #: Three lines per force, none shared: every force excites its own frequencies [Hz].
 LINES_HZ = np.array([[1.3, 3.7, 7.1], [2.1, 4.3, 9.7], [2.9, 5.3, 12.1]])

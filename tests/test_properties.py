@@ -28,7 +28,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import algid
-from algid.chain import TABLE1
+from algid.model.chain import TABLE1
 from algid.recording import load_recording
 from signals import multisine, simulate_chain
 

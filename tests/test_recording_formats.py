@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 import algid.cli
-from algid.chain import TABLE1
+from algid.model.chain import TABLE1
 from algid.recording import Recording, RecordingError, load_recording, parameter_units, save_recording
 from algid.recording.units import STANDARD_GRAVITY
 from signals import multisine, simulate_chain

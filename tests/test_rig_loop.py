@@ -10,14 +10,14 @@ import pytest
 from scipy.integrate import quad
 
 import algid
-from algid.chain import TABLE1
-from algid.control_law import pole_placement_gains
-from algid.controller import BezierReference, TrackingController
-from algid.demo import _continuous_factory, _relative_errors, run_scenario, substitution_disturbance
-from algid.estimate_gate import EstimateGate
-from algid.held_input import HeldLaggedInput, LagEstimator, RigInput
+from algid.control.control_law import pole_placement_gains
+from algid.control.controller import BezierReference, TrackingController
+from algid.control.demo import _continuous_factory, _relative_errors, run_scenario, substitution_disturbance
+from algid.control.estimate_gate import EstimateGate
+from algid.control.held_input import HeldLaggedInput, LagEstimator, RigInput
+from algid.control.trajectories import Multisine
+from algid.model.chain import TABLE1
 from algid.simulator import simulate
-from algid.trajectories import Multisine
 
 H = 1e-3
 

@@ -9,8 +9,8 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.signal import cont2discrete
 
-from algid import reference
-from algid.chain import TABLE1, Chain
+from algid.estimator import reference
+from algid.model.chain import TABLE1, Chain
 from algid.simulator import EFFECT_NAMES, Effect, SensorNoise, simulate
 
 
@@ -411,7 +411,7 @@ def test_force_offset_acts_like_an_unrecorded_constant_force():
 
 
 def test_encoder_readings_are_whole_counts_in_open_and_closed_loop():
-    from algid.positioning import BangBangReference, PositioningController
+    from algid.control.positioning import BangBangReference, PositioningController
 
     q = 1e-5
     res = simulate(TABLE1, np.random.default_rng(12).standard_normal((300, 3)), 0.3, encoder_resolution_m=q)
@@ -428,7 +428,7 @@ def test_encoder_readings_are_whole_counts_in_open_and_closed_loop():
 
 
 def test_bang_bang_reference_profile():
-    from algid.positioning import BangBangReference
+    from algid.control.positioning import BangBangReference
 
     ref = BangBangReference([[0.04], [0.0]], a_max=4.0, dwell_s=0.5, start_s=0.2)
     dur = 2 * np.sqrt(0.04 / 4.0)  # 0.2 s per move

@@ -18,10 +18,10 @@ import pytest
 
 import algid
 import algid.cli
-from algid.chain import Chain
 from algid.diagnosis import diagnose
 from algid.diagnosis.equations import force_form
 from algid.diagnosis.units import PARAMETER_DIMENSIONS, SI, diagnosis_units
+from algid.model.chain import Chain
 from algid.recording import Recording, load_recording, save_recording
 from algid.recording.units import unit_label
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import algid
-from algid.chain import Chain
+from algid.model.chain import Chain
 from test_continuous import CHAIN, DT, tone_record
 
 
@@ -173,7 +173,7 @@ def test_one_absurd_sample_stays_out_of_the_joint(value):
     1e8) no longer biases the running estimates for good: its windows fit far worse than their
     neighbours and stay out of the joint; the noise estimate moves by at most 0.3 %. Table 1's
     chain under a multisine, noise-free, 30 s."""
-    from algid.chain import TABLE1
+    from algid.model.chain import TABLE1
     from signals import multisine, simulate_chain
 
     _, a, u, _ = simulate_chain(TABLE1, multisine(3, seed=4), 30.0, 1000.0)

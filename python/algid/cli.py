@@ -13,13 +13,7 @@ import os
 import sys
 import warnings
 
-from .messages import one_line
-
-#: What goes where; the epilog of ``identify --help`` and ``diagnose --help``.
-STREAMS = (
-    "The summary goes to stdout, progress (on a terminal only) and one-line errors to stderr. "
-    "With --json - the JSON goes to stdout and the summary to stderr; --quiet drops the summary."
-)
+from .messages import error_line
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -45,35 +39,14 @@ class HelpFormatter(argparse.HelpFormatter):
         return "\n\n".join(out)
 
 
-def example(*lines: str) -> str:
-    """The epilog paragraph of a subcommand's examples: ``example:`` and each command line."""
-    return "example:\n" + "\n".join(f"  {line}" for line in lines)
-
-
 #: Options whose value is a comma-separated list (a blank instead of a comma gets a hint).
 COMMA_LISTS = ("--force", "--accel", "--velocity", "--displacement", "--units")
 
 
-def error_text(err: BaseException) -> str:
-    """What went wrong, in one line: the message of an input error, else the exception's type
-    and message."""
-    if isinstance(err, OSError) and err.strerror:
-        what = f"{err.strerror}: {err.filename}" if err.filename else err.strerror
-    elif isinstance(err, (ValueError, TypeError)) or type(err).__module__.startswith("algid"):
-        what = str(err) or type(err).__name__
-    else:
-        what = f"{type(err).__name__}: {err}"
-    return one_line(what)
-
-
-def error_line(command: str, err: BaseException) -> str:
-    """The one line an exception of ``algid COMMAND`` ends with."""
-    return one_line(f"algid {command}: error: {error_text(err)}")
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand registered."""
-    from . import __version__, demo
+    from . import __version__
+    from .control import demo
     from .diagnosis import cli as diagnosis_cli
     from .fleet import cli as batch_cli
     from .identification import cli as identify_cli

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..noise import white_floor
+from ..recording.noise import white_floor
 
 __all__ = [
     "BAND_DETECT",

@@ -59,7 +59,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.signal import lfilter, lfilter_zi
 
-from ..chain import spring_columns, spring_deformation, spring_sides, springs
+from ..model.chain import spring_columns, spring_deformation, spring_sides, springs
 from .equations import base_design, effect_column, linear_design, target, to_physical
 from .gram import CVResult, EqSpec, cross_validate, jackknife_std, score_walk, walk_grid, window_stats
 from .integrals import integrals

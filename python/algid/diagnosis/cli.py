@@ -2,7 +2,7 @@
 
 Registered by the top-level ``algid`` command through :func:`add_parser`. The report goes
 to stdout (to stderr with ``--json -``, which puts the JSON on stdout), progress (on a
-terminal only, :class:`algid.progress.Progress`) to stderr; bad input gives one line on
+terminal only, :class:`algid.messages.progress.Progress`) to stderr; bad input gives one line on
 stderr and exit code 2.
 """
 
@@ -13,9 +13,8 @@ import json
 import sys
 from pathlib import Path
 
-from ..cli import STREAMS, example
-from ..messages import one_line, quote_path
-from ..progress import Progress
+from ..messages import STREAMS, example, one_line, quote_path
+from ..messages.progress import Progress
 from ..recording import RecordingError, load_recording
 from ..recording.options import RECORDING_HELP, add_recording_options, print_notes, recording_options
 from ..recording.transient import add_band_option

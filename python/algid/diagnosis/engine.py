@@ -24,12 +24,12 @@ from typing import Callable
 
 import numpy as np
 
-from ..chain import Chain, springs
-from ..display import Displayed, number
-from ..noise import channel, white_floor, without_hum
+from ..messages.display import Displayed, number
+from ..model.chain import Chain, springs
 from ..parallel import parallel_map
 from ..recording import Recording, RecordingError, accelerations, as_recording, derivative
 from ..recording import motion as recording_motion
+from ..recording.noise import channel, white_floor, without_hum
 from ..recording.transient import transient_record
 from .band import Band, signal_band
 from .candidates import (
@@ -157,7 +157,7 @@ class Diagnosis:
     def metric(self) -> str:
         return METRIC
 
-    # ---- display: one-line repr, notebook table (algid.display) -------------------------
+    # ---- display: one-line repr, notebook table (algid.messages.display) -------------------------
     def _display_fields(self) -> dict:
         parts = (self.location or {}).get("parts", [self.location] if self.location else [])
         where = "+".join(f"{'DOF' if 'dof' in p else 'spring'} {next(iter(p.values()))}" for p in parts)
@@ -386,7 +386,7 @@ def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: 
     (read on the derived accelerations' PSD divided by the derivative stencil's gain, where
     differentiation has lifted the noise far above the leakage of a large slow motion; for
     encoder counts at least the quantisation floor
-    ``q^2 / 12 / (fs / 2)``, :func:`algid.noise.quantisation_psd`) carried through the
+    ``q^2 / 12 / (fs / 2)``, :func:`algid.recording.noise.quantisation_psd`) carried through the
     analysis itself: white noise of that level on every motion channel, differentiated
     ``order`` times as the recording's accelerations were, integrated, put into each
     equation with the linear fit's parameters, detrended and projected on the band of every
@@ -401,8 +401,8 @@ def noise_floors(P: Prepared, lin: LinearFit, motion: np.ndarray | None, order: 
         return floor, band, NoiseLevels()
     from scipy.signal import welch
 
-    from ..noise import quantisation_psd
     from ..recording.derivatives import DEFAULT_DIFF_POINTS, derivative_weights
+    from ..recording.noise import quantisation_psd
     from .windows import band_filter
 
     fs = 1.0 / P.dt
@@ -790,7 +790,7 @@ def coloured_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
     """(n,) in-band noise power of detrended equation errors ``resid`` (N, n), summed over
     the analysed samples, under a white plus 1/f noise model: per DFT bin of a window, the
     mean power over the windows; the white level ``w`` from the bins above the band
-    (:func:`algid.noise.white_floor`); the 1/f level ``p`` the median over the band's bins of
+    (:func:`algid.recording.noise.white_floor`); the 1/f level ``p`` the median over the band's bins of
     ``(power - w) f`` (a median: an effect's power on a few bins does not move it); the
     floor ``sum over the band of w + p / f``. For white noise ``p`` is about 0 and this is
     the white floor's band share."""

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..chain import spring_columns
+from ..model.chain import spring_columns
 
 if TYPE_CHECKING:
     from .windows import Prepared

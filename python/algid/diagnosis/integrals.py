@@ -7,7 +7,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..reference import quadrature_weights
+from ..estimator.quadrature import quadrature_weights
 
 __all__ = ["QUAD_POINTS", "integrals"]
 
@@ -23,7 +23,7 @@ def _weights(points: int) -> np.ndarray:
 def integrals(a: np.ndarray, dt: float, points: int = QUAD_POINTS) -> tuple[np.ndarray, np.ndarray]:
     """``(int a, int int a)`` from the first sample for every column of ``a`` (T, c).
 
-    The quadrature of :func:`algid.reference.iterated_integrals` (on every interval the
+    The estimator's quadrature (:mod:`algid.estimator.quadrature`: on every interval the
     degree ``points-1`` interpolant through the nearest samples, integrated exactly),
     vectorised over columns.
     """

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..chain import equation_parameter_names, spring_columns
+from ..model.chain import equation_parameter_names, spring_columns
 from .equations import force_form, linear_design, target, to_physical
 from .gram import CVResult, EqSpec, cross_validate, solve_gram, window_stats
 from .windows import Prepared, detrend, window_lines

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import welch
 
-from ..chain import spring_deformation, spring_sides, springs
-from ..noise import white_floor
+from ..model.chain import spring_deformation, spring_sides, springs
+from ..recording.noise import white_floor
 from .linear import LinearFit, per_window_fits
 from .windows import Prepared
 
@@ -22,7 +22,7 @@ N_BINS = 24
 
 def noise_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
     """Per-DOF RMS of the white part of the equation error (its target units), from its
-    white PSD floor (:func:`algid.noise.white_floor`: the upper third of the band, above the
+    white PSD floor (:func:`algid.recording.noise.white_floor`: the upper third of the band, above the
     forcing and the modes in a well-sampled record, or below an anti-alias roll-off) times
     the bandwidth."""
     f, S = welch(resid, fs=1.0 / P.dt, nperseg=min(P.L, 1024), axis=0)

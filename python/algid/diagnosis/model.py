@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..chain import spring_columns
+from ..model.chain import spring_columns
 from .equations import linear_design, target, to_physical
 from .gram import EqSpec, cross_validate, jackknife_std, window_stats
 from .linear import LinearFit
@@ -210,8 +210,8 @@ def transient_response(u: np.ndarray, y: np.ndarray, tr) -> dict:
 
 def resonances(P: Prepared, f_hi: float) -> dict:
     """Resonance peaks of every forced DOF's drive-point H1 (question 2), in the signal band,
-    below :data:`FORCE_EDGE` of the force's own band edge (:func:`algid.noise.channel`) and
-    where it carries power (PSD above :data:`algid.noise.DETECT` times its white floor and
+    below :data:`FORCE_EDGE` of the force's own band edge (:func:`algid.recording.noise.channel`) and
+    where it carries power (PSD above :data:`algid.recording.noise.DETECT` times its white floor and
     within ``DETECT^2`` of its peak: a band-passed record has no floor to speak of);
     segments of an eighth of the record (fine resolution, 8 averages). A peak
     counts with coherence of at least :data:`PEAK_COHERENCE`, or, standing
@@ -221,7 +221,7 @@ def resonances(P: Prepared, f_hi: float) -> dict:
     from scipy.ndimage import maximum_filter1d
     from scipy.signal import csd, find_peaks, welch
 
-    from ..noise import DETECT, channel, white_floor
+    from ..recording.noise import DETECT, channel, white_floor
 
     fs = 1.0 / P.dt
     T = P.u_full.shape[0]

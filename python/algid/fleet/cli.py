@@ -38,7 +38,7 @@ DESCRIPTION = (
 def add_parser(sub) -> None:
     """Register ``algid batch``."""
     summary = "identify (and diagnose) folders of recordings on Dask, results to Parquet"
-    from ..cli import example
+    from ..messages import example
 
     epilog = example("algid batch rigs/ --out results/ --force F1 --accel acc1 --units acceleration=g")
     p = sub.add_parser("batch", help=summary, description=DESCRIPTION, epilog=epilog)
@@ -88,7 +88,7 @@ def _report(table, out: Path, quiet: bool) -> None:
 
 def run(args) -> int:
     """Entry point of ``algid batch``; returns the exit code."""
-    from ..cli import error_line
+    from ..messages import error_line
     from .deps import require
     from .engine import batch
     from .inputs import read_layouts

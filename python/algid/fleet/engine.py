@@ -94,7 +94,7 @@ class _Writer:
 
 
 def _lost_row(path: Path, err: BaseException) -> dict:
-    from ..cli import error_text
+    from ..messages import error_text
 
     row = {"key": None, "path": str(path), "name": path.name, "machine": path.parent.name, "status": "failed"}
     return {**row, "error": f"lost by Dask: {error_text(err)}"}

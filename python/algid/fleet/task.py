@@ -160,7 +160,7 @@ def run_one(path: str, options: Options, done: frozenset = frozenset()) -> dict:
     """The row of the recording at ``path``, or ``{"key", "path", "status": "skipped"}`` when
     its key is in ``done``. Never raises for a bad recording: its row says why."""
     from .. import __version__
-    from ..cli import error_text
+    from ..messages import error_text
 
     clock, cpu = time.perf_counter(), time.process_time()
     p = Path(path)

@@ -34,7 +34,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..chain import parameter_names
+from ..model.chain import parameter_names
 from ..recording import Recording, accelerations, base_acceleration
 from ..recording import motion as recording_motion
 

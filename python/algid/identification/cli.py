@@ -3,7 +3,7 @@
 Estimates every mass, damping and spring of the chain in a recording with one standard
 deviation each, says of every estimate whether it is valid and, if not, why
 (:func:`algid.identify`), and gives the modes of the estimated chain (natural frequency and
-damping ratio with one standard deviation, :mod:`algid.modal`); with ``--effect``, the
+damping ratio with one standard deviation, :mod:`algid.model.modal`); with ``--effect``, the
 chain and the effect's parameters estimated together (:mod:`.augmented`). The table goes to stdout
 (to stderr with ``--json -``, which puts the JSON on stdout), one line per invalid estimate
 and the progress to stderr. Exit codes: 0 when something was identified (invalid entries
@@ -16,10 +16,9 @@ import json
 import sys
 from pathlib import Path
 
-from ..chain import Chain
-from ..cli import STREAMS, error_line, example
-from ..messages import quote_path
-from ..progress import Progress
+from ..messages import STREAMS, error_line, example, quote_path
+from ..messages.progress import Progress
+from ..model.chain import Chain
 from ..recording import RecordingError, load_recording
 from ..recording.frf_file import is_frf_source
 from ..recording.options import RECORDING_HELP, add_recording_options, print_notes, recording_options
@@ -189,9 +188,9 @@ def _identify_frf(args):
 def _write_figures(result, rec, folder: Path, progress: Progress, resolution: float | None = None) -> None:
     """``estimates.png`` and ``frf.png`` (the estimated chain's FRF, if it has one, against
     the recording's H1 in bins of ``resolution`` [Hz], by default fine enough for the
-    estimated modes: :func:`algid.frf.resolution_hz`); for FRFs (``rec`` None)
+    estimated modes: :func:`algid.model.frf.resolution_hz`); for FRFs (``rec`` None)
     ``frf_fit.png``, the model against them."""
-    from ..frf import recording_h1, resolution_hz
+    from ..model.frf import recording_h1, resolution_hz
     from ..plotting.frf import save_frf, save_frf_fit
     from ..plotting.identify import save_figures
 

@@ -39,7 +39,7 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.signal import butter
 
-from ..chain import Chain
+from ..model.chain import Chain
 
 # ---------------------------------------------------------------------------------------------
 # model

@@ -3,12 +3,12 @@ verdicts, in stages, each entered once:
 
 0. Screen: finite samples far outside their channel's robust range are taken out and
    treated as missing (:mod:`.screen`).
-1. Signals: mains hum notched out of every channel alike (:func:`algid.noise.without_hum`);
+1. Signals: mains hum notched out of every channel alike (:func:`algid.recording.noise.without_hum`);
    an impact record's hits found, its force cleaned and force and motion band-passed alike
    around the modes the chain is to hold (:mod:`algid.recording.transient`); the measured
    accelerations, or the derivatives of the velocities or displacements
    (:func:`algid.recording.accelerations`); the forces.
-2. Noise model and signal band of the recording (:mod:`algid.noise`).
+2. Noise model and signal band of the recording (:mod:`algid.recording.noise`).
 3. Fit check (:func:`.augmented.fit_check`): the diagnosis's verdict on the record. Unless
    it is ``none``, the linear chain reported is the diagnosis's fit of it, the one linear
    fit of the record whichever command prints it
@@ -42,10 +42,10 @@ from typing import Callable, Optional
 import numpy as np
 
 from ..diagnosis.corrected import linear_model
-from ..noise import analyse, without_hum
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
 from ..recording import motion as recording_motion
 from ..recording.frf_file import is_frf_source
+from ..recording.noise import analyse, without_hum
 from ..recording.transient import transient_record
 from .augmented import diagnosis_fields, fit_check, fit_with_effects
 from .base import FIT_CHECK_SKIPPED, augment, reduce

@@ -1,11 +1,11 @@
 """The chain's m, c, k from measured FRFs (``algid identify frf.uff``): :func:`identify_frf`.
 
-Model (eq. 1 in frequency, :mod:`algid.frf`): the receptance ``G(w) = Z(w)^-1`` with the
+Model (eq. 1 in frequency, :mod:`algid.model.frf`): the receptance ``G(w) = Z(w)^-1`` with the
 dynamic stiffness ``Z(w) = K - w^2 M + i w C``. Every parameter enters ``Z`` as a rank-one
 term, ``Z = sum_p theta_p s_p(w) u_p u_p^T`` with ``s_p = -w^2`` and ``u_p = e_i`` for mass
 ``i``, ``s_p = i w``, ``u_p = e_i`` for damper ``i`` and ``s_p = 1``, ``u_p = d_j`` (its row
 of the deformation matrix) for spring ``j``. Parameters fixed by the topology (a free right
-end's spring, the second spring of one DOF between walls: :func:`algid.modal.known_parameters`)
+end's spring, the second spring of one DOF between walls: :func:`algid.model.modal.known_parameters`)
 are not estimated. Stages, each entered once:
 
 1. **Lines.** Every measured column (a force on DOF ``j``) as a receptance ``X`` (accelerance
@@ -41,8 +41,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..chain import deformation_matrix, parameter_names
-from ..modal import known_parameters
+from ..model.chain import deformation_matrix, parameter_names
+from ..model.modal import known_parameters
 from ..recording.frf_file import QUANTITIES, FrfData, load_frf
 from .verdicts import NEGLIGIBLE, RELATIVE, UNDETERMINED, ZERO_BOUND, Verdict
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..display import Displayed, number, parameter_rows
+from ..messages.display import Displayed, number, parameter_rows
 from ..recording.frf_file import FrfData
 from ..recording.units import parameter_unit_labels
 from .result import PackedEstimates, _num
@@ -67,7 +67,7 @@ class FrfIdentification(PackedEstimates):
 
     def chain(self):
         """The estimated :class:`algid.Chain` (:meth:`algid.Chain.from_packed`)."""
-        from ..chain import Chain
+        from ..model.chain import Chain
 
         return Chain.from_packed(self.theta, self.n, self.boundary)
 

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..chain import spring_columns, stiffness_matrix
-from ..noise import DETECT, NoiseModel
+from ..model.chain import spring_columns, stiffness_matrix
+from ..recording.noise import DETECT, NoiseModel
 
 #: Derivative order of each kind of recorded motion.
 ORDER = {"displacement": 0, "velocity": 1, "acceleration": 2}

@@ -51,8 +51,8 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from ..chain import stiffness_matrix
-from ..noise import NoiseModel
+from ..model.chain import stiffness_matrix
+from ..recording.noise import NoiseModel
 
 #: In-band SNR [dB] of every channel above which a record counts as noise-free.
 CLEAN_SNR_DB = 90.0

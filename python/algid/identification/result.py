@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..chain import parameter_names
-from ..continuous import PackedParameters, unpack
 from ..diagnosis.report import location_text
-from ..display import Displayed, number, parameter_rows
-from ..noise import NoiseModel
+from ..estimator.continuous import PackedParameters, unpack
+from ..messages.display import Displayed, number, parameter_rows
+from ..model.chain import parameter_names
+from ..recording.noise import NoiseModel
 from .plan import Plan
 from .screen import Screened
 from .verdicts import Verdict, dof_validity
@@ -59,9 +59,9 @@ class PackedEstimates(PackedParameters):
 
     def modes(self):
         """``(ModalAnalysis, "")`` of the estimated chain with uncertainties from ``sigma``
-        (:func:`algid.modal.modal_analysis`), or ``(None, reason)`` when a parameter has no
+        (:func:`algid.model.modal.modal_analysis`), or ``(None, reason)`` when a parameter has no
         admissible estimate."""
-        from ..modal import identification_modes
+        from ..model.modal import identification_modes
 
         key = (self.theta.tobytes(), self.sigma.tobytes())  # computed once for the table and the JSON
         cached = self.__dict__.get("_modes")
@@ -137,7 +137,7 @@ class Identification(PackedEstimates):
     ----------
     n, boundary, dt [s], samples : the recording and the chain.
     plan : the estimator used, its settings and why (:class:`~.plan.Plan`).
-    noise : noise model and signal band of the recording (:class:`algid.noise.NoiseModel`).
+    noise : noise model and signal band of the recording (:class:`algid.recording.noise.NoiseModel`).
     theta, sigma : (3n+1,) estimates ``m1..mn, c1..cn, k1..k{n+1}`` [kg, N s/m, N/m] and
         one standard deviation each.
     raw : the estimates before the bias correction; bias : the correction taken off;
@@ -212,7 +212,7 @@ class Identification(PackedEstimates):
         lines = [f"{v.name}: {v.reason}" for v in self.verdicts if v.status != "ok" and v.reason]
         return lines + [f"{e['effect']}: {e['reason']}" for e in self.effects if e["reason"]]
 
-    # ---- display: one-line repr, notebook table (algid.display) -------------------------
+    # ---- display: one-line repr, notebook table (algid.messages.display) -------------------------
     def _display_fields(self) -> dict:
         return {
             "n": self.n,

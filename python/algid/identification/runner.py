@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..continuous import ContinuousEstimator
 from ..estimator import ChainEstimator
+from ..estimator.continuous import ContinuousEstimator
 from .plan import Plan
 
 #: Most rows of a continuous history.

@@ -11,7 +11,7 @@ sensor noise, so that the estimator's error on it is known:
    keeps none: its motion is the one the chain gives it with zero force, driven by its
    neighbours through the springs (:func:`.motion.unforced_consistent`).
 3. **Sensors**, drawn afresh for every replicate from the recording's noise model
-   (:mod:`algid.noise`): white noise of each channel's floor on forces and measured
+   (:mod:`algid.recording.noise`): white noise of each channel's floor on forces and measured
    accelerations; white noise on velocities, then differentiated like the recording's;
    displacements quantised to the recording's encoder resolution (with a random offset of
    the count grid) plus whatever white floor lies above the quantisation noise, then
@@ -39,9 +39,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..noise import NoiseModel
 from ..parallel import parallel_map
 from ..recording import derivative, second_derivative
+from ..recording.noise import NoiseModel
 from .motion import Motion, band_limited_motion, chain_forces, unforced_consistent
 from .plan import Plan, natural_frequencies_hz, window_candidates, window_limits
 from .runner import Run, run_plan

@@ -4,7 +4,7 @@ explains.
 
 * **Weak-form windows** (measured accelerations) carry their own uncertainty: the
   generalised least squares covariance of every window and of their summed normal equations
-  (:mod:`algid.continuous`; their per-window sigmas match the scatter of window results on
+  (:mod:`algid.estimator.continuous`; their per-window sigmas match the scatter of window results on
   records whose noise is known). Their bias compensation takes off the noise bias of the
   iterated integrals, so no bootstrap runs. ``excess`` is the scatter of the window results
   about the estimate in units of each window's own sigma (:class:`.runner.Run`): about 1 when
@@ -29,7 +29,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..noise import NoiseModel
+from ..recording.noise import NoiseModel
 from .motion import Motion, band_limited_motion
 from .plan import Plan
 from .runner import Run

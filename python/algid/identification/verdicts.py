@@ -46,8 +46,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..chain import dof_parameter_names, parameter_names, spring_deformation
-from ..noise import NoiseModel
+from ..model.chain import dof_parameter_names, parameter_names, spring_deformation
+from ..recording.noise import NoiseModel
 from .motion import Motion
 
 #: Uncertainty share above which a parameter is not determined by the record.

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..chain import parameter_names
+from ..model.chain import parameter_names
 from . import subplots
 
 __all__ = [
@@ -59,7 +59,7 @@ def _families(res: Any) -> list[tuple[str, np.ndarray, np.ndarray, list[str]]]:
 
 def _title(res: Any, summary: dict[str, Any]) -> str:
     """What ran: DOF, mode, noise, estimator (and whether the estimates were substituted)."""
-    from ..demo import CONTROL_WORDS, ESTIMATOR_WORDS
+    from ..control.demo import CONTROL_WORDS, ESTIMATOR_WORDS
 
     title = (
         f"n = {res.chain.n}, {CONTROL_WORDS[res.mode]}, "

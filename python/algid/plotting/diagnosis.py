@@ -32,10 +32,10 @@ import numpy as np
 from matplotlib.ticker import FormatStrFormatter, LogLocator, MaxNLocator, NullFormatter
 from scipy.signal import welch
 
-from ..chain import spring_deformation, spring_sides, springs
 from ..diagnosis.equations import force_form
 from ..diagnosis.locate import window_parameters
 from ..diagnosis.windows import detrend
+from ..model.chain import spring_deformation, spring_sides, springs
 from . import subplots
 
 DPI = 90
@@ -149,10 +149,10 @@ def fig_residuals_spectrum(d):
 
 def spectrum_segment(d) -> int:
     """Welch segment [samples] of the residual spectra: four windows (at most 4096 samples),
-    or longer for bins narrower than the fitted chain's modes (:func:`algid.frf.resolution_hz`),
+    or longer for bins narrower than the fitted chain's modes (:func:`algid.model.frf.resolution_hz`),
     at most a quarter of the record."""
     from ..diagnosis.engine import fitted_chain
-    from ..frf import resolution_hz, segment_samples
+    from ..model.frf import resolution_hz, segment_samples
 
     N = d.P.y.shape[0]
     chain = fitted_chain(d.lin, d.P.boundary)

@@ -3,11 +3,11 @@
 
 ``frf.png``: three panels over frequency [Hz] (log scale): magnitude (log), phase [deg] and the multiple coherence of
 every drive-point FRF ``H[e, e]`` (the response of mass e to its own force) of a forced mass;
-measured where the forces excite it (:func:`algid.frf.h1_estimate`: a multisine's lines are
+measured where the forces excite it (:func:`algid.model.frf.h1_estimate`: a multisine's lines are
 points at their frequencies, a broadband band a curve), model dashed in the same colour on a
 fine grid. The frequency axis spans :data:`SPAN` times the chain's highest natural frequency
 (or the excited band without a chain), not the Nyquist rate. Units are the estimate's
-(:attr:`algid.frf.FrfEstimate.unit`: the recording's declared units, else SI) unless
+(:attr:`algid.model.frf.FrfEstimate.unit`: the recording's declared units, else SI) unless
 ``units`` names others.
 """
 
@@ -49,7 +49,7 @@ def measured(estimate, e: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def frf_figure(estimate, chain=None, units: str | None = None, title: str = ""):
-    """The figure (a ``matplotlib.figure.Figure``) of an :class:`algid.frf.FrfEstimate` and,
+    """The figure (a ``matplotlib.figure.Figure``) of an :class:`algid.model.frf.FrfEstimate` and,
     if given, the model of ``chain``."""
     unit = units or estimate.unit
     lo, hi = frequency_range(estimate, chain)
@@ -88,7 +88,7 @@ def frf_figure(estimate, chain=None, units: str | None = None, title: str = ""):
 
 
 def _title(estimate, chain, drawn: list[int]) -> str:
-    from ..frf import resolution_hz
+    from ..model.frf import resolution_hz
 
     text = (
         f"drive-point FRFs: H1 ({estimate.segments} Welch segments of {estimate.nperseg} samples, "

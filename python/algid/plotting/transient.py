@@ -2,7 +2,7 @@
 
 Top: the hit(s), the force as the identification used it (baseline drift removed, band-passed).
 Bottom: the measured response over the decay, band-passed alike, and the identified chain's
-response to that force (the chain's state space, :func:`algid.frf.state_space`, simulated with
+response to that force (the chain's state space, :func:`algid.model.frf.state_space`, simulated with
 the measured force). The numbers drawn are those of :func:`transient_lines`.
 """
 
@@ -21,8 +21,8 @@ def transient_lines(res, rec) -> dict:
     result's band); ``model`` is NaN when the chain has no estimate."""
     from scipy.signal import lsim
 
-    from ..chain import Chain
-    from ..frf import state_space
+    from ..model.chain import Chain
+    from ..model.frf import state_space
     from ..recording.transient import transient_record
 
     filtered, _ = transient_record(rec, res.transient.band_hz)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import display
+from ..messages import display
 from .units import ROLES, SI_UNITS
 
 #: Fewest samples a recording may have (the estimator's quadrature needs a few).
@@ -168,7 +168,7 @@ class Recording:
 
         return to_frame(self)
 
-    # ---- display: one-line repr, notebook table (algid.display) -------------------------
+    # ---- display: one-line repr, notebook table (algid.messages.display) -------------------------
     def _display_fields(self) -> dict:
         return display.recording_fields(self)
 

@@ -90,7 +90,7 @@ def accelerations(rec: Recording, points: int = DEFAULT_DIFF_POINTS) -> np.ndarr
     Differentiation amplifies measurement noise: white displacement noise of standard
     deviation s becomes acceleration noise of ``3.1 s / dt^2`` (5 points), white velocity
     noise ``0.95 s / dt`` — at 1 kHz a 1 um displacement noise gives 3.1 m/s^2. The
-    identification and the diagnosis take that noise into account (:mod:`algid.noise`).
+    identification and the diagnosis take that noise into account (:mod:`algid.recording.noise`).
     """
     if rec.a is not None:
         return rec.a

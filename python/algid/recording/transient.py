@@ -34,7 +34,7 @@ the force's "signal" at a few hertz. So, decided once from the record (:func:`an
   where the backward pass has not settled (:func:`settling`), is marked missing. The hits of one
   record are one continuous signal: files of separate hits joined end to end have a jump at every
   join that no filter or window explains (identify such hits one by one).
-* **Noise**: the white-noise RMS of the raw motion and force (:func:`algid.noise.channel`'s
+* **Noise**: the white-noise RMS of the raw motion and force (:func:`algid.recording.noise.channel`'s
   floor), read before the band-pass.
 * **Quiet level**: the response's RMS in the band over the pre-triggers (each band-passed alone:
   the whole record's zero-phase filter smears a hit backwards), or over the last tenth of the
@@ -293,7 +293,7 @@ def settling(dt: float, band_hz: tuple) -> int:
 def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: tuple | None = None):
     """The :class:`Transient` of a record with forces ``u`` (T, q) and response ``y`` (T, c),
     or None when the record is not a hammer test (module docstring)."""
-    from ..noise import channel
+    from .noise import channel
 
     drive = int(np.argmax(np.max(np.abs(u - np.median(u, axis=0)), axis=0)))
     hits, share = find_hits(u[:, drive], dt)

@@ -66,7 +66,7 @@ acceleration just after) makes the estimator's quadrature of eq. 4 integrate two
 that are half a sample out of step, and because eq. 4 forms small differences of large
 terms, the parameters of a DOF come out biased by 10-60 % instead of a few 1e-4 (Table 1,
 multisine of 1.3-7.1 Hz held at 1 kHz, 0.5-2 s, estimated with the numpy reference
-:func:`algid.reference.estimate`; ``tests/test_simulator.py`` checks both; noise-free
+:func:`algid.estimator.reference.estimate`; ``tests/test_simulator.py`` checks both; noise-free
 continuous forcing gives 1e-9, so the remaining few 1e-4 is what a held force costs
 the estimator's smooth quadrature, not the simulator). Positions and velocities are
 continuous and need no convention. The first sample
@@ -89,7 +89,7 @@ reference); the noise RMS actually used and the SNR actually achieved are report
 
 Closed loop
 -----------
-With a ``controller`` (see :mod:`algid.controller`), ``continuous`` mode evaluates the
+With a ``controller`` (see :mod:`algid.control.controller`), ``continuous`` mode evaluates the
 control law inside the ODE (its integrator states are integrated with the plant), with
 the parameters it uses held constant over each sample interval; ``sampled`` mode runs the
 law once per sample on the measured positions and holds its force. In both modes the
@@ -116,7 +116,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..chain import Chain
+from ..model.chain import Chain
 from .closed_loop import ClosedLoop
 from .effects import COULOMB_V_EPS, EFFECT_NAMES, Effect
 from .inputs import ForceInput, RunInputs, validate_inputs
@@ -184,7 +184,7 @@ def simulate(
         Seed of the noise.
     controller : Controller or None
         Closed-loop controller producing the force (``force`` must then be None), e.g.
-        :class:`algid.controller.TrackingController`; in continuous mode a
+        :class:`algid.control.controller.TrackingController`; in continuous mode a
         :class:`ContinuousController`.
     mode : {"continuous", "sampled"}
         Continuous-time force (callables, interpolated arrays, controller inside the ODE)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..chain import Chain
+from ..model.chain import Chain
 from ..recording import Recording
 
 #: Default band of the support acceleration [Hz].

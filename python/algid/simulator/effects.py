@@ -8,8 +8,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from ..chain import Chain
-from ..deprecation import warn_renamed
+from ..messages.deprecation import warn_renamed
+from ..model.chain import Chain
 
 __all__ = ["COULOMB_V_EPS", "EFFECT_LOCATIONS", "EFFECT_NAMES", "Effect", "as_effect"]
 

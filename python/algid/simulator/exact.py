@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..chain import Chain
+from ..model.chain import Chain
 
 
 def simulate_chain(chain: Chain, force, duration_s: float, fs_hz: float = 1000.0, breaks=()):

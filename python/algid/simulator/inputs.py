@@ -11,7 +11,7 @@ from typing import Any, Callable, Union
 
 import numpy as np
 
-from ..chain import Chain
+from ..model.chain import Chain
 from .effects import Effect, as_effect
 from .protocol import Controller
 from .sensors import SensorNoise

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..chain import Chain, deformation_matrix
+from ..model.chain import Chain, deformation_matrix
 from .effects import COULOMB_V_EPS, Effect, as_effect
 
 __all__ = ["Plant", "effect_forces"]

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ..chain import Chain
+from ..model.chain import Chain
 from .effects import Effect
 
 __all__ = ["LIMIT_NAMES", "Samples", "SimulationResult"]
@@ -31,7 +31,7 @@ class SimulationResult:
     u : (T, n) recorded forces [N]: what the force sensors read (noisy if asked)
     u_applied : (T, n) forces acting on the masses [N]
     x_meas : (T, n) measured positions [m] (noisy if asked)
-    chain : the simulated :class:`~algid.chain.Chain`
+    chain : the simulated :class:`~algid.model.chain.Chain`
     effects : the effects switched on
     fs_hz : sample rate [Hz]
     mode : "continuous" or "sampled"
@@ -42,7 +42,7 @@ class SimulationResult:
     snr_db : SNR achieved per noisy channel kind, each (n,) [dB]
     x_ref : (T, n) reference positions [m] when a controller ran, else None
     estimates : estimator history when a controller ran (see
-        :meth:`algid.controller.TrackingController.log`), else None
+        :meth:`algid.control.controller.TrackingController.log`), else None
     controller_log : the controller's full log, else None
     stats : integrator statistics (steps, rejected steps, wall time [s])
     """

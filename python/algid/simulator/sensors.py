@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..chain import Chain
+from ..model.chain import Chain
 from .effects import Effect
 from .protocol import Controller
 from .result import Samples

@@ -83,13 +83,13 @@ law keeps the nominal parameters: the loop stays stable but does not track.
 physically admissible; the first substitution waits until all DOFs pass, afterwards each
 DOF follows the estimates while they pass and keeps its last accepted values otherwise.
 With 40 dB on the accelerations and a 0.05 N-per-line probe multisine
-(:class:`~algid.trajectories.Multisine`) the continuous-mode demo substitutes at about 0.2 s and the peak
+(:class:`~algid.control.trajectories.Multisine`) the continuous-mode demo substitutes at about 0.2 s and the peak
 tracking error after 1 s is 1.8-2.8 % of the stroke over three seeds (the single window in
 the same loop: 12.6 %; ``bench/demo_report.py``).
 
-The references (:class:`~algid.trajectories.BezierReference`) and the probing multisine
-(:class:`~algid.trajectories.Multisine`) are in :mod:`algid.trajectories`; the law of eqs. 8-10
-in :mod:`algid.control_law`, the acceptance rule in :mod:`algid.estimate_gate`.
+The references (:class:`~algid.control.trajectories.BezierReference`) and the probing multisine
+(:class:`~algid.control.trajectories.Multisine`) are in :mod:`algid.control.trajectories`; the law of eqs. 8-10
+in :mod:`algid.control.control_law`, the acceptance rule in :mod:`algid.control.estimate_gate`.
 
 The estimator is any object with ``update(accel (n,), force (n,)) -> status`` and the
 attributes ``mass (n,)``, ``damping (n,)``, ``stiffness (n+1,)``, ``valid (n,)``; the default
@@ -107,7 +107,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .continuous import PackedParameters
+from ..estimator.continuous import PackedParameters
 from .control_law import DEFAULT_POLES, ControlLaw, LawParameters, pole_placement_gains
 from .controller_log import ControllerLog
 from .estimate_gate import ACCEPT_RULES, EstimateGate
@@ -125,7 +125,7 @@ __all__ = [
 
 
 def _default_estimator(n: int, dt: float, boundary: str) -> Any:
-    from . import ChainEstimator  # the compiled core; imported only when a loop starts
+    from .. import ChainEstimator  # the compiled core; imported only when a loop starts
 
     return ChainEstimator(n, dt, boundary=boundary)
 
@@ -181,7 +181,7 @@ class ContinuousAdapter(PackedParameters):
         bootstrap_tol: float | None = None,
         **options: Any,
     ) -> None:
-        from . import ChainEstimator, ContinuousEstimator
+        from .. import ChainEstimator, ContinuousEstimator
 
         if not rel_sigma_tol > 0:
             raise ValueError("rel_sigma_tol must be > 0")
@@ -291,7 +291,7 @@ class TrackingController:
         estimator flags valid (its validity carries an uncertainty test); ``"better"`` those
         of ``"sigma"`` that never replace accepted ones by ones of larger uncertainty or
         inconsistent ones (the estimator's ``rel_sigma``, ``sigma`` and ``phase``; see
-        :mod:`algid.estimate_gate`).
+        :mod:`algid.control.estimate_gate`).
     settle_window_s : float
         Window [s] of the steadiness test.
     settle_tol : float
@@ -301,18 +301,18 @@ class TrackingController:
         running and is logged); default False, the law follows the estimates.
     excitation : callable ``t [s] -> (n,)`` [N] or None
         A known probing force added to the commanded force of eq. 8 (see
-        :class:`~algid.trajectories.Multisine`); it is part of ``u`` in eq. 10 and in what
+        :class:`~algid.control.trajectories.Multisine`); it is part of ``u`` in eq. 10 and in what
         the estimator sees.
     velocity_pole : float or None
         Sampled mode: the pole ``p`` [rad/s] of the position feedback (10c); None: the paper's.
     actuator_lag_s : float, "estimate" or None
         Sampled mode on a rig: the time constant [s] of the first-order actuator behind the
         held command (0: none), or ``"estimate"``: identify it on line from the commands and
-        the measured forces (:class:`~algid.held_input.LagEstimator`). The estimator is then
-        fed the smooth-equivalent samples of :class:`~algid.held_input.HeldLaggedInput`
+        the measured forces (:class:`~algid.control.held_input.LagEstimator`). The estimator is then
+        fed the smooth-equivalent samples of :class:`~algid.control.held_input.HeldLaggedInput`
         (with the accepted masses, two samples late) instead of the raw ones; the samples
         before the masses were accepted are smoothed again at the switch
-        (:class:`~algid.held_input.RigInput`).
+        (:class:`~algid.control.held_input.RigInput`).
         None (default) feeds the raw samples.
 
     Notes
@@ -321,9 +321,9 @@ class TrackingController:
     :meth:`start`, :meth:`params_for_sample`, :meth:`continuous` (continuous mode) or
     :meth:`sampled_force` (sampled mode), and :meth:`observe`; :meth:`reference_motion`
     sets the noise level of a noisy loop and :meth:`log` returns the history. The law is a
-    :class:`~algid.control_law.ControlLaw`, the acceptance rule an
-    :class:`~algid.estimate_gate.EstimateGate`, the history a
-    :class:`~algid.controller_log.ControllerLog` (all made by :meth:`start`).
+    :class:`~algid.control.control_law.ControlLaw`, the acceptance rule an
+    :class:`~algid.control.estimate_gate.EstimateGate`, the history a
+    :class:`~algid.control.controller_log.ControllerLog` (all made by :meth:`start`).
     """
 
     def __init__(
@@ -457,7 +457,7 @@ class TrackingController:
         """Feed sample ``k`` (accelerations [m/s^2], forces [N]) to the estimator and keep
         its valid estimates for the following intervals. On a rig the estimator gets the
         smooth sample ``k - 2`` instead, and a new estimator at the switch
-        (:class:`~algid.held_input.RigInput`)."""
+        (:class:`~algid.control.held_input.RigInput`)."""
         n = self.n
         if z is not None and k < self.history.T:
             u, xd, _ = self.law.force(t, x_meas, z[:n], z[n : 2 * n], z[2 * n : 3 * n], z[3 * n :], self._p_k)

@@ -1,6 +1,6 @@
 """The estimate-acceptance gate of the tracking controller: which of the on-line
 estimates the control law takes (the rules ``settled``, ``valid``, ``sigma`` and
-``better`` of :mod:`algid.controller`), and the parameters accepted so far.
+``better`` of :mod:`algid.control.controller`), and the parameters accepted so far.
 
 ``better`` never replaces accepted estimates by worse ones. Each DOF ``i`` keeps the
 uncertainty ``s_i`` of its accepted estimates, the largest relative one-sigma uncertainty

@@ -1,4 +1,4 @@
-"""The control law of eqs. 8-10 (see :mod:`algid.controller`): the force from the
+"""The control law of eqs. 8-10 (see :mod:`algid.control.controller`): the force from the
 reference, the measured or integrated positions and the parameters in use, in
 continuous time (integrators as ODE states) and sampled (discrete integrals)."""
 
@@ -9,7 +9,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from .chain import stiffness_matrix
+from ..model.chain import stiffness_matrix
 from .trajectories import BezierReference
 
 __all__ = ["DEFAULT_POLES", "ControlLaw", "LawParameters", "pole_placement_gains"]
@@ -64,8 +64,8 @@ class ControlLaw:
     ``"measured"`` (a rig's eq. 10: the force sensor's samples, trapezoidal up to the
     latest one, :meth:`measured`, plus the command held since) or ``"commanded"`` (the
     held commands, exact; wrong by ``tau w`` behind an actuator lag ``tau``, see
-    :mod:`algid.controller`). ``velocity_pole`` [rad/s] adds the position feedback (10c) of
-    :mod:`algid.controller` to eq. 10 in sampled mode (None: the paper's eq. 10).
+    :mod:`algid.control.controller`). ``velocity_pole`` [rad/s] adds the position feedback (10c) of
+    :mod:`algid.control.controller` to eq. 10 in sampled mode (None: the paper's eq. 10).
     """
 
     def __init__(

@@ -298,7 +298,7 @@ def coherent_share(u: np.ndarray, motion: np.ndarray, dt: float):
     multiple coherence with every forced channel; None when the upper third of the spectrum
     is not coherent (median below :data:`COHERENT`), i.e. when that flat top is noise after all.
     Noise is what no other channel explains, so the floor is read from this share."""
-    from .frf import h1_estimate
+    from ..model.frf import h1_estimate
 
     if not np.any(u != 0.0):
         return None
@@ -359,7 +359,7 @@ def notch(x: np.ndarray, dt: float, lines_hz: list[float], width_hz: float = 0.5
 def without_hum(rec):
     """The recording (:class:`algid.recording.Recording`) with mains hum notched out of
     every channel alike (:func:`mains_lines`, :func:`notch`), and the lines removed [Hz]."""
-    from .recording import Recording, motion
+    from . import Recording, motion
 
     kind, y = motion(rec)
     lines = mains_lines(np.column_stack([rec.u, y]), rec.dt)

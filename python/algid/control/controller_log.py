@@ -66,7 +66,7 @@ class ControllerLog:
 
     def history(self) -> dict[str, Any]:
         """``estimates``, ``used``, ``velocity_estimate`` and ``force_command`` as in
-        :meth:`algid.controller.TrackingController.log`."""
+        :meth:`algid.control.controller.TrackingController.log`."""
         return {
             "estimates": {
                 "mass": self.est_mass,

@@ -16,10 +16,10 @@ import os
 
 import numpy as np
 
-from . import _core
-from .chain import parameter_names
-from .deprecation import Histories, renamed_method
-from .display import Displayed, number, parameter_rows, validity
+from .. import _core
+from ..messages.deprecation import Histories, renamed_method
+from ..messages.display import Displayed, number, parameter_rows, validity
+from ..model.chain import parameter_names
 
 #: Chain sizes compiled as fixed-size C++ instantiations; any other n >= 1 runs the run-time
 #: sized estimator (the same arithmetic; about 1.1-1.4x the cost per DOF-sample).
@@ -58,7 +58,7 @@ def chain_core(isa: str | None = None):
                 raise RuntimeError(f"this CPU cannot run the {level} build of algid")
             continue
         try:
-            return importlib.import_module(f".{name}", __package__)
+            return importlib.import_module(f"..{name}", __package__)  # the builds sit at the top of algid
         except ImportError:
             if wanted is not None:
                 raise RuntimeError(

@@ -74,7 +74,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .estimator import Status
+from ..estimator import Status
 
 __all__ = ["HeldLaggedInput", "LagEstimator", "RigInput"]
 

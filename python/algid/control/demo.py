@@ -11,7 +11,7 @@ the numbers as ``summary.json`` into ``--out``.
 
 **Estimators** (``--estimator``). ``single`` is the paper's: one growing window from
 t = 0 (``algid.ChainEstimator``), substituted under the controller's ``accept="settled"``
-rule. ``continuous`` is :class:`algid.controller.ContinuousAdapter` over
+rule. ``continuous`` is :class:`algid.control.controller.ContinuousAdapter` over
 ``algid.ContinuousEstimator`` (staggered 0.3 s windows, running estimate with a one-sigma
 uncertainty); until the running estimate exists (0.31 s) it serves the growing window.
 The controller (``accept="sigma"``) substitutes the estimates of DOF ``i`` when all of
@@ -25,11 +25,11 @@ the noise-free continuous-mode demo is the paper's.
 **Rig** (``--mode sampled --actuator-lag-ms L``). The DAC holds the command between samples
 and a first-order actuator of time constant ``L`` follows it; the force sensors read the
 actuator's output. The controller is not told ``L``: it identifies the lag from its own
-commands and the measured forces (:class:`algid.held_input.LagEstimator`, exact on the
+commands and the measured forces (:class:`algid.control.held_input.LagEstimator`, exact on the
 simulated actuator), its eq. 10 integrates the measured force and its estimator gets the
-smooth-equivalent samples of :class:`algid.held_input.HeldLaggedInput`; the probe (below)
+smooth-equivalent samples of :class:`algid.control.held_input.HeldLaggedInput`; the probe (below)
 is on by default there too. Three rig defaults differ from the paper's set-up: eq. 10 gets
-the position feedback (10c) of :mod:`algid.controller` (``velocity_pole`` =
+the position feedback (10c) of :mod:`algid.control.controller` (``velocity_pole`` =
 :data:`RIG_VELOCITY_POLE`, 40 rad/s); the running estimate is the weak-form one with 0.3 s
 windows and test functions up to 30 Hz (first results at 0.31 s); and the growing window
 that serves until then counts as valid only while steady within 1 % over 20 ms (noise-free
@@ -66,7 +66,7 @@ actual SNR of 22, 22 and 6 dB for a requested 40.
 **Probe** (``--excitation``). The paper's references alone carry too little information
 for 40 dB of accelerometer noise: on a loop tracking with the *true* parameters, neither
 estimator gets any parameter within 50 % from them. With ``--noise-db`` (and in sampled mode)
-the controller therefore adds a known multisine force (:class:`algid.trajectories.Multisine`, six lines of
+the controller therefore adds a known multisine force (:class:`algid.control.trajectories.Multisine`, six lines of
 3-16 Hz, ``--excitation`` N each, default 0.05 N) to its command; it moves each mass by
 about 50 um (1 % of the stroke), which is in the reported tracking error. Noise-free in continuous
 mode the default is no probe (the paper's experiment).
@@ -93,9 +93,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .chain import TABLE1, Chain, parameter_names
-from .messages import one_line
-from .progress import Progress
+from ..messages import one_line
+from ..messages.progress import Progress
+from ..model.chain import TABLE1, Chain, parameter_names
 
 __all__ = ["add_parser", "run", "demo_chain", "run_scenario", "summarize", "settle_time", "format_summary", "jsonable"]
 
@@ -331,7 +331,7 @@ def _actual_snr_noise(noise_db: float, seed: int | None, scale: np.ndarray) -> A
     simulator's planned-motion level, per DOF."""
     from dataclasses import dataclass
 
-    from .simulator import SensorNoise
+    from ..simulator import SensorNoise
 
     @dataclass(frozen=True)
     class _Scaled(SensorNoise):
@@ -348,7 +348,7 @@ def estimator_drift(res: Any, times_s: tuple = DRIFT_TIMES_S) -> dict[str, Any]:
     """Both estimators open loop on the loop's recorded samples: largest relative error over
     the identified parameters at ``times_s`` [s], and the continuous one's largest relative
     one-sigma uncertainty there."""
-    from . import ChainEstimator
+    from .. import ChainEstimator
     from .controller import ContinuousAdapter
 
     chain = res.chain
@@ -413,8 +413,8 @@ def run_scenario(
     mode, none in continuous mode); ``disturbance_reference``: also run the same loop
     (same noise) with the estimates never substituted, for
     :func:`substitution_disturbance` against it (``estimate_disturbance_vs_reference``)."""
+    from ..simulator import simulate
     from .controller import TrackingController
-    from .simulator import simulate
     from .trajectories import BezierReference, Multisine
 
     kind = resolve_estimator(estimator, noise_db, mode)
@@ -442,7 +442,7 @@ def run_scenario(
     noise = None
     if noise_db is not None:
         # calibration: the same loop noise-free gives the actual acceleration RMS per DOF
-        from .simulator.sensors import nominal_closed_loop_rms
+        from ..simulator.sensors import nominal_closed_loop_rms
 
         ctrl0 = controller()
         cal = simulate(chain, None, duration_s, 1000.0, controller=ctrl0, mode=mode, actuator_lag_s=actuator_lag_s)
@@ -574,7 +574,7 @@ def _percent(fraction: float, digits: int) -> str:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``algid demo`` on an argparse sub-parser collection."""
-    from .cli import example
+    from ..messages import example
 
     p = subparsers.add_parser(
         "demo",
@@ -674,7 +674,7 @@ def run(args: argparse.Namespace) -> int:
         json.dump(jsonable(summary), fh, indent=2)
     written = [out / "summary.json"]
     if not args.no_plots:
-        from .plotting.demo import write_figures
+        from ..plotting.demo import write_figures
 
         progress("writing figures")
         written += write_figures(res, summary, out)

@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _core
-from .chain import parameter_names, spring_columns
-from .display import Displayed, number, parameter_rows, validity
-from .estimator import Status, as_record, as_sample, config_fields, dofs, estimator_class, make_config, spring_index
+from .. import _core
+from ..messages.display import Displayed, number, parameter_rows, validity
+from ..model.chain import parameter_names, spring_columns
+from . import Status, as_record, as_sample, config_fields, dofs, estimator_class, make_config, spring_index
 
 ChangeKind = _core.ChangeKind
 #: Configuration of a :class:`ContinuousEstimator` (the C++ ``ContinuousConfig``; its defaults,
@@ -65,7 +65,7 @@ def unpack(vec: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
 
 def finite_dofs(vec: np.ndarray, n: int, boundary: str) -> np.ndarray:
     """(n,) per DOF: the mass, the damping and every spring its equation identifies (see
-    :func:`algid.chain.spring_columns`) are finite in the packed vector ``vec``."""
+    :func:`algid.model.chain.spring_columns`) are finite in the packed vector ``vec``."""
     m, c, k = unpack(vec, n)
     return np.array(
         [

@@ -221,7 +221,7 @@ class Chain:
         return cls.from_packed(packed, int(doc["n"]), doc.get("boundary", "fixed"))
 
     def modes(self, sigma=None, covariance=None):
-        """Damped modes (:func:`algid.modal.modal_analysis`), with uncertainties from the
+        """Damped modes (:func:`algid.model.modal.modal_analysis`), with uncertainties from the
         standard deviations ``sigma`` (3n+1,) or the ``covariance`` of ``m, c, k`` if given."""
         from .modal import modal_analysis
 
@@ -229,7 +229,7 @@ class Chain:
 
     def state_space(self, output: str = "acceleration"):
         """``scipy.signal.StateSpace`` from the forces [N] to the displacements, velocities or
-        accelerations (``output``) of every mass (:func:`algid.frf.state_space`)."""
+        accelerations (``output``) of every mass (:func:`algid.model.frf.state_space`)."""
         from .frf import state_space
 
         return state_space(self, output)
@@ -241,7 +241,7 @@ class Chain:
         return to_control(self, output)
 
     def frf(self, f_hz, output: str = "acceleration") -> np.ndarray:
-        """Frequency response (F, n, n) at ``f_hz`` [Hz] (:func:`algid.frf.frf`)."""
+        """Frequency response (F, n, n) at ``f_hz`` [Hz] (:func:`algid.model.frf.frf`)."""
         from .frf import frf
 
         return frf(self, f_hz, output)

@@ -25,11 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .chain import Chain
-from .positioning import BangBangReference, PositioningController
-from .recording import Recording, save_recording
-from .simulator import effect_forces, simulate
-from .simulator.exact import multisine
+from ..control.positioning import BangBangReference, PositioningController
+from ..model.chain import Chain
+from ..recording import Recording, save_recording
+from . import effect_forces, simulate
+from .exact import multisine
 
 
 @dataclass

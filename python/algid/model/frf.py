@@ -245,7 +245,7 @@ def recording_h1(rec, nperseg: int | None = None, resolution: float | None = Non
     for bins of ``resolution`` [Hz] as far as the record allows (:func:`segment_samples`)."""
     from dataclasses import replace
 
-    from .recording import motion
+    from ..recording import motion
 
     kind, y = motion(rec)
     if nperseg is None:
