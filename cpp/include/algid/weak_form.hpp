@@ -37,6 +37,12 @@
 /// for white noise; a band-limited response at 20 Hz of 1 kHz leaks (2 pi 0.02)^4 of its
 /// amplitude into it), exponentially forgotten.
 ///
+/// The parts, each in a header of its own under detail/: the hop-block Fourier sums and the rows
+/// (weak_form_sums.hpp, detail::WeakFormSums), the noise estimate (weak_form_noise.hpp,
+/// detail::FourthDifferenceNoise), the weights, their background refresh and the bias term
+/// (weak_form_weights.hpp, detail::WeakFormWeights). This class runs them per sample and solves
+/// each window.
+///
 /// Window result: the normal equations Phi^T W Phi theta = Phi^T W y of all n F rows (Phi is
 /// sparse: a parameter's column has rows in one or two DOFs), corrected, solved (LDLT); the
 /// diagonal of the inverse is the window's variance (with GLS weights).
@@ -60,16 +66,16 @@
 /// matrices (W in force, the next W, the Cholesky factor), 9 F^2 Gram matrices; about 1.8 MB
 /// for n = 5 and 6.5 MB for n = 10 at W = 0.5 s, band 50 Hz.
 
-#include "algid/detail/storage.hpp"
+#include "algid/detail/weak_form_noise.hpp"
+#include "algid/detail/weak_form_sums.hpp"
+#include "algid/detail/weak_form_weights.hpp"
 #include "algid/types.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <complex>
 #include <limits>
 
 namespace algid {
@@ -147,7 +153,6 @@ class WeakFormWindows {
     K_ = config_.stagger;
     H_ = L_ / K_;
     Q_ = static_cast<int>(std::floor(band_of(config_) * static_cast<double>(L_) * dt() + 1e-9));
-    J_ = Q_ + 3;
     F_ = 2 * Q_ + 1;
     R_ = n_ * F_;
     // window steps: rows; P n products of a row block of W with a parameter's column (one or
@@ -162,31 +167,20 @@ class WeakFormWindows {
     for (int step = 0; step < window_steps_; ++step) total += step_cost(step);
     const long due = std::max(3L, 3 * H_ / 4 - 1);
     for (window_budget_ = 2.0 * F_ * F_; latency_samples() > due && window_budget_ < total;) window_budget_ *= 1.05;
-    const int C = 2 * n_;
-    z_.resize(J_);
-    bins_.setZero(J_, C * K_);
-    seg_.setZero(J_, C);
     rows_.setZero(F_, 4 * n_);
     phi_.setZero(R_, params_ + 1);
     xw_.setZero(R_, params_ + 1);
-    weight_.setZero(R_, R_);
-    chol_.setZero(R_, R_);
-    wnext_.setZero(R_, R_);
-    traces_.setZero(n_ * 5 * 9);
-    next_traces_.setZero(n_ * 5 * 9);
-    identity_traces_.setZero(9);
     normal_.setZero(params_, params_);
     raw_normal_.setZero(params_, params_);
     rhs_.setZero(params_);
     solution_.setZero(params_);
     work_.setZero(params_);
     inverse_.setZero(params_, params_);
-    model_.setConstant(params_, std::numeric_limits<double>::quiet_NaN());
-    noise_.resize(C);
-    history_.resize(C);
     result_.setZero(params_);
     variance_.setZero(params_);
-    gram();
+    sums_.configure(n_, L_, K_, Q_, dt());
+    noise_.configure(n_, dt(), static_cast<double>(config_.noise_horizon_s), config_.accel_noise, config_.force_noise);
+    weights_.configure(n_, F_, L_, dt(), config_.boundary, config_.weighted);
     reset();
   }
 
@@ -194,17 +188,8 @@ class WeakFormWindows {
   /// @realtime no allocation, no throw
   void reset() noexcept {
     restart();
-    weight_.setIdentity();
-    weighted_ = false;
-    full_ = false;
-    for (int c = 0; c < 2 * n_; ++c) {
-      noise_[c] = Noise{};
-      history_[c] = History{};
-    }
-    model_.setConstant(std::numeric_limits<double>::quiet_NaN());
-    refresh_stage_ = 0;
-    refresh_pos_ = 0;
-    refresh_sub_ = 0;
+    weights_.reset();
+    noise_.reset();
     results_ = 0;
     misfit_ = std::numeric_limits<double>::quiet_NaN();
     result_.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
@@ -214,20 +199,15 @@ class WeakFormWindows {
   /// Drop the windows in flight (after a bad sample); weights and noise estimate are kept.
   /// @realtime no allocation, no throw
   void restart() noexcept {
-    for (int c = 0; c < 2 * n_; ++c) history_[c].count = 0;  // no differences across the gap
-    bins_.setZero();
-    phase_ = 0;
-    in_hop_ = 0;
-    hops_ = 0;
+    noise_.restart();  // no differences across the gap
+    sums_.restart();
     pending_ = false;
     step_ = 0;
   }
 
   /// Running parameters (m, c, k packed, 3n+1) that the GLS weights are computed from; NaN or
   /// non-positive masses keep the current weights. @realtime no allocation, no throw
-  void set_model(const Scalar* theta) noexcept {
-    for (int j = 0; j < params_; ++j) model_(j) = static_cast<double>(theta[j]);
-  }
+  void set_model(const Scalar* theta) noexcept { weights_.set_model(theta); }
 
   /// Consume one sample of the accelerations [m/s^2] and forces [N] (finite: the owner checks).
   /// Returns true when a window result was completed by this call (see result()).
@@ -235,27 +215,14 @@ class WeakFormWindows {
   bool update(const Scalar* accel, const Scalar* force) noexcept {
     const int n = n_;
     for (int i = 0; i < n; ++i) {
-      observe(i, static_cast<double>(accel[i]));
-      observe(n + i, static_cast<double>(force[i]));
+      noise_.observe(i, static_cast<double>(accel[i]));
+      noise_.observe(n + i, static_cast<double>(force[i]));
     }
-    // Fourier sums of this hop block: phasors e^{i 2 pi j phase / L}, j = 0 .. J-1.
-    const double angle = kTwoPi * static_cast<double>(phase_) / static_cast<double>(L_);
-    const Complex z1(std::cos(angle), std::sin(angle));
-    z_(0) = Complex(dt(), 0.0);
-    for (int j = 1; j < J_; ++j) z_(j) = z_(j - 1) * z1;
-    const int block = static_cast<int>(hops_ % K_);
-    for (int c = 0; c < 2 * n; ++c) {
-      const double x = c < n ? static_cast<double>(accel[c]) : static_cast<double>(force[c - n]);
-      bins_.col(block * 2 * n + c) += x * z_;
+    if (sums_.add(accel, force)) {
+      pending_ = true;
+      step_ = 0;
     }
-    if (++phase_ == L_) phase_ = 0;
     bool done = false;
-    if (++in_hop_ == H_) {
-      in_hop_ = 0;
-      ++hops_;
-      if (hops_ >= K_) start_window();
-      bins_.middleCols(static_cast<int>(hops_ % K_) * 2 * n, 2 * n).setZero();  // the oldest block restarts
-    }
     for (double spent = 0.0; pending_;) {
       const int step = step_;
       const double cost = step_cost(step);
@@ -264,7 +231,7 @@ class WeakFormWindows {
       done = window_step() || done;
       if (heavy_step(step)) break;  // an O(P^3) step ran: the rest waits for the next sample
     }
-    refresh();
+    weights_.refresh(noise_, pending_);
     return done;
   }
 
@@ -291,9 +258,9 @@ class WeakFormWindows {
   /// Window results since reset().
   long results() const noexcept { return results_; }
   /// True once every DOF's rows are weighted by a covariance from the running estimate.
-  bool weighted() const noexcept { return weighted_; }
+  bool weighted() const noexcept { return weights_.weighted(); }
   /// Estimated (or given) noise RMS of channel c: accelerations 0..n-1, forces n..2n-1.
-  Scalar noise_rms(int c) const noexcept { return static_cast<Scalar>(std::sqrt(noise_variance(c))); }
+  Scalar noise_rms(int c) const noexcept { return static_cast<Scalar>(std::sqrt(noise_.variance(c))); }
   /// Window length L [samples].
   long window_samples() const noexcept { return L_; }
   /// Samples between two window results.
@@ -319,27 +286,8 @@ class WeakFormWindows {
   const Config& config() const noexcept { return config_; }
 
  private:
-  using Complex = std::complex<double>;
   using MatD = Eigen::MatrixXd;
   using VecD = Eigen::VectorXd;
-  using MatC = Eigen::Matrix<Complex, Eigen::Dynamic, Eigen::Dynamic>;
-  using VecC = Eigen::Matrix<Complex, Eigen::Dynamic, 1>;
-  static constexpr double kTwoPi = 6.283185307179586476925;
-  // sin^4(x) = 3/8 - cos(2x)/2 + cos(4x)/8: coefficients of e^{i 2 pi k t / W}, k = -2..2.
-  static constexpr double kTaper[5] = {1.0 / 16, -1.0 / 4, 3.0 / 8, -1.0 / 4, 1.0 / 16};
-
-  static constexpr int kNoiseStart = 64;  // fourth differences whose median starts the estimate
-  static constexpr double kNoiseClip = 30.0;  // clip of a later one, times the running mean
-  struct Noise {
-    double sum = 0.0;  // forgotten sum of squared fourth differences
-    double weight = 0.0;  // forgotten count
-    std::array<double, kNoiseStart> start{};  // the first squared fourth differences
-    int started = 0;
-  };
-  struct History {
-    double x[4] = {0.0, 0.0, 0.0, 0.0};
-    int count = 0;
-  };
 
   double dt() const noexcept { return static_cast<double>(config_.dt); }
 
@@ -354,126 +302,8 @@ class WeakFormWindows {
     return c;
   }
 
-  // Gram matrices of the test functions and their derivatives (configuration phase).
-  void gram() {
-    const double W = static_cast<double>(L_) * dt();
-    MatD psi[3];
-    for (auto& p : psi) p.setZero(F_, L_);
-    for (long l = 0; l < L_; ++l) {
-      const double t = static_cast<double>(l) * dt();
-      const double a = 3.14159265358979323846 / W;
-      const double s = std::sin(a * t), co = std::cos(a * t);
-      const double w0 = s * s * s * s, w1 = 4 * s * s * s * co * a;
-      const double w2 = a * a * 4 * (3 * s * s * co * co - s * s * s * s);
-      for (int f = 0; f < F_; ++f) {
-        const int q = (f + 1) / 2;
-        const bool sine = f > 0 && f % 2 == 0;
-        const double om = kTwoPi * q / W;
-        const double g0 = sine ? std::sin(om * t) : std::cos(om * t);
-        const double g1 = sine ? om * std::cos(om * t) : -om * std::sin(om * t);
-        const double g2 = -om * om * g0;
-        psi[0](f, l) = w0 * g0;
-        psi[1](f, l) = w1 * g0 + w0 * g1;
-        psi[2](f, l) = w2 * g0 + 2 * w1 * g1 + w0 * g2;
-      }
-    }
-    const double d2 = dt() * dt();
-    for (int d = 0; d < 3; ++d)
-      for (int e = 0; e < 3; ++e) {
-        gram_[3 * d + e] = d2 * psi[d] * psi[e].transpose();
-        identity_traces_(3 * d + e) = gram_[3 * d + e].trace();
-      }
-  }
-
-  // The noise estimate: a forgotten mean of squared fourth differences. It starts from the
-  // median of the first 64 (one absurd sample among them does not set it); non-finite ones
-  // are skipped; later ones enter clipped at kNoiseClip times the mean so far (for white noise
-  // a squared fourth difference over its mean is chi^2_1: beyond 30 once in 2.5e7), so one
-  // absurd sample moves it by at most 30 dt / noise_horizon_s (0.3 %), while a real rise of
-  // the noise is followed at e-fold per noise_horizon_s / 29 (0.34 s).
-  void observe(int c, double x) noexcept {
-    History& h = history_[c];
-    if (h.count == 4) {
-      const double d4 = x - 4 * h.x[3] + 6 * h.x[2] - 4 * h.x[1] + h.x[0];
-      const double keep = 1.0 - dt() / static_cast<double>(config_.noise_horizon_s);
-      Noise& s = noise_[c];
-      double q = d4 * d4;
-      if (std::isfinite(q)) {
-        if (s.started == kNoiseStart && s.sum > 0.0) q = std::min(q, kNoiseClip * s.sum / s.weight);
-        s.sum = keep * s.sum + q;
-        s.weight = keep * s.weight + 1.0;
-        if (s.started < kNoiseStart) {
-          s.start[static_cast<std::size_t>(s.started++)] = q;
-          if (s.started == kNoiseStart) {
-            auto mid = s.start.begin() + kNoiseStart / 2;
-            std::nth_element(s.start.begin(), mid, s.start.end());
-            s.sum = s.weight * *mid / 0.4549;  // median of chi^2_1 = 0.4549 of its mean
-          }
-        }
-      }
-    }
-    h.x[0] = h.x[1];
-    h.x[1] = h.x[2];
-    h.x[2] = h.x[3];
-    h.x[3] = x;
-    h.count = std::min(h.count + 1, 4);
-  }
-
-  double noise_variance(int c) const noexcept {
-    const Scalar given = c < n_ ? config_.accel_noise : config_.force_noise;
-    if (given >= Scalar(0)) return static_cast<double>(given) * static_cast<double>(given);
-    const Noise& s = noise_[c];
-    return s.weight > 0.0 ? s.sum / (70.0 * s.weight) : 0.0;
-  }
-
-  // The K newest hop blocks form a window: sum them, shift the phasors to its start.
-  void start_window() noexcept {
-    const int C = 2 * n_;
-    seg_.setZero();
-    for (int b = 0; b < K_; ++b) seg_ += bins_.middleCols(b * C, C);
-    // The window started L - K H = 0 samples of phase ago modulo L, i.e. at phase_ (mod L).
-    const double angle = -kTwoPi * static_cast<double>(phase_) / static_cast<double>(L_);
-    const Complex r(std::cos(angle), std::sin(angle));
-    Complex rot(1.0, 0.0);
-    for (int j = 0; j < J_; ++j) {
-      seg_.row(j) *= rot;
-      rot *= r;
-    }
-    pending_ = true;
-    step_ = 0;
-  }
-
-  // Bin j of channel c with X_{-j} = conj(X_j).
-  Complex bin(int j, int c) const noexcept { return j >= 0 ? seg_(j, c) : std::conj(seg_(-j, c)); }
-
-  // Rows of the window: rows_ columns 0..n-1: int psi a (d = 0), n..2n-1: d = 1, 2n..3n-1:
-  // d = 2, 3n..4n-1: int psi'' u.
-  void build_rows() noexcept {
-    const double W = static_cast<double>(L_) * dt();
-    const int n = n_;
-    for (int q = 0; q <= Q_; ++q) {
-      for (int c = 0; c < 2 * n; ++c) {
-        Complex r[3] = {Complex(0.0, 0.0), Complex(0.0, 0.0), Complex(0.0, 0.0)};
-        for (int k = -2; k <= 2; ++k) {
-          const Complex x = kTaper[k + 2] * bin(q + k, c);
-          const Complex iw(0.0, kTwoPi * (q + k) / W);
-          r[0] += x;
-          r[1] += iw * x;
-          r[2] += iw * iw * x;
-        }
-        for (int d = 0; d < 3; ++d) {
-          if (c >= n && d < 2) continue;
-          const int col = c < n ? d * n + c : 3 * n + (c - n);
-          const Complex v = c < n ? r[d] : r[2];
-          rows_(2 * q == 0 ? 0 : 2 * q - 1, col) = v.real();
-          if (q > 0) rows_(2 * q, col) = v.imag();
-        }
-      }
-    }
-  }
-
   // True if DOF i has a spring to its right in the model (a neighbour or the right wall).
-  bool right(int i) const noexcept { return n_ > 1 && (i + 1 < n_ || config_.boundary == Boundary::kFixed); }
+  bool right(int i) const noexcept { return detail::right_spring(i, n_, config_.boundary); }
 
   // Row blocks [first, last] where column p of phi_ (a parameter, or p = params_: the
   // right-hand side) has rows; first > last if none.
@@ -511,37 +341,6 @@ class WeakFormWindows {
     }
   }
 
-  // <W_ij, G_de> of the weights in force (|i - j| <= 2).
-  double trace(int i, int j, int d, int e) const noexcept {
-    if (!window_weighted_) return i == j ? identity_traces_(3 * d + e) : 0.0;
-    return traces_(((i * 5) + (j - i + 2)) * 9 + 3 * d + e);
-  }
-
-  // Bias of the normal matrix: the regressor noise of acceleration channel c loads the
-  // columns (DOF row block, parameter, derivative order, sign) listed here, and
-  // E[N^T W N](p, q) = sum_c s_c^2 sum a_p a_q <W_ij, G_de>.
-  void subtract_bias() noexcept {
-    const int n = n_;
-    for (int c = 0; c < n; ++c) {
-      const double s2 = noise_variance(c);
-      if (!(s2 > 0.0)) continue;
-      int blk[6], par[6], ord[6], cnt = 0;
-      double sgn[6];
-      const auto add = [&](int b, int p, int d, double a) {
-        blk[cnt] = b, par[cnt] = p, ord[cnt] = d, sgn[cnt] = a, ++cnt;
-      };
-      add(c, c, 2, 1.0);
-      add(c, n + c, 1, -1.0);
-      add(c, 2 * n + c, 0, 1.0);
-      if (right(c)) add(c, 2 * n + c + 1, 0, 1.0);
-      if (c > 0) add(c - 1, 2 * n + c, 0, -1.0);           // DOF c-1's right spring
-      if (c + 1 < n) add(c + 1, 2 * n + c + 1, 0, -1.0);  // DOF c+1's left spring
-      for (int a = 0; a < cnt; ++a)
-        for (int b = 0; b < cnt; ++b)
-          normal_(par[a], par[b]) -= s2 * sgn[a] * sgn[b] * trace(blk[a], blk[b], ord[a], ord[b]);
-    }
-  }
-
   // The factorisation and the back-substitutions: O(P^3), each ends its sample.
   bool heavy_step(int step) const noexcept { return step == window_steps_ - 3 || step == window_steps_ - 2; }
 
@@ -572,9 +371,9 @@ class WeakFormWindows {
   bool window_step() noexcept {
     const int F = F_, n = n_, P = params_, Pn = params_ * n;
     if (step_ == 0) {
-      window_weighted_ = weighted_;
-      window_full_ = weighted_ && full_;
-      build_rows();
+      window_weighted_ = weights_.weighted();
+      window_full_ = weights_.weighted() && weights_.full();
+      sums_.rows(rows_);
       fill_phi();
     } else if (step_ <= Pn) {
       const int p = (step_ - 1) / n, r = (step_ - 1) % n;
@@ -585,7 +384,7 @@ class WeakFormWindows {
         out.setZero();
       } else if (window_weighted_) {
         const int w = (last - first + 1) * F;
-        out.noalias() = weight_.block(r * F, first * F, F, w) * phi_.col(p).segment(first * F, w);
+        out.noalias() = weights_.matrix().block(r * F, first * F, F, w) * phi_.col(p).segment(first * F, w);
       } else {
         out = phi_.col(p).segment(r * F, F);
       }
@@ -595,9 +394,9 @@ class WeakFormWindows {
       if (!window_weighted_) {
         if (c == 0) out = phi_.col(P).segment(r * F, F);
       } else if (c == 0) {
-        out.noalias() = weight_.block(r * F, 0, F, F) * phi_.col(P).segment(0, F);
+        out.noalias() = weights_.matrix().block(r * F, 0, F, F) * phi_.col(P).segment(0, F);
       } else {
-        out.noalias() += weight_.block(r * F, c * F, F, F) * phi_.col(P).segment(c * F, F);
+        out.noalias() += weights_.matrix().block(r * F, c * F, F, F) * phi_.col(P).segment(c * F, F);
       }
     } else if (step_ <= products_ + params_) {
       const int p = step_ - 1 - products_;
@@ -613,7 +412,7 @@ class WeakFormWindows {
       }
     } else if (step_ == products_ + params_ + 1) {
       raw_normal_ = normal_;
-      if (config_.bias_compensation) subtract_bias();
+      if (config_.bias_compensation) weights_.subtract_bias(normal_, noise_, window_weighted_);
       factor();
     } else if (step_ == products_ + params_ + 2) {
       solve();
@@ -680,199 +479,21 @@ class WeakFormWindows {
     misfit_ = std::max(r2, 0.0) / static_cast<double>(std::max(1, R_ - params_));
   }
 
-  // Noise loading of DOF i's equation error on acceleration channel c, derivative order d:
-  // m_i (d = 2), -c_i (d = 1), the stiffness matrix entry K_ic (d = 0).
-  double loading(int i, int c, int d) const noexcept {
-    const int n = n_;
-    const double kl = model_(2 * n + i), kr = right(i) ? model_(2 * n + i + 1) : 0.0;
-    if (c == i) return d == 2 ? model_(i) : d == 1 ? -model_(n + i) : kl + kr;
-    if (d != 0) return 0.0;
-    if (c == i - 1) return -kl;
-    if (c == i + 1) return -kr;
-    return 0.0;
-  }
-
-  // Background refresh of the weights W = Sigma^-1 over all n F rows (the equation errors of
-  // neighbouring DOFs share channels: Sigma is block pentadiagonal), in steps of at most about
-  // 9 F^2 multiply-adds, as many per sample as a budget of 6 F^2 allows: stage 1 builds Sigma
-  // block by block from the model into chol_'s lower triangle, stage 2 factors it in place
-  // column by column (left-looking, within the band), stage 3 solves for W column by column, a
-  // row block per step, stage 4 forms the traces <W_ij, G_de> of the bias term, stage 5 swaps
-  // W in between windows. The first refresh keeps only the diagonal blocks (band 0: each DOF's
-  // rows weighted alone, about n^2 times less work), so that weighted windows start early.
-  void refresh() noexcept {
-    if (!config_.weighted) return;
-    const double budget = 6.0 * F_ * F_;
-    double spent = 0.0;
-    while (spent < budget) {
-      const double cost = refresh_step();
-      if (cost < 0.0) return;  // waiting: no model yet, or a window in progress
-      spent += cost + 1.0;
-    }
-  }
-
-  // One step; its cost in multiply-adds, or -1 if the refresh cannot advance in this sample.
-  double refresh_step() noexcept {
-    switch (refresh_stage_) {
-      case 0:
-        if (!usable_model()) return -1.0;
-        band_ = weighted_ ? 2 : 0;
-        refresh_stage_ = 1;
-        refresh_pos_ = 0;
-        return 0.0;
-      case 1: return sigma_step();
-      case 2: return cholesky_step();
-      case 3: return inverse_step();
-      case 4: return traces_step();
-      default:
-        if (pending_) return -1.0;  // never change the weights under a window in progress
-        weight_.swap(wnext_);
-        traces_.swap(next_traces_);
-        weighted_ = true;
-        full_ = band_ == 2 || n_ == 1;
-        refresh_stage_ = 0;
-        return -1.0;
-    }
-  }
-
-  bool usable_model() const noexcept {
-    for (int i = 0; i < n_; ++i) {
-      if (!(model_(i) > 0.0) || !std::isfinite(model_(i)) || !std::isfinite(model_(n_ + i))) return false;
-      if (!(noise_variance(i) > 0.0)) return false;  // noise-free: the weights do not matter
-    }
-    for (int j = 2 * n_; j < params_; ++j)
-      if (!std::isfinite(model_(j)) && (j < params_ - 1 || right(n_ - 1))) return false;
-    return true;
-  }
-
-  // Block (i, j) of Sigma, i >= j >= i - 2 (zero outside the band), and the zero blocks left
-  // of the band in row i.
-  double sigma_step() noexcept {
-    const int F = F_, i = refresh_pos_ / 3, j = i - refresh_pos_ % 3;
-    double cost = 0.0;
-    if (j == i && i > 2) chol_.block(i * F, 0, F, (i - 2) * F).setZero();
-    if (j >= 0) {
-      auto block = chol_.block(i * F, j * F, F, F);
-      block.setZero();
-      for (int c = std::max(0, i - 1); c <= std::min(n_ - 1, j + 1) && i - j <= band_; ++c) {
-        const double s2 = noise_variance(c);
-        for (int d = 0; d < 3; ++d)
-          for (int e = 0; e < 3; ++e) {
-            const double a = s2 * loading(i, c, d) * loading(j, c, e);
-            if (a == 0.0) continue;
-            block.noalias() += a * gram_[3 * d + e];
-            cost += F * F;
-          }
-      }
-      if (i == j) block.noalias() += noise_variance(n_ + i) * gram_[8];
-    }
-    if (++refresh_pos_ == 3 * n_) {
-      refresh_stage_ = 2;
-      refresh_pos_ = 0;
-    }
-    return cost + F * F;
-  }
-
-  // Column j of the Cholesky factor, in place; rows and columns within the band (fill-in stays
-  // inside it). Not positive definite: keep the old weights.
-  double cholesky_step() noexcept {
-    const int F = F_, j = refresh_pos_, b = j / F;
-    const int k0 = std::max(0, b - band_) * F, r1 = std::min(R_, (b + band_ + 1) * F);
-    auto lj = chol_.row(j).segment(k0, j - k0);
-    const double d = chol_(j, j) - lj.squaredNorm();
-    if (!(d > 0.0) || !std::isfinite(d)) {
-      refresh_stage_ = 0;
-      return -1.0;
-    }
-    const double root = std::sqrt(d);
-    chol_(j, j) = root;
-    const int below = r1 - j - 1;
-    if (below > 0) {
-      auto col = chol_.col(j).segment(j + 1, below);
-      col.noalias() -= chol_.block(j + 1, k0, below, j - k0) * lj.transpose();
-      col /= root;
-    }
-    if (++refresh_pos_ == R_) {
-      refresh_stage_ = 3;
-      refresh_pos_ = 0;
-      refresh_sub_ = 0;
-    }
-    return static_cast<double>(below + 1) * (j - k0 + 1);
-  }
-
-  // Column j of W = (L L^T)^-1, one row block per step: forward from j's block down, then
-  // backward from the last block up (within j's block only while the band is 0).
-  double inverse_step() noexcept {
-    const int F = F_, j = refresh_pos_, bj = j / F;
-    const int last = band_ > 0 ? n_ - 1 : bj, first = band_ > 0 ? 0 : bj;
-    const int forward = last - bj + 1, steps = forward + last - first + 1;
-    auto w = wnext_.col(j);
-    const auto reach = [&](int k) { return std::min(R_, (k / F + band_ + 1) * F); };
-    double cost = 0.0;
-    if (refresh_sub_ < forward) {
-      const int b = bj + refresh_sub_;
-      if (refresh_sub_ == 0) {
-        w.setZero();
-        w(j) = 1.0;
-      }
-      for (int k = std::max(j, b * F); k < (b + 1) * F; ++k) {
-        w(k) /= chol_(k, k);
-        const int end = reach(k);
-        if (end > k + 1) w.segment(k + 1, end - k - 1).noalias() -= w(k) * chol_.col(k).segment(k + 1, end - k - 1);
-        cost += end - k;
-      }
-    } else {
-      const int b = last - (refresh_sub_ - forward);
-      for (int r = (b + 1) * F - 1; r >= b * F; --r) {
-        const int end = reach(r);
-        double x = w(r);
-        if (end > r + 1) x -= chol_.col(r).segment(r + 1, end - r - 1).dot(w.segment(r + 1, end - r - 1));
-        w(r) = x / chol_(r, r);
-        cost += end - r;
-      }
-    }
-    if (++refresh_sub_ == steps) {
-      refresh_sub_ = 0;
-      if (++refresh_pos_ == R_) {
-        refresh_stage_ = 4;
-        refresh_pos_ = 0;
-      }
-    }
-    return cost;
-  }
-
-  // <W_ij, G_de> for one block pair (i, j = i - 2 .. i + 2; zero outside the band).
-  double traces_step() noexcept {
-    const int F = F_, i = refresh_pos_ / 5, o = refresh_pos_ % 5, j = i + o - 2;
-    const bool inside = j >= 0 && j < n_ && std::abs(i - j) <= band_;
-    for (int de = 0; de < 9; ++de)
-      next_traces_((i * 5 + o) * 9 + de) = inside ? wnext_.block(i * F, j * F, F, F).cwiseProduct(gram_[de]).sum()
-                                                  : 0.0;
-    if (++refresh_pos_ == 5 * n_) refresh_stage_ = 5;
-    return inside ? 9.0 * F * F : 1.0;
-  }
-
   Config config_;
   int n_;
   int params_;
   Eigen::LDLT<MatD> ldlt_;
   long L_ = 0, H_ = 0;
-  int K_ = 1, Q_ = 0, J_ = 0, F_ = 0, R_ = 0, window_steps_ = 1, products_ = 0;
+  int K_ = 1, Q_ = 0, F_ = 0, R_ = 0, window_steps_ = 1, products_ = 0;
   double window_budget_ = 1.0;  // multiply-adds of window steps per sample
-  long phase_ = 0, in_hop_ = 0, hops_ = 0;
-  VecC z_;
-  MatC bins_, seg_;
-  MatD rows_, phi_, xw_, weight_, chol_, wnext_, normal_, raw_normal_, inverse_;
-  MatD gram_[9];
-  VecD traces_, next_traces_, identity_traces_;
-  detail::Storage<Noise, N == Dynamic ? Dynamic : 2 * N> noise_{};
-  detail::Storage<History, N == Dynamic ? Dynamic : 2 * N> history_{};
-  VecD rhs_, solution_, work_, model_;
+  MatD rows_, phi_, xw_, normal_, raw_normal_, inverse_;
+  detail::WeakFormSums sums_;
+  detail::FourthDifferenceNoise<Scalar, N == Dynamic ? Dynamic : 2 * N> noise_;
+  detail::WeakFormWeights weights_;
+  VecD rhs_, solution_, work_;
   bool pending_ = false;
   int step_ = 0;
-  int refresh_stage_ = 0, refresh_pos_ = 0, refresh_sub_ = 0, band_ = 0;
-  bool weighted_ = false, window_weighted_ = false;
-  bool full_ = false, window_full_ = false;  // the weights in force / the latest window's: full covariance
+  bool window_weighted_ = false, window_full_ = false;  // the latest window's rows: weighted; by the full covariance
   long results_ = 0;
   double misfit_ = std::numeric_limits<double>::quiet_NaN();
   Vector<Scalar, kParams> result_, variance_;
