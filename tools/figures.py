@@ -170,13 +170,13 @@ def demo_controller() -> str:
         ["choice (Table 1, 5 s)", "peak tracking error after 1 s [% of the stroke]", "alternative"],
         [
             [
-                "eq. 10 with the stiffness estimates inside the integrals (`eq10=\"integrated\"`), noise-free",
+                'eq. 10 with the stiffness estimates inside the integrals (`eq10="integrated"`), noise-free',
                 num(sc["continuous_noise_free"]["headline"][peak]),
                 f"{num(sc['continuous_noise_free_eq10_product']['headline'][peak], 3)} with the paper's product form "
-                "(`eq10=\"product\"`)",
+                '(`eq10="product"`)',
             ],
             [
-                f"the continuous estimator under `accept=\"sigma\"`, 40 dB with the probe ({len(cont)} seeds)",
+                f'the continuous estimator under `accept="sigma"`, 40 dB with the probe ({len(cont)} seeds)',
                 span([r[peak] for r in cont], num),
                 f"{num(sc['continuous_40dB_seed0_single_estimator']['headline'][peak], 3)} with the single growing "
                 "window in the same loop (seed 0)",
@@ -217,7 +217,8 @@ def per_sample_table() -> str:
     cpp = d["targets"]["python_run_within_1.5x_of_cpp"]
     path = [c["max_path"] / c["ns_per_dof_sample_median"] for c in d["configurations"]["default_double"].values()]
     numpy = d["numpy_reference_over_python_run_interleaved"]
-    flt = {(r["source"], r["scalar"]): r["max_rel_error_at"]["0.10"] for r in d["single_precision"] if r["rate_hz"] == 1000}
+    at_1khz = [r for r in d["single_precision"] if r["rate_hz"] == 1000]
+    flt = {(r["source"], r["scalar"]): r["max_rel_error_at"]["0.10"] for r in at_1khz}
     flops = d["flops"]["per_dof_sample"]
     x = lambda v: f"{v:.2f}"  # noqa: E731
     rows = [

@@ -19,8 +19,8 @@ commanded force's integral exceeds the applied one's by ``tau w``, a velocity er
 velocity from the forces without feedback, so a parameter error integrates into it: with a
 spring off by ``dk``, ``xd_i`` drifts at ``dk x / m_i`` while a mass holds at ``x``, and the
 loop's integral action turns that ramp into a steady tracking error
-``(beta_2 - c_i / m_i) dk x / (m_i beta_0)``. A rig measures the positions, so in sampled mode the law can pull the integral of
-its velocity estimate onto them::
+``(beta_2 - c_i / m_i) dk x / (m_i beta_0)``. A rig measures the positions, so in sampled
+mode the law can pull the integral of its velocity estimate onto them::
 
     xd_i <- xd_i - 2 p (P_i - x_i) - p^2 Q_i,    P_i = int_0^t xd_i,   Q_i = int_0^t (P_i - x_i)   (10c)
 
@@ -178,8 +178,9 @@ class ContinuousAdapter(PackedParameters):
         self.n, self.dt, self.boundary = int(n), float(dt), boundary
         self.rel_sigma_tol = float(rel_sigma_tol)
         self.bootstrap_tol = self.rel_sigma_tol if bootstrap_tol is None else float(bootstrap_tol)
-        # The bootstrap hand-over and the sigma rule were set up with the algebraic windows (0.3 s, first estimate at 0.31 s); the weak-form default
-        # has its first estimate after 0.5 s. method="weak_form" selects it here too.
+        # The bootstrap hand-over and the sigma rule were set up with the algebraic windows
+        # (0.3 s, first estimate at 0.31 s); the weak-form default has its first estimate after
+        # 0.5 s. method="weak_form" selects it here too.
         options.setdefault("method", "algebraic")
         self.continuous = ContinuousEstimator(n, dt, boundary, **options)
         self.bootstrap = ChainEstimator(n, dt, boundary=boundary)
