@@ -13,17 +13,14 @@ at rest. ``int u_i`` integrates the force applied: in continuous mode the law's 
 (the ODE's state); in sampled mode, as on a rig, the force sensors' samples (trapezoidal up
 to the latest sample, plus the command held since). Behind an actuator lag ``tau`` the
 commanded force's integral exceeds the applied one's by ``tau w``, a velocity error
-``tau w_i / m_i`` that grows with the force (Table 1, sampled mode, true parameters in the
-law, 5 ms lag: tracking peak 3.7 % of the stroke on the commanded force, 0.15 % on the
-measured one).
+``tau w_i / m_i`` that grows with the force.
 
 **Position feedback in eq. 10 (the rig variant, ``velocity_pole``).** Eq. 10 rebuilds the
 velocity from the forces without feedback, so a parameter error integrates into it: with a
 spring off by ``dk``, ``xd_i`` drifts at ``dk x / m_i`` while a mass holds at ``x``, and the
 loop's integral action turns that ramp into a steady tracking error
-``(beta_2 - c_i / m_i) dk x / (m_i beta_0)`` (1 % on ``k_1`` of Table 1: 3.6 % of the
-stroke). A rig measures the positions, so in sampled mode the law can pull the integral of
-its velocity estimate onto them::
+``(beta_2 - c_i / m_i) dk x / (m_i beta_0)``. A rig measures the positions, so in sampled
+mode the law can pull the integral of its velocity estimate onto them::
 
     xd_i <- xd_i - 2 p (P_i - x_i) - p^2 Q_i,    P_i = int_0^t xd_i,   Q_i = int_0^t (P_i - x_i)   (10c)
 
@@ -32,10 +29,7 @@ The error ``r = P - x`` then obeys ``r'' + 2 p r' + p^2 r = delta'`` for a veloc
 state. At the first substitution ``P`` restarts at ``x`` and ``Q`` at 0: the correction made
 up for the nominal model's error, which the new parameters do not have, and carried over it
 disturbs the loop (and with it the estimates) for about ``1 / p``. ``velocity_pole=None``
-(the default, and continuous mode always) is the paper's eq. 10. Table 1 on the rig at
-40 dB (three seeds, 0, 2 and 5 ms lag), ``p = 40 rad/s``: the tracking peak after 1 s is
-1.06-1.12 % of the stroke with (10c), 1.2-2.2 % without (1 of 9 runs above 2 %;
-``bench/demo_report.py --rig-only`` and ``run_scenario(..., velocity_pole=None)``).
+(the default, and continuous mode always) is the paper's eq. 10.
 
 **Eq. 10 with moving estimates.** By default (``eq10="integrated"``) the stiffness
 estimates sit *inside* the integrals, ``int_0^t k_i(s) (x_i - x_{i-1})(s) ds``: identical to
@@ -45,10 +39,8 @@ the paper's form for constant estimates, but when the estimates move, the paper'
 length of the record. The first substitution of a DOF's estimates (at ``switch_time_s``,
 or later if they are accepted later) still re-bases the integral as the product form
 does (``int K x <- int K x + (K_new - K_old) int x``), so the first estimates model the
-whole past instead of the nominal stiffness-free model. On Table 1 in continuous mode
-with the estimates updated every sample, the peak tracking error after 1 s is 0.04 % of
-the stroke with the integrated form and 7.6 % with the product form (``eq10="product"``,
-kept for comparison; ``bench/demo_report.py``).
+whole past instead of the nominal stiffness-free model. ``eq10="product"`` is kept for
+comparison.
 
 With exact parameters, eqs. 8-10 make every DOF a chain of integrators and the tracking
 error ``e = x - x*`` obeys ``e''' + beta_2 e'' + beta_1 e' + beta_0 e = 0``. The gains come
@@ -64,8 +56,8 @@ estimates used on ``[t_k, t_{k+1})`` come from samples up to ``k - 1`` (one samp
 computation latency).
 
 **Which estimates are taken.** Early in a record, and under noise, eq. 7 can return
-estimates the estimator flags valid but that are far off (with 40 dB of accelerometer
-noise the first 0.1 s of the paper's references carry almost no signal). Substituting
+estimates the estimator flags valid but that are far off (under accelerometer noise the
+first 0.1 s of the paper's references carry almost no signal). Substituting
 them can destabilise the loop, so by default (``accept="settled"``) the four estimates
 of DOF ``i`` are taken only when they are finite and physically admissible (``m > 0``,
 ``c >= 0``, ``k >= 0``) and have changed by less than ``settle_tol`` (2 %) over the last
@@ -74,18 +66,17 @@ of the critical damping); the first substitution waits until all DOFs pass toget
 Otherwise the last accepted values of that DOF stay in use, or the nominal ones if
 none was accepted yet. Noise-free, the estimates settle well within
 the first 0.1 s, so the rule changes nothing there; ``accept="valid"`` takes every valid
-estimate with a positive mass. With 40 dB of accelerometer noise the single growing window
-never passes the rule on the paper's references alone (its error stays above 40 %), so the
-law keeps the nominal parameters: the loop stays stable but does not track.
+estimate with a positive mass. An estimate that never steadies is never taken: the law then
+keeps the nominal parameters, and the loop stays stable but does not track.
 ``accept="sigma"`` is for estimators that carry an uncertainty, such as
 :class:`ContinuousAdapter`: a DOF's estimates are taken when the estimator flags it valid
 (every relative one-sigma uncertainty of the DOF at most 5 % by default) and they are
 physically admissible; the first substitution waits until all DOFs pass, afterwards each
 DOF follows the estimates while they pass and keeps its last accepted values otherwise.
-With 40 dB on the accelerations and a 0.05 N-per-line probe multisine
-(:class:`~algid.control.trajectories.Multisine`) the continuous-mode demo substitutes at about 0.2 s and the peak
-tracking error after 1 s is 1.8-2.8 % of the stroke over three seeds (the single window in
-the same loop: 12.6 %; ``bench/demo_report.py``).
+
+What these choices change on Table 1 (the forces of eq. 10, the position feedback, the two
+forms of eq. 10, the acceptance rules) is measured in ``docs/demo.md``, built from
+``bench/results/demo_report.json``.
 
 The references (:class:`~algid.control.trajectories.BezierReference`) and the probing multisine
 (:class:`~algid.control.trajectories.Multisine`) are in :mod:`algid.control.trajectories`; the law of eqs. 8-10
@@ -165,8 +156,7 @@ class ContinuousAdapter(PackedParameters):
         ``rel_sigma_tol``). Noise-free the growing window changes by far less than 1 % in
         20 ms from a few tens of ms on; under noise it wanders by more, so a tight value
         leaves a noisy loop on the nominal parameters until the running estimate passes
-        (the rig's 0.01: at 40 dB the substitution waits for it, 0.41-0.48 s, and disturbs
-        the estimates by at most 0.48 % instead of up to 48 %).
+        (the rig's 0.01; ``docs/demo.md`` gives what it changes).
     **options
         Passed to :class:`algid.ContinuousEstimator` (``window_s``, ``stagger``, ...).
     """
@@ -188,9 +178,9 @@ class ContinuousAdapter(PackedParameters):
         self.n, self.dt, self.boundary = int(n), float(dt), boundary
         self.rel_sigma_tol = float(rel_sigma_tol)
         self.bootstrap_tol = self.rel_sigma_tol if bootstrap_tol is None else float(bootstrap_tol)
-        # The bootstrap hand-over, the sigma rule and the demo's measured figures were set up
-        # with the algebraic windows (0.3 s, first estimate at 0.31 s); the weak-form default
-        # has its first estimate after 0.5 s. method="weak_form" selects it here too.
+        # The bootstrap hand-over and the sigma rule were set up with the algebraic windows
+        # (0.3 s, first estimate at 0.31 s); the weak-form default has its first estimate after
+        # 0.5 s. method="weak_form" selects it here too.
         options.setdefault("method", "algebraic")
         self.continuous = ContinuousEstimator(n, dt, boundary, **options)
         self.bootstrap = ChainEstimator(n, dt, boundary=boundary)

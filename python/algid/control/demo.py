@@ -13,7 +13,7 @@ the numbers as ``summary.json`` into ``--out``.
 t = 0 (``algid.ChainEstimator``), substituted under the controller's ``accept="settled"``
 rule. ``continuous`` is :class:`algid.control.controller.ContinuousAdapter` over
 ``algid.ContinuousEstimator`` (staggered 0.3 s windows, running estimate with a one-sigma
-uncertainty); until the running estimate exists (0.31 s) it serves the growing window.
+uncertainty); until the running estimate exists (after its first window) it serves the growing window.
 The controller (``accept="sigma"``) substitutes the estimates of DOF ``i`` when all of
 ``m_i, c_i, k_i, k_{i+1}`` are physically admissible and their relative one-sigma
 uncertainty is at most 5 % (the damping's against at least 1 % of critical damping); the
@@ -31,45 +31,25 @@ smooth-equivalent samples of :class:`algid.control.held_input.HeldLaggedInput`; 
 is on by default there too. Three rig defaults differ from the paper's set-up: eq. 10 gets
 the position feedback (10c) of :mod:`algid.control.controller` (``velocity_pole`` =
 :data:`RIG_VELOCITY_POLE`, 40 rad/s); the running estimate is the weak-form one with 0.3 s
-windows and test functions up to 30 Hz (first results at 0.31 s); and the growing window
-that serves until then counts as valid only while steady within 1 % over 20 ms (noise-free
-from a few tens of ms on, so the law still substitutes at 0.1 s; at 40 dB never, so the law
-waits for the running estimate, 0.41-0.48 s) (:data:`RIG_ESTIMATOR_OPTIONS`). Table 1,
-5 s, 0/2/5 ms, ``bench/demo_report.py --rig-only --seeds 0 1 2``:
-
-* noise-free: all estimates within 1 % from 0.077-0.099 s on; largest error from 0.1 s on
-  0.40 % (no lag), 0.16 % (2 ms), 0.04 % (5 ms), after 0.5 s 0.04 % and less; tracking peak
-  after 1 s 1.06-1.11 % of the stroke (mostly the probe's motion); the substitution disturbs
-  the estimates by 0.007-0.31 % (the largest excess of an estimate's error within 0.1 s of it
-  over that never-substituted loop's, same noise: ``disturbance_reference=True``);
-* 40 dB, 3 seeds: all estimates within 1 % from 0.48-0.71 s on, largest error after 0.5 s
-  0.7-1.8 % (the dampings; with the loop's signals even a least-squares fit that knew the
-  true velocities and positions would leave a one-sigma of 0.5-1.6 % on them at 0.5 s);
-  tracking peak after 1 s 1.06-1.12 %; the substitution disturbs the estimates by at most
-  0.48 %;
-* a wrong lag (5 ms told as 4 or 6 ms) still tracks (1.07-1.18 %) but the estimates end
-  12-17 % off.
+windows and test functions up to 30 Hz; and the growing window that serves until then counts
+as valid only while steady within 1 % over 20 ms (:data:`RIG_ESTIMATOR_OPTIONS`).
 
 **Noise** (``--noise-db``). The SNR is meant on the accelerations the estimator actually
 gets. The simulator has to fix a closed loop's noise level before the run, from the
 planned motion (the reference accelerations); when the loop tracks, the actual
 accelerations are the planned ones plus the probe's (below), so the demo first runs the
 same loop noise-free and scales each accelerometer's noise to that run's acceleration RMS.
-The SNR achieved on the noisy run's actual accelerations is reported next to the request
-(it drifts from it only as far as the noisy loop moves differently: the noisy loop
-substitutes its estimates later, about 0.2 s instead of 0.1 s, and the longer transient
-under the nominal model adds acceleration; 40.0-40.2 dB on the 5 s Table 1 run, about
-45 dB on a 2 s, 2-DOF run). Without that calibration the level came from the reference
-accelerations alone, and a loop that did not track (the single window under noise) got an
-actual SNR of 22, 22 and 6 dB for a requested 40.
+The SNR achieved on the noisy run's actual accelerations is reported next to the request.
 
-**Probe** (``--excitation``). The paper's references alone carry too little information
-for 40 dB of accelerometer noise: on a loop tracking with the *true* parameters, neither
-estimator gets any parameter within 50 % from them. With ``--noise-db`` (and in sampled mode)
+**Probe** (``--excitation``). Under accelerometer noise the paper's references alone carry
+too little information for either estimator. With ``--noise-db`` (and in sampled mode)
 the controller therefore adds a known multisine force (:class:`algid.control.trajectories.Multisine`, six lines of
-3-16 Hz, ``--excitation`` N each, default 0.05 N) to its command; it moves each mass by
-about 50 um (1 % of the stroke), which is in the reported tracking error. Noise-free in continuous
-mode the default is no probe (the paper's experiment).
+3-16 Hz, ``--excitation`` N each, default 0.05 N) to its command; its motion is in the
+reported tracking error. Noise-free in continuous mode the default is no probe (the paper's
+experiment).
+
+The measured figures of the demo are in ``docs/demo.md``, built from
+``bench/results/demo_report.json`` (``bench/demo_report.py``).
 
 **Drift table.** Both estimators are also run open loop on the recorded samples
 (accelerations and forces as the loop's estimator got them), and the demo reports the

@@ -20,8 +20,8 @@ The force's mean over interval ``k`` is exact by (H1)::
 
 and the smooth force at ``t_k`` is the value there of the cubic whose means over the four
 intervals around ``t_k`` are those (H2) gives (exact for any cubic; the box of the two
-intervals next to ``t_k`` alone is exact for a straight line only and leaves the
-estimates up to 0.9 % off at 2 ms of lag in the demo's rig loop between 0.1 and 0.3 s)::
+intervals next to ``t_k`` alone is exact for a straight line only and biases the estimates
+behind a lag; ``docs/demo.md`` gives by how much)::
 
     w~_k = (-wbar_{k-2} + 7 wbar_{k-1} + 7 wbar_k - wbar_{k+1}) / 12                  (H3)
 
@@ -43,8 +43,7 @@ it moves the mass by ``nu_k / m_i``, with (``w~`` between samples: the straight 
            - h^2 (2 w~_k + w~_{k+1}) / 6 + h^2 (w~_{k+1} - 2 w~_k + w~_{k-1}) / 24        (H6)
 
 Without lag these add up to about ``h^2 (w - w_0) / (12 m_i)`` in position, which no initial
-condition absorbs, and the estimator reads it as stiffness (1.2 % on Table 1's last spring
-at 0.1 s in the demo's rig loop). The smooth force therefore gets
+condition absorbs, and the estimator reads it as stiffness. The smooth force therefore gets
 ``(nu_k - nu_{k-1}) / h^2`` added (and, through (H4), the acceleration the same over the
 mass): a smooth motion whose positions are the measured ones. It needs ``w~_{k+1}``, so
 sample ``k`` leaves the smoothing when sample ``k + 2`` arrives, two samples late (the
@@ -65,9 +64,8 @@ samples and DOF, and ``tau = -h / ln a``, come from the recorded commands and th
 forces alone (:class:`LagEstimator`). Without lag the force jumps at the samples and a
 sample reads the mean of the one-sided limits, ``w_k = (u_{k-1} + u_k) / 2``, which (H5)
 would take for a lag of about ``h / ln 2``; the estimator therefore reports no lag when
-that model leaves the smaller residual. The smooth samples need ``tau`` well: Table 1's loop
-behind 5 ms of lag, told 4 or 6 ms, gets estimates 12-17 % off (the demo's rig loop, whose
-position feedback still tracks within 1.2 % of the stroke).
+that model leaves the smaller residual. The smooth samples need ``tau`` well: a lag told
+20 % off biases every estimate (``docs/demo.md``).
 """
 
 from __future__ import annotations

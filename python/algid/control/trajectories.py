@@ -124,11 +124,9 @@ class Multisine:
     """Probing force ``f_i(t) = amplitude * sum_q sin(2 pi f_q t + phi_iq)`` [N] per DOF.
 
     The paper's references are slow (2 s rest-to-rest moves): their accelerations carry so
-    little information that 40 dB of accelerometer noise buries it (neither the growing
-    window nor the continuous estimator gets a usable estimate from them, even with the
-    loop tracking on the true parameters). A small known multisine added to the commanded
-    force keeps the chain excited; with the default 3-16 Hz lines each DOF moves by some
-    10 um (0.2 % of the stroke) under the loop's feedback. Phases are fixed per DOF
+    little information that accelerometer noise buries it (``docs/demo.md``). A small known
+    multisine added to the commanded force keeps the chain excited; its motion stays small
+    under the loop's feedback. Phases are fixed per DOF
     (``seed``), so every run gets the same probe.
     """
 

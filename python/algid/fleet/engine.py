@@ -42,11 +42,9 @@ RETRIES = 2
 
 #: Worker settings of the embedded cluster (merged into this process's Dask configuration).
 #: Dask's statistical profiler keeps the call trees of its last 1000 one-second cycles per worker
-#: (about 17 min): memory that grows recording by recording for that long (0.25 MiB per 3-DOF
-#: 20 s recording measured); it is off. The system monitor keeps 7200 half-second samples (an
-#: hour) and the developers' logs 1000 entries each: 5 min and 100 entries here (a worker that
-#: ran only sleep tasks grew 66.7 -> 70.2 MiB over 2,310 of them with Dask's lengths, 66.8 ->
-#: 68.2 MiB over 3,893 with these).
+#: (about 17 min): memory that grows recording by recording for that long; it is off. The system
+#: monitor keeps 7200 half-second samples (an hour) and the developers' logs 1000 entries each:
+#: 5 min and 100 entries here (what each costs a worker: docs/fleet.md).
 WORKER_CONFIG = {
     "worker": {"profile": {"enabled": False}},
     "admin": {"low-level-log-length": 100, "system-monitor": {"log-length": 600}},

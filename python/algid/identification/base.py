@@ -44,7 +44,7 @@ SCALE_REASON = "base excitation without a force: the chain is known up to scale 
 #: Why identify's fit check (the diagnosis's withheld-window test) does not run on a base-excited
 #: record: it tests every equation, the support's too, which holds the shaker's unmeasured reaction
 #: (with a force) or the double integral of the accelerations' noise (without: no white force
-#: noise, as its noise floor assumes; on Table 1 at 40 dB it leaves 5.4x its floor).
+#: noise, as its noise floor assumes, so a linear chain would fail it).
 FIT_CHECK_SKIPPED = (
     "not run: the diagnosis's test would take in the support's equation, whose force is the shaker's "
     "unmeasured reaction; the verdicts do not include the fit check"

@@ -24,8 +24,8 @@ not against the chain itself, so that what the band-limited surrogate costs the
 estimator's quadrature, at the record's ends for instance, is not mistaken for it). The
 noise-free surrogate's estimate minus the chain it was made from is the method's own error
 on signals of the record's spectrum (``method_bias``: the quadrature of content close to
-the sampling rate, for instance; +0.2 % on the masses and springs of Table 1 under a force
-band-limited to fs/5, 0.000 % at fs/20); it is not taken off (it may be the surrogate's)
+the sampling rate, for instance: it grows as the force's band nears the sampling rate); it
+is not taken off (it may be the surrogate's)
 but counted in the uncertainty. The noise the surrogates
 cannot reproduce (coloured or correlated with the input through a controller) and the
 model error (effects outside eq. 1) are not in it; :func:`algid.diagnose` looks for those.

@@ -25,11 +25,9 @@ sub-steps, and the dry-friction regularisation width defaults to
 ``v_eps = max(1e-4 m/s, F / (m_i f_sub))`` (``f_sub`` the sub-step rate) so that its
 relaxation rate ``F / (m v_eps)`` never exceeds one per step (an explicit ``v_eps`` gets
 enough sub-steps instead). A step across a switch (a dry-friction velocity changing sign,
-a clearance contact engaging or releasing) is redone in 8 sub-steps. Measured against
-scipy's ``solve_ivp`` (DOP853, rtol 1e-11) at 1 kHz: linear chains 1e-10 relative,
-smooth effects (cubic spring, quadratic damping, drift, low-pass) 1e-8, clearance 1e-6,
-dry friction 2e-5 (``tests/test_simulator.py``; a zero-order-hold response matches its
-exact discretisation to 1e-12).
+a clearance contact engaging or releasing) is redone in 8 sub-steps.
+``tests/test_simulator.py`` checks every kind of run against scipy's ``solve_ivp`` and a
+zero-order-hold response against its exact discretisation (the agreement: ``docs/theory.md``).
 
 Force input
 -----------
@@ -64,11 +62,8 @@ of the staircase's smooth equivalent at the sample instant. Pairing the limits a
 way (held force with the acceleration just before the update, or the new force with the
 acceleration just after) makes the estimator's quadrature of eq. 4 integrate two signals
 that are half a sample out of step, and because eq. 4 forms small differences of large
-terms, the parameters of a DOF come out biased by 10-60 % instead of a few 1e-4 (Table 1,
-multisine of 1.3-7.1 Hz held at 1 kHz, 0.5-2 s, estimated with the numpy reference
-:func:`algid.estimator.reference.estimate`; ``tests/test_simulator.py`` checks both; noise-free
-continuous forcing gives 1e-9, so the remaining few 1e-4 is what a held force costs
-the estimator's smooth quadrature, not the simulator). Positions and velocities are
+terms, the parameters of a DOF come out biased (``tests/test_simulator.py`` checks both
+pairings; ``docs/theory.md`` gives the figures). Positions and velocities are
 continuous and need no convention. The first sample
 (``t = 0``) takes the right limit, the recording starting there. The one-sided limits are
 kept in :attr:`SimulationResult.limits`.
