@@ -239,7 +239,9 @@ def test_demo_positions_and_forces_draw_the_loop(demo_run):
     x_ref = res.x_ref
     x_prev = np.hstack([np.zeros((x_ref.shape[0], 1)), x_ref[:, :-1]])
     x_next = np.hstack([x_ref[:, 1:], np.zeros((x_ref.shape[0], 1))])
-    exact = ch.mass * log["xdd_ref"] + ch.damping * log["xd_ref"] + k_left * (x_ref - x_prev) + k_right * (x_ref - x_next)
+    exact = (
+        ch.mass * log["xdd_ref"] + ch.damping * log["xd_ref"] + k_left * (x_ref - x_prev) + k_right * (x_ref - x_next)
+    )
     fig = forces_figure(res, summary)
     top, bottom = fig.axes
     near = (res.t >= summary["switch_time_s"] - 0.05) & (res.t <= summary["switch_time_s"] + 0.2)
@@ -260,7 +262,9 @@ def test_demo_estimation_error_draws_the_relative_errors(demo_run):
     for ax, family in zip(fig.axes[:3], ("mass", "damping", "stiffness")):
         est = np.asarray(res.estimates[family], float)
         for q, line in enumerate(ax.get_lines()[: truth[family].size]):
-            np.testing.assert_allclose(line.get_ydata(), np.abs(est[:, q] - truth[family][q]) / truth[family][q], rtol=1e-9, atol=1e-14)
+            np.testing.assert_allclose(
+                line.get_ydata(), np.abs(est[:, q] - truth[family][q]) / truth[family][q], rtol=1e-9, atol=1e-14
+            )
     drift = fig.axes[3]
     for line, key in zip(drift.get_lines(), ("single_history", "continuous_history")):
         h = np.asarray(res.drift[key], float)
@@ -301,7 +305,9 @@ def test_batch_histories_draw_the_valid_springs_with_their_sigmas(fleet_table):
             np.testing.assert_allclose(date2num(line.get_xdata()), date2num(rows["recorded_at"].dt.tz_localize(None)))
             np.testing.assert_allclose(np.asarray(line.get_ydata(), float), rows[k].to_numpy(float))
             ends = np.array([[seg[0, 1], seg[1, 1]] for seg in bars.get_segments()])
-            np.testing.assert_allclose(np.sort(ends, axis=1), np.c_[rows[k] - rows[f"sigma_{k}"], rows[k] + rows[f"sigma_{k}"]].astype(float))
+            np.testing.assert_allclose(
+                np.sort(ends, axis=1), np.c_[rows[k] - rows[f"sigma_{k}"], rows[k] + rows[f"sigma_{k}"]].astype(float)
+            )
         assert _inside(ax, rows[["k1", "k2"]].to_numpy(float))
 
 
