@@ -59,7 +59,7 @@
 /// (the other's is the same number); between two DOF that carry their own scale, the mean. A
 /// DOF that no forced DOF reaches through valid estimates (no force at all, a spring estimated
 /// as 0 on the way, n = 1) is NaN and not valid. This runs per sample after eq. 7 (O(n)) only
-/// while some DOF is without force.
+/// while some DOF is without force (detail/one_force.hpp: OneForce).
 ///
 /// Interface:
 ///   - `static ConfigError validate(const Config&, int n = N)`,
@@ -82,6 +82,7 @@
 #include "algid/chain_config.hpp"
 #include "algid/cramer.hpp"
 #include "algid/detail/lanes.hpp"
+#include "algid/detail/one_force.hpp"
 #include "algid/detail/storage.hpp"
 #include "algid/histories.hpp"
 #include "algid/integrator_chain.hpp"
@@ -154,10 +155,7 @@ class ChainEstimator {
                     &numerator_[3]})
       s->resize(registers);
     ratio_.resize(registers);
-    forced_.resize(registers);
-    left_mass_.resize(n_);
-    left_reach_.resize(n_);
-    scaled_by_.resize(n_);
+    one_force_.configure(n_);
     for (auto& s : estimate_) s.resize(springs);
     spring_.resize(springs);
     valid_.resize(n_);
@@ -180,11 +178,7 @@ class ChainEstimator {
     spring_.fill(nan);
     if (free_end()) spring_[n_ / kLanes](n_ % kLanes) = Scalar(0);
     valid_.fill(false);
-    // no force seen yet; the lanes beyond the last DOF count as forced (they never join a DOF)
-    forced_.fill(L::Zero());
-    for (int i = n_; i < registers() * kLanes; ++i) forced_[i / kLanes](i % kLanes) = Scalar(1);
-    all_forced_ = false;
-    for (int i = 0; i < n_; ++i) scaled_by_[i] = kUnscaled;
+    one_force_.reset();
   }
 
   /// Consume one simultaneous sample of the accelerations [m/s^2] and forces [N].
@@ -194,7 +188,7 @@ class ChainEstimator {
       reseed();
       return Status::kBadInput;
     }
-    note_forces(force);
+    one_force_.note(force, ratio_);
     const bool advanced = accel_.push(accel, n_, weights_);
     force_.push(force, n_, weights_);
     if (!advanced) return Status::kWarmup;
@@ -300,7 +294,7 @@ class ChainEstimator {
   }
   /// Whether DOF i (0-based) has had a non-zero force since t0; false: its equation is
   /// homogeneous and its scale comes through its springs (file comment, "One force").
-  bool forced(int i) const noexcept { return lane(forced_, i) > Scalar(0); }
+  bool forced(int i) const noexcept { return one_force_.forced(i); }
   /// Whether DOF i's last instantaneous solution was trusted.
   bool instant_valid(int i) const noexcept { return lane(weight_, i) > Scalar(0); }
 
@@ -416,7 +410,7 @@ class ChainEstimator {
         S[15] = Ops::if_less(zero, reduced_, L::Ones(), S[15]);
         s[3] = Ops::if_less(zero, reduced_, zero, s[3]);
       }
-      if (!all_forced_) homogeneous_rows(g, has_reduced, S, s);
+      if (!one_force_.all_forced()) one_force_.homogeneous_rows(g, has_reduced ? reduced_ : zero, S, s);
     }
     L det, numerator[M], h2num, h2den;
     cramer_lanes<M>(S, s, det, numerator);
@@ -433,11 +427,11 @@ class ChainEstimator {
     L rho = M == 3        ? L::Constant(now.decay3)
             : has_reduced ? Ops::if_less(zero, reduced_, L::Constant(now.decay3), L::Constant(now.decay4))
                           : L::Constant(now.decay4);
-    if (M == 4 && !all_forced_) {
+    if (M == 4 && !one_force_.all_forced()) {
       const L homogeneous = has_reduced ? Ops::if_less(zero, reduced_, L::Constant(now.homogeneous3),
                                                        L::Constant(now.homogeneous4))
                                         : L::Constant(now.homogeneous4);
-      rho = Ops::if_less(zero, forced_[g], rho, homogeneous);
+      rho = one_force_.select(g, rho, homogeneous);
     }
     auto& ratio = ratio_[g];
     ratio.add(rho, Scalar(0.5) * config_.dt, weight, weighted);
@@ -455,50 +449,13 @@ class ChainEstimator {
     for (int j = 0; j < M; ++j) numerator_[j][g] = scaled[j];
   }
 
-  // A DOF is forced from its first non-zero force sample since t0 on (before it, every integral
-  // of its force is zero); its system then changes from the homogeneous one and its eq. 7
-  // restarts. Nothing to do once every DOF is forced.
-  void note_forces(const Scalar* force) noexcept {
-    if (all_forced_) return;
-    bool all = true;
-    for (int g = 0; g < registers(); ++g) {
-      L now = forced_[g];
-      for (int k = 0, i = g * kLanes; k < kLanes && i < n_; ++k, ++i)
-        if (force[i] != Scalar(0)) now(k) = Scalar(1);
-      const L switched = now - forced_[g];
-      if ((switched > Scalar(0)).any()) ratio_[g].restart(switched);
-      forced_[g] = now;
-      all &= (now > Scalar(0)).all();
-    }
-    all_forced_ = all;
-  }
-
-  // The homogeneous system of a DOF without force (a lane of forced_ at 0), in the M = 4 layout:
-  // its last row (row 3; row 2 for the 3x3 DOF of a free end, whose row 3 is the identity's)
-  // becomes m_i = 1 and its right-hand side is zero elsewhere, so Cramer's rule returns
-  // [1, c_i / m_i, k_i / m_i, k_{i+1} / m_i] from rows 0-2 (0-1), and |det S| is that of
-  // those rows and columns c_i, k_i, k_{i+1} (c_n, k_n).
-  void homogeneous_rows(int g, bool has_reduced, L* S, L* s) const noexcept {
-    const L zero = L::Zero(), one = L::Ones();
-    const L reduced = has_reduced ? reduced_ : zero;
-    const L row3 = Ops::if_less(zero, forced_[g], zero, Ops::if_less(zero, reduced, zero, one));
-    const L row2 = Ops::if_less(zero, forced_[g], zero, reduced);
-    for (int q = 0; q < 4; ++q) s[q] = Ops::if_less(zero, forced_[g], s[q], zero);
-    s[3] = Ops::if_less(zero, row3, one, s[3]);
-    s[2] = Ops::if_less(zero, row2, one, s[2]);
-    for (int c = 0; c < 4; ++c) {
-      const L entry = c == 0 ? one : zero;
-      S[c * 4 + 3] = Ops::if_less(zero, row3, entry, S[c * 4 + 3]);
-      S[c * 4 + 2] = Ops::if_less(zero, row2, entry, S[c * 4 + 2]);
-    }
-  }
-
   // The fused springs and the validity flags from the eq. 7 estimates of every lane, after the
-  // DOF without force have their scale (propagate()): k_i is the mean of DOF i's estimate (slot
-  // 2) and DOF i-1's (slot 3) where both are numbers, else the one that is; where one of the two
-  // DOF took its scale through k_i alone, the other's (carried_springs()); k_{n+1} = 0 at a free end.
+  // DOF without force have their scale (OneForce::propagate()): k_i is the mean of DOF i's
+  // estimate (slot 2) and DOF i-1's (slot 3) where both are numbers, else the one that is; where
+  // one of the two DOF took its scale through k_i alone, the other's (OneForce::carried_springs());
+  // k_{n+1} = 0 at a free end.
   void collect() noexcept {
-    if (!all_forced_) propagate();
+    if (!one_force_.all_forced()) one_force_.propagate(estimate_);
     const L nan = L::Constant(std::numeric_limits<Scalar>::quiet_NaN());
     const int dof_registers = registers();
     for (int g = 0; g < spring_registers(); ++g) {
@@ -507,91 +464,13 @@ class ChainEstimator {
       const L left = Ops::from_previous(dof ? estimate_[3][g] : nan, g > 0 ? estimate_[3][g - 1] : nan);
       spring_[g] = Ops::if_equal(own, own, Ops::if_equal(left, left, Scalar(0.5) * (own + left), own), left);
     }
-    if (!all_forced_) carried_springs();
+    if (!one_force_.all_forced()) one_force_.carried_springs(estimate_, spring_);
     if (free_end()) spring_[n_ / kLanes](n_ % kLanes) = Scalar(0);
     // Valid: eq. 7 has weight, and every estimate of the DOF is a number.
     for (int i = 0; i < n_; ++i)
       valid_[i] = ratio_[i / kLanes].denominator()(i % kLanes) > Scalar(0) && std::isfinite(lane(estimate_[0], i)) &&
                   std::isfinite(lane(estimate_[1], i)) && std::isfinite(lane(estimate_[2], i)) &&
                   (is_reduced(i) || std::isfinite(lane(estimate_[3], i)));
-  }
-
-  // How a DOF has its scale: its force, the spring on its left (k_i), on its right (k_{i+1}),
-  // both (equally near forced DOF: the mean of the two masses), or none.
-  enum Scale : std::int8_t { kForced, kFromLeft, kFromRight, kFromBoth, kUnscaled };
-
-  void set_lane(Registers<kSpringRegisters>& registers, int i, Scalar value) noexcept {
-    registers[i / kLanes](i % kLanes) = value;
-  }
-
-  // The scale of the DOF without force (file comment, "One force"). Their eq. 7 lanes hold
-  // [1, c_i / m_i, k_i / m_i, k_{i+1} / m_i]; a neighbour with a scale estimates the spring they
-  // share, and m_i = k_shared / (k_shared / m_i). Left to right, each DOF's mass from the nearest
-  // forced DOF on its left (through the springs between them), then right to left the same
-  // from the right; the nearer wins, equally near ones are averaged. The eq. 7 lanes are then
-  // overwritten with m_i times the ratios; a DOF that no forced DOF reaches through valid
-  // estimates is NaN (not valid).
-  void propagate() noexcept {
-    constexpr Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    constexpr int far = std::numeric_limits<int>::max();
-    Scalar carried = nan;  // the spring on the right of the last DOF, scaled
-    int reach = far;       // DOF from that estimate to its forced DOF
-    for (int i = 0; i < n_; ++i) {
-      if (forced(i)) {
-        left_mass_[i] = nan;
-        left_reach_[i] = 0;
-        carried = lane(estimate_[3], i);
-        reach = 0;
-        continue;
-      }
-      const Scalar m = carried / lane(estimate_[2], i);
-      const bool ok = std::isfinite(m);
-      left_mass_[i] = ok ? m : nan;
-      left_reach_[i] = ok ? reach + 1 : far;
-      carried = ok ? m * lane(estimate_[3], i) : nan;
-      reach = left_reach_[i];
-    }
-    carried = nan;  // the spring on the left of the last DOF, scaled
-    reach = far;
-    for (int i = n_ - 1; i >= 0; --i) {
-      if (forced(i)) {
-        scaled_by_[i] = kForced;
-        carried = lane(estimate_[2], i);
-        reach = 0;
-        continue;
-      }
-      const Scalar ratio[3] = {lane(estimate_[1], i), lane(estimate_[2], i), lane(estimate_[3], i)};
-      const Scalar right = carried / ratio[2];
-      const int right_reach = std::isfinite(right) ? reach + 1 : far;
-      const Scalar left = left_mass_[i];
-      const int left_reach = left_reach_[i];
-      Scalar m = nan;
-      Scale by = kUnscaled;
-      if (left_reach < right_reach) {
-        m = left;
-        by = kFromLeft;
-      } else if (right_reach < left_reach) {
-        m = right;
-        by = kFromRight;
-      } else if (left_reach < far) {
-        m = Scalar(0.5) * (left + right);
-        by = kFromBoth;
-      }
-      scaled_by_[i] = by;
-      set_lane(estimate_[0], i, m);
-      for (int j = 0; j < 3; ++j) set_lane(estimate_[j + 1], i, m * ratio[j]);
-      carried = right_reach < far ? right * ratio[1] : nan;
-      reach = right_reach;
-    }
-  }
-
-  // A spring between a DOF and the neighbour that took its scale through it alone: both
-  // estimates are the same number, the scaled side's.
-  void carried_springs() noexcept {
-    for (int j = 1; j < n_; ++j) {
-      if (scaled_by_[j] == kFromLeft) set_lane(spring_, j, lane(estimate_[3], j - 1));
-      if (scaled_by_[j - 1] == kFromRight) set_lane(spring_, j, lane(estimate_[2], j));
-    }
   }
 
   Config config_;
@@ -609,15 +488,8 @@ class ChainEstimator {
   Registers<kSpringRegisters> estimate_[4]{};
   Registers<kSpringRegisters> spring_{};
   detail::Storage<bool, N> valid_{};
-  // 1 in the lanes of a DOF whose force was non-zero at a sample since t0 (and in the lanes
-  // beyond the last DOF), 0 where its system is homogeneous; whether all are 1.
-  Registers<kRegisters> forced_{};
-  bool all_forced_ = false;
-  // propagate(): the masses from the left and their distance to the forced DOF [DOF], and how
-  // each DOF has its scale (Scale).
-  detail::Storage<Scalar, N> left_mass_{};
-  detail::Storage<int, N> left_reach_{};
-  detail::Storage<std::int8_t, N> scaled_by_{};
+  // Which DOF are forced, and the scale of the others (file comment, "One force").
+  detail::OneForce<Scalar, kLanes, kRegisters, N> one_force_{};
 };
 
 }  // namespace algid
