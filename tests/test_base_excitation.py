@@ -57,6 +57,14 @@ def test_record_without_force_nor_support_motion_is_refused(tmp_path):
         Recording(t=T_S, u=None, a=np.ones((200, 2)))
 
 
+def test_a_support_motion_alone_is_refused(tmp_path):
+    """Found by the reader's fuzzing: a0 and no DOF's motion (nor force) is one clear line."""
+    path = tmp_path / "support.csv"
+    _shake_table_csv(path, {"t": T_S, "a0": T_S})
+    with pytest.raises(RecordingError, match=r"missing columns a1..an \(or velocities v1..vn"):
+        load_recording(path)
+
+
 def test_two_support_motions_are_refused(tmp_path):
     path = tmp_path / "two.csv"
     _shake_table_csv(path, {"t": T_S, "a0": T_S, "x0": T_S, "a1": T_S})

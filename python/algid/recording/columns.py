@@ -180,7 +180,7 @@ def _complete(groups: dict[str, dict[int, int]], source: str, base: bool = False
             f"{source}: missing force columns u1..un (or the support's acceleration a0 of a base-excited record)"
         )
     if not motions:
-        n = max(groups["u"])
+        n = max(groups["u"]) if groups["u"] else "n"  # a support motion alone says nothing of n
         raise RecordingError(f"{source}: missing columns a1..a{n} (or velocities v1..v{n}, or displacements x1..x{n})")
     n = max(groups["u"]) if groups["u"] and not base else max(groups[motions[0]])
     out: dict[str, list[int]] = {}
