@@ -1,8 +1,8 @@
-// libFuzzer target: ChainEstimator (update(), run(), record()) and ContinuousEstimator (update())
+// libFuzzer target: ChainEstimator (update(), run(), record()) and WeakFormContinuousEstimator (update())
 // fed arbitrary doubles between stretches of a closed-form chain record (SineChainN), built with
 // -fsanitize=fuzzer,address,undefined (CMake option ALGID_BUILD_FUZZ, clang only;
-// tools/fuzz_estimators.sh builds and runs it). The input is a program:
-//   byte 0: the estimator: ChainEstimator<Dynamic> or ContinuousEstimator<Dynamic> of n = 1..4
+// tests/fuzz/estimators.sh builds and runs it). The input is a program:
+//   byte 0: the estimator: ChainEstimator<Dynamic> or WeakFormContinuousEstimator<Dynamic> of n = 1..4
 //           DOF, or ChainEstimator<3> (the SIMD-lane layout);
 //   then ops, each an op byte and its operands:
 //     clean k   1..1024 samples of the record (it continues where the last clean stretch ended)
@@ -11,7 +11,7 @@
 //               denormals, -0, the clean value x 1e6, the clean value)
 //     reset     reseed() / reset()
 //     run k     ChainEstimator::record() (and run()) over k clean samples with specials spliced in;
-//               ContinuousEstimator: the same k samples through update()
+//               WeakFormContinuousEstimator: the same k samples through update()
 // Properties (a violation aborts, like a sanitizer report):
 //   - every sample holding a NaN or an infinity is BadInput, and the chain estimator never
 //     flags valid an estimate that is not a number;
