@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import datetime as _dt
 import functools
 import json
@@ -340,7 +341,54 @@ def machine_info() -> dict:
     return info
 
 
-def main(argv: list[str] | None = None) -> int:
+@dataclasses.dataclass
+class Builds:
+    """The bench binaries' directories: the default build, the wider ones the wheel also ships
+    (algid._core_v3, _core_v4) where the compiler and this CPU run them ({"v3": dir, ...}), and
+    the baseline revision's, built with the same flags ({"": dir, "_v3": dir, ...})."""
+
+    bindir: Path
+    wide_dirs: dict[str, Path]
+    baseline_dirs: dict[str, Path]
+
+
+@dataclasses.dataclass
+class Measurements:
+    """Everything the run measured, before any figure is derived from it."""
+
+    configs: dict[str, dict[str, dict]]
+    other_isas: list[str]
+    interleaved: dict[str, dict]
+    flops: list[dict]
+    peak_default: list[dict]
+    peak_wide: dict[str, list[dict]]
+    accuracy: list[dict]
+    load_before: tuple[float, float, float]
+    load_after: tuple[float, float, float]
+    continuous_note: str
+
+
+@dataclasses.dataclass
+class Derived:
+    """The figures computed from the measurements (flops, peak, bounds, ratios)."""
+
+    flops_per_dof: dict[int, dict]
+    rls_flops: float | None
+    peak: dict[str, dict]
+    bound: dict[str, dict]
+    run_cpp: str
+    rls_ratio: dict[str, float]
+    rls_ratio_instructions: dict[str, float]
+    runtime_over_fixed: dict[str, dict]
+    after_over_before: dict[str, dict]
+
+
+def figure(configs: dict, config: str, n: int) -> dict:
+    """The figures of `config` at `n`, {} where that configuration or size was not measured."""
+    return configs.get(config, {}).get(str(n), {})
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--build-dir", type=Path, default=ROOT / "build" / "bench")
     ap.add_argument("--quick", action="store_true", help="3 windows, no callgrind, no x86-64-v3/v4 builds")
@@ -357,96 +405,104 @@ def main(argv: list[str] | None = None) -> int:
         "every round (configurations baseline_*): before/after figures from one run",
     )
     args = ap.parse_args(argv)
-    windows = 3 if args.quick else 5
     if args.quick:
         args.rounds = 1
-    load_before = os.getloadavg()
+    return args
 
+
+def build_wide(args: argparse.Namespace) -> dict[str, Path]:
+    """The -march=x86-64-v3 / -v4 builds this CPU runs (none with --quick or --no-wide)."""
+    wide_dirs: dict[str, Path] = {}
+    if args.quick or args.no_wide:
+        return wide_dirs
+    import algid._core as core
+
+    for level in ("v3", "v4"):
+        if not core.cpu_supports(f"x86-64-{level}"):
+            continue
+        print(
+            f"building bench/cpp (Release, -O3 -march=x86-64-{level} -ffp-contract=off: algid._core_{level}'s "
+            "flags) ...",
+            flush=True,
+        )
+        wide_dirs[level] = cmake_build(
+            args.build_dir / f"x86-64-{level}",
+            ["bench_per_sample", "peak_flops"],
+            f"-march=x86-64-{level} -ffp-contract=off",
+        )
+    return wide_dirs
+
+
+def build_baseline(args: argparse.Namespace, wide_dirs: dict[str, Path]) -> dict[str, Path]:
+    """The --baseline revision's bench, with the default flags and those of every wide build."""
+    baseline_dirs: dict[str, Path] = {}
+    if not args.baseline:
+        return baseline_dirs
+    source = baseline_source(args.baseline, args.build_dir)
+    print(f"building bench/cpp of {args.baseline} (the baseline) ...", flush=True)
+    baseline_dirs[""] = cmake_build(args.build_dir / "baseline-default", ["bench_per_sample"], source=source)
+    for level in wide_dirs:
+        baseline_dirs[f"_{level}"] = cmake_build(
+            args.build_dir / f"baseline-x86-64-{level}",
+            ["bench_per_sample"],
+            f"-march=x86-64-{level} -ffp-contract=off",
+            source=source,
+        )
+    return baseline_dirs
+
+
+def build_benches(args: argparse.Namespace) -> Builds:
     targets = ["bench_per_sample", "flop_count", "peak_flops", "float_accuracy"]
     print("building bench/cpp (Release, -O3, no -march) ...", flush=True)
     bindir = cmake_build(args.build_dir / "default", targets)
-    # The wider builds the wheel also ships (algid._core_v3, _core_v4), where the compiler and
-    # this CPU can run them: {"v3": bench dir, ...}.
-    wide_dirs: dict[str, Path] = {}
-    if not (args.quick or args.no_wide):
-        import algid._core as core
+    wide_dirs = build_wide(args)
+    return Builds(bindir, wide_dirs, build_baseline(args, wide_dirs))
 
-        for level in ("v3", "v4"):
-            if not core.cpu_supports(f"x86-64-{level}"):
-                continue
-            print(
-                f"building bench/cpp (Release, -O3 -march=x86-64-{level} -ffp-contract=off: algid._core_{level}'s "
-                "flags) ...",
-                flush=True,
-            )
-            wide_dirs[level] = cmake_build(
-                args.build_dir / f"x86-64-{level}",
-                ["bench_per_sample", "peak_flops"],
-                f"-march=x86-64-{level} -ffp-contract=off",
-            )
 
-    # The baseline revision's C++ bench, built with the same flags: {"": dir, "v3": dir, ...}.
-    baseline_dirs: dict[str, Path] = {}
-    if args.baseline:
-        source = baseline_source(args.baseline, args.build_dir)
-        print(f"building bench/cpp of {args.baseline} (the baseline) ...", flush=True)
-        baseline_dirs[""] = cmake_build(args.build_dir / "baseline-default", ["bench_per_sample"], source=source)
-        for level in wide_dirs:
-            baseline_dirs[f"_{level}"] = cmake_build(
-                args.build_dir / f"baseline-x86-64-{level}",
-                ["bench_per_sample"],
-                f"-march=x86-64-{level} -ffp-contract=off",
-                source=source,
-            )
-
-    configs: dict[str, dict[str, dict]] = {}
-
-    def put(config: str, n: int, figures: dict) -> None:
-        configs.setdefault(config, {})[str(n)] = figures
-
-    # Rounds: C++ and Python timed back to back, `rounds` times. The machine is shared (other
-    # jobs come and go, and its speed moves by tens of percent between rounds), so each figure
-    # keeps the round with the lowest median, p99 from that round, max = the worst over all
-    # rounds, max_path = the best over all rounds; `round_medians` shows the spread.
-    rounds: dict[tuple[str, int], list[dict]] = {}
-
-    def add(config: str, n: int, figures: dict) -> None:
-        rounds.setdefault((config, n), []).append(figures)
-
-    py_reps = 2 if args.quick else 3
+def other_python_isas() -> list[str]:
+    """The instruction-set builds of algid the CPU runs besides the default one
+    (reported as python_run_double_<isa>)."""
     import algid
     from algid.estimator import chain_core
 
-    other_isas = []  # the builds the CPU runs besides the default one (python_run_double_<isa>)
+    other_isas = []
     for isa in ("x86-64", "x86-64-v3", "x86-64-v4"):
         try:
             if isa != algid.ISA and chain_core(isa):
                 other_isas.append(isa)
         except (RuntimeError, ValueError):
             pass
-    signals = {n: load_signals(bindir / "bench_per_sample", n, 4000) for n in SIZES}
-    for r in range(args.rounds):
-        print(f"round {r + 1}/{args.rounds}: C++ (steady_clock), Python update()/run() ...", flush=True)
-        for row in json_lines([str(bindir / "bench_per_sample"), "--windows", str(windows)]):
+    return other_isas
+
+
+def time_cpp_round(builds: Builds, windows: int, add) -> None:
+    """One round of every C++ bench binary (default, wide, baseline), rows passed to `add`."""
+    binaries = [("", builds.bindir, "")]
+    binaries += [("", wide_dir, f"_{level}") for level, wide_dir in builds.wide_dirs.items()]
+    binaries += [("baseline_", base_dir, suffix) for suffix, base_dir in builds.baseline_dirs.items()]
+    for prefix, bench_dir, suffix in binaries:
+        for row in json_lines([str(bench_dir / "bench_per_sample"), "--windows", str(windows)]):
             add(
-                f"{row['config']}_{row['scalar']}",
+                f"{prefix}{row['config']}_{row['scalar']}{suffix}",
                 row["n"],
                 {k: v for k, v in row.items() if k not in ("config", "n", "scalar")},
             )
-        for level, wide_dir in wide_dirs.items():
-            for row in json_lines([str(wide_dir / "bench_per_sample"), "--windows", str(windows)]):
-                add(
-                    f"{row['config']}_{row['scalar']}_{level}",
-                    row["n"],
-                    {k: v for k, v in row.items() if k not in ("config", "n", "scalar")},
-                )
-        for suffix, base_dir in baseline_dirs.items():
-            for row in json_lines([str(base_dir / "bench_per_sample"), "--windows", str(windows)]):
-                add(
-                    f"baseline_{row['config']}_{row['scalar']}{suffix}",
-                    row["n"],
-                    {k: v for k, v in row.items() if k not in ("config", "n", "scalar")},
-                )
+
+
+def time_rounds(
+    args: argparse.Namespace, builds: Builds, signals: dict, other_isas: list[str]
+) -> dict[tuple[str, int], list[dict]]:
+    """C++ and Python timed back to back, `args.rounds` times: {(config, n): [figures per round]}."""
+    windows = 3 if args.quick else 5
+    py_reps = 2 if args.quick else 3
+    rounds: dict[tuple[str, int], list[dict]] = {}
+
+    def add(config: str, n: int, figures: dict) -> None:
+        rounds.setdefault((config, n), []).append(figures)
+
+    for r in range(args.rounds):
+        print(f"round {r + 1}/{args.rounds}: C++ (steady_clock), Python update()/run() ...", flush=True)
+        time_cpp_round(builds, windows, add)
         for n in SIZES:
             a, u = signals[n]
             for key, f in python_figures(a[:2000], u[:2000], py_reps).items():
@@ -454,6 +510,15 @@ def main(argv: list[str] | None = None) -> int:
             for isa in other_isas:
                 for key, f in python_figures(a[:2000], u[:2000], py_reps, isa).items():
                     add(f"{key}_double_{isa}", n, f)
+    return rounds
+
+
+def best_of_rounds(rounds: dict[tuple[str, int], list[dict]]) -> dict[str, dict[str, dict]]:
+    """The machine is shared (other jobs come and go, and its speed moves by tens of percent
+    between rounds), so each figure keeps the round with the lowest median, p99 from that round,
+    max = the worst over all rounds, max_path = the best over all rounds; `round_medians` shows
+    the spread. Returns {config: {str(n): figures}}."""
+    configs: dict[str, dict[str, dict]] = {}
     for (config, n), rows in rounds.items():
         best = dict(min(rows, key=lambda f: f["ns_per_dof_sample_median"]))
         best["round_medians"] = [f["ns_per_dof_sample_median"] for f in rows]
@@ -463,93 +528,116 @@ def main(argv: list[str] | None = None) -> int:
             best["max"] = max(f["max"] for f in rows)
         if all(f.get("max_path") is not None for f in rows):
             best["max_path"] = min(f["max_path"] for f in rows)
-        put(config, n, best)
+        configs.setdefault(config, {})[str(n)] = best
+    return configs
 
-    have_valgrind = shutil.which("valgrind") is not None and not (args.quick or args.no_callgrind)
+
+def count_instructions(args: argparse.Namespace, builds: Builds, configs: dict) -> None:
+    """Fill in instructions_per_dof_sample (None where callgrind did not run)."""
     for by_n in configs.values():
-        for _n_str, fig in by_n.items():
+        for fig in by_n.values():
             fig["instructions_per_dof_sample"] = None
-    if have_valgrind:
-        print("counting instructions (callgrind) ...", flush=True)
-        for subject in [c for c in ("default", "batch", "continuous", "rls") if f"{c}_double" in configs]:
-            for scalar in ("double", "float"):
-                for n in SIZES:
-                    ipds = callgrind_instructions(bindir / "bench_per_sample", subject, n, scalar)
-                    configs[f"{subject}_{scalar}"][str(n)]["instructions_per_dof_sample"] = ipds
-        if "v3" in wide_dirs:  # valgrind 3.19 runs AVX2 code, not AVX-512
-            for subject in ("default", "batch"):
-                for n in SIZES:
-                    ipds = callgrind_instructions(wide_dirs["v3"] / "bench_per_sample", subject, n, "double")
-                    configs[f"{subject}_double_v3"][str(n)]["instructions_per_dof_sample"] = ipds
+    if shutil.which("valgrind") is None or args.quick or args.no_callgrind:
+        return
+    print("counting instructions (callgrind) ...", flush=True)
+    for subject in [c for c in ("default", "batch", "continuous", "rls") if f"{c}_double" in configs]:
+        for scalar in ("double", "float"):
+            for n in SIZES:
+                ipds = callgrind_instructions(builds.bindir / "bench_per_sample", subject, n, scalar)
+                configs[f"{subject}_{scalar}"][str(n)]["instructions_per_dof_sample"] = ipds
+    if "v3" in builds.wide_dirs:  # valgrind 3.19 runs AVX2 code, not AVX-512
+        for subject in ("default", "batch"):
+            for n in SIZES:
+                ipds = callgrind_instructions(builds.wide_dirs["v3"] / "bench_per_sample", subject, n, "double")
+                configs[f"{subject}_double_v3"][str(n)]["instructions_per_dof_sample"] = ipds
 
-    continuous_note = (
-        "ContinuousEstimator<N, Scalar> with its default configuration (K = 4 staggered 0.5 s "
-        "weak-form windows, joint estimate, change detection on), one uninterrupted signal"
-        if "continuous_double" in configs
-        else "algid::ContinuousEstimator is not in the core (cpp/include/algid/continuous_estimator.hpp "
+
+def continuous_note(configs: dict) -> str:
+    if "continuous_double" in configs:
+        return (
+            "ContinuousEstimator<N, Scalar> with its default configuration (K = 4 staggered 0.5 s "
+            "weak-form windows, joint estimate, change detection on), one uninterrupted signal"
+        )
+    return (
+        "algid::ContinuousEstimator is not in the core (cpp/include/algid/continuous_estimator.hpp "
         "missing at build time): not measured"
     )
 
+
+def time_numpy_reference(args: argparse.Namespace, configs: dict, signals: dict) -> dict[str, dict]:
+    """The numpy reference's configurations (added to `configs`); returns the interleaved ratios."""
     print("timing the numpy reference ...", flush=True)
     for n in SIZES:
-        put(
-            "numpy_reference_cached_weights_double",
-            n,
-            numpy_reference_figures(*signals[n], (1000, 4000), cached_weights=True, reps=2 if args.quick else 6),
+        configs.setdefault("numpy_reference_cached_weights_double", {})[str(n)] = numpy_reference_figures(
+            *signals[n], (1000, 4000), cached_weights=True, reps=2 if args.quick else 6
         )
     print("numpy reference and Python run() back to back ...", flush=True)
     interleaved = {str(n): interleaved_numpy_ratio(*signals[n], reps=3 if args.quick else 8) for n in SIZES}
     # As shipped (reference.quadrature_weights recomputed per signal: a fixed ~0.25 s x 6n).
-    put("numpy_reference_double", 3, numpy_reference_figures(*signals[3], (1000, 4000), cached_weights=False, reps=1))
+    configs.setdefault("numpy_reference_double", {})["3"] = numpy_reference_figures(
+        *signals[3], (1000, 4000), cached_weights=False, reps=1
+    )
+    return interleaved
 
+
+def measure(args: argparse.Namespace, builds: Builds, load_before: tuple) -> Measurements:
+    """Every timing, count and accuracy figure of the run (`load_before`: before the builds)."""
+    other_isas = other_python_isas()
+    signals = {n: load_signals(builds.bindir / "bench_per_sample", n, 4000) for n in SIZES}
+    configs = best_of_rounds(time_rounds(args, builds, signals, other_isas))
+    count_instructions(args, builds, configs)
+    interleaved = time_numpy_reference(args, configs, signals)
     print("counting flops, measuring peak and float accuracy ...", flush=True)
-    flops = json_lines([str(bindir / "flop_count")])
-    peak_default = json_lines([str(bindir / "peak_flops")])
-    peak_wide = {level: json_lines([str(d / "peak_flops")]) for level, d in wide_dirs.items()}
-    accuracy = json_lines([str(bindir / "float_accuracy")])
-    load_after = os.getloadavg()
+    flops = json_lines([str(builds.bindir / "flop_count")])
+    peak_default = json_lines([str(builds.bindir / "peak_flops")])
+    peak_wide = {level: json_lines([str(d / "peak_flops")]) for level, d in builds.wide_dirs.items()}
+    accuracy = json_lines([str(builds.bindir / "float_accuracy")])
+    return Measurements(
+        configs=configs,
+        other_isas=other_isas,
+        interleaved=interleaved,
+        flops=flops,
+        peak_default=peak_default,
+        peak_wide=peak_wide,
+        accuracy=accuracy,
+        load_before=load_before,
+        load_after=os.getloadavg(),
+        continuous_note=continuous_note(configs),
+    )
 
-    # ---- derived figures --------------------------------------------------------------------
-    def fig(config: str, n: int) -> dict:
-        return configs.get(config, {}).get(str(n), {})
 
-    flops_per_dof = {r["n"]: r for r in flops if r["subject"] == "default"}
-    rls_flops = next((r["flops_per_dof_sample"] for r in flops if r["subject"] == "rls"), None)
+def peak_figures(rows: list[dict]) -> dict:
+    """A build's multiply-add peak: best over lane widths, scalar (1 lane), float."""
 
-    def best_peak(rows: list[dict], scalar: str) -> float | None:
+    def best_peak(scalar: str) -> float | None:
         vals = [r["gflops"] for r in rows if r.get("scalar") == scalar]
         return max(vals) if vals else None
 
-    def scalar_peak(rows: list[dict], scalar: str) -> float | None:
+    def scalar_peak(scalar: str) -> float | None:
         vals = [r["gflops"] for r in rows if r.get("scalar") == scalar and r.get("lanes") == 1]
         return vals[0] if vals else None
 
-    peak = {
-        "default_flags": {
-            "isa": next((r["isa"] for r in peak_default if "isa" in r), None),
-            "double_gflops": best_peak(peak_default, "double"),
-            "double_scalar_gflops": scalar_peak(peak_default, "double"),
-            "float_gflops": best_peak(peak_default, "float"),
-            "rows": [r for r in peak_default if "lanes" in r],
-        }
+    return {
+        "isa": next((r["isa"] for r in rows if "isa" in r), None),
+        "double_gflops": best_peak("double"),
+        "double_scalar_gflops": scalar_peak("double"),
+        "float_gflops": best_peak("float"),
+        "rows": [r for r in rows if "lanes" in r],
     }
-    for level, rows in peak_wide.items():
-        peak[f"x86-64-{level}"] = {
-            "isa": next((r["isa"] for r in rows if "isa" in r), None),
-            "double_gflops": best_peak(rows, "double"),
-            "double_scalar_gflops": scalar_peak(rows, "double"),
-            "float_gflops": best_peak(rows, "float"),
-            "rows": [r for r in rows if "lanes" in r],
-        }
-    bound = {}
-    # The lane layout (n >= 3) computes whole registers: lane_slots lanes for n DOF, the padding
-    # lanes included (n = 3 in 4 lanes: 4/3 of the useful flops). Counted flops are the useful
-    # ones; the bound of a build uses what that build executes.
+
+
+def lower_bound(m: Measurements, flops_per_dof: dict, peak: dict, wide_levels: list[str]) -> dict[str, dict]:
+    """Counted flops over each build's peak, per n. The lane layout (n >= 3) computes whole
+    registers: lane_slots lanes for n DOF, the padding lanes included (n = 3 in 4 lanes: 4/3 of
+    the useful flops). Counted flops are the useful ones; the bound of a build uses what that
+    build executes."""
+    fig = functools.partial(figure, m.configs)
     build_config = {
         "default_flags": "default_double",
         "x86-64-v3": "default_double_v3",
         "x86-64-v4": "default_double_v4",
     }
+    bound = {}
     for n in SIZES:
         f = flops_per_dof.get(n, {}).get("flops_per_dof_sample")
         measured = fig("default_double", n).get("ns_per_dof_sample_median")
@@ -563,103 +651,20 @@ def main(argv: list[str] | None = None) -> int:
                     entry[f"bound_ns_{name}_{kind.replace('_gflops', '')}"] = executed / p[kind]
         if f and measured:
             entry["achieved_gflops"] = f / measured
-        for level in wide_dirs:
+        for level in wide_levels:
             batch_wide = fig(f"batch_double_{level}", n).get("ns_per_dof_sample_median")
             if f and batch_wide:
                 entry[f"measured_ns_batch_{level}"] = batch_wide
                 entry[f"achieved_gflops_batch_{level}"] = f / batch_wide
         bound[str(n)] = entry
+    return bound
 
-    n3 = fig("default_double", 3)
-    n50 = fig("default_double", 50)
-    run_cpp = {"x86-64-v3": "batch_double_v3", "x86-64-v4": "batch_double_v4"}.get(algid.ISA, "default_double")
-    run_cpp = run_cpp if fig(run_cpp, 3) else "default_double"
-    run3 = fig("python_run_double", 3)
-    targets = {
-        "median_ns_per_dof_sample_n3_le_100": {
-            "value": n3.get("ns_per_dof_sample_median"),
-            "limit": 100,
-            "met": (n3.get("ns_per_dof_sample_median") or 1e9) <= 100,
-        },
-        "linear_in_n_n50_per_dof_le_n3": {
-            "n50": n50.get("ns_per_dof_sample_median"),
-            "n3": n3.get("ns_per_dof_sample_median"),
-            "met": (n50.get("ns_per_dof_sample_median") or 1e9) <= (n3.get("ns_per_dof_sample_median") or 0),
-        },
-        # Python run() against the C++ loop it wraps, same build: ChainEstimator::record() blocks
-        # in the wider builds (blocks for n = 1, the lane layout for n >= 3), update() sample by
-        # sample in the baseline build.
-        "python_run_within_1.5x_of_cpp": {
-            str(n): {
-                "isa": algid.ISA,
-                "cpp_config": run_cpp,
-                "ratio": fig("python_run_double", n)["window_min"] / fig(run_cpp, n)["window_min"],
-                "ratio_to_cpp_default_update_median": fig("python_run_double", n)["window_min"]
-                / fig("default_double", n)["ns_per_dof_sample_median"],
-                "met": fig("python_run_double", n)["window_min"] <= 1.5 * fig(run_cpp, n)["window_min"],
-            }
-            for n in SIZES
-            if fig(run_cpp, n)
-        },
-        "python_run_at_least_50x_faster_than_numpy_reference": {
-            str(n): {
-                "isa": algid.ISA,
-                # the figure: numpy reference and run() timed back to back, median over repetitions
-                "ratio_interleaved_median": interleaved[str(n)]["ratio_median"],
-                "ratio_interleaved_min": interleaved[str(n)]["ratio_min"],
-                # the same from the separate measurements (numpy timed after every round)
-                "ratio_marginal_cached": fig("numpy_reference_cached_weights_double", n)["marginal_ns_per_dof_sample"]
-                / fig("python_run_double", n)["window_min"],
-                "ratio_whole_call_cached": fig("numpy_reference_cached_weights_double", n)["ns_per_dof_sample_median"]
-                / fig("python_run_double", n)["window_min"],
-                **(
-                    {
-                        "ratio_marginal_cached_x86-64_build": fig("numpy_reference_cached_weights_double", n)[
-                            "marginal_ns_per_dof_sample"
-                        ]
-                        / fig("python_run_double_x86-64", n)["window_min"]
-                    }
-                    if fig("python_run_double_x86-64", n)
-                    else {}
-                ),
-            }
-            for n in SIZES
-        },
-        "max_within_5x_of_median": {
-            str(n): {
-                "max_over_median": fig("default_double", n)["max"]
-                / fig("default_double", n)["ns_per_dof_sample_median"],
-                "max_path_over_median": fig("default_double", n)["max_path"]
-                / fig("default_double", n)["ns_per_dof_sample_median"],
-            }
-            for n in SIZES
-        },
-    }
-    as_shipped = fig("numpy_reference_double", 3)
-    if as_shipped and run3:
-        targets["python_run_at_least_50x_faster_than_numpy_reference"]["3"]["ratio_whole_call_as_shipped"] = (
-            as_shipped["ns_per_dof_sample_median"] / run3["window_min"]
-        )
-    for t in targets["python_run_at_least_50x_faster_than_numpy_reference"].values():
-        t["met"] = t["ratio_interleaved_median"] >= 50
-    for t in targets["max_within_5x_of_median"].values():
-        t["met_raw_max"] = t["max_over_median"] <= 5
-        t["met_path_max"] = t["max_path_over_median"] <= 5
-    rls_ratio = {
-        str(n): fig("default_double", n)["ns_per_dof_sample_median"] / fig("rls_double", n)["ns_per_dof_sample_median"]
-        for n in SIZES
-    }
-    rls_ratio_instructions = {
-        str(n): fig("default_double", n)["instructions_per_dof_sample"]
-        / fig("rls_double", n)["instructions_per_dof_sample"]
-        for n in SIZES
-        if fig("default_double", n).get("instructions_per_dof_sample")
-        and fig("rls_double", n).get("instructions_per_dof_sample")
-    }
 
-    # The run-time sized estimator against the fixed-size one at the same n, same build and run.
+def runtime_over_fixed_ratios(m: Measurements, wide_levels: list[str]) -> dict[str, dict]:
+    """The run-time sized estimator against the fixed-size one at the same n, same build and run."""
+    fig = functools.partial(figure, m.configs)
     runtime_over_fixed = {}
-    for suffix in ["", *(f"_{level}" for level in wide_dirs)]:
+    for suffix in ["", *(f"_{level}" for level in wide_levels)]:
         for scalar in ("double", "float"):
             ratios = {
                 str(n): fig(f"dynamic_{scalar}{suffix}", n)["ns_per_dof_sample_median"]
@@ -669,7 +674,7 @@ def main(argv: list[str] | None = None) -> int:
             }
             if ratios:
                 runtime_over_fixed[f"update_{scalar}{suffix}"] = ratios
-    for isa in [None, *other_isas]:
+    for isa in [None, *m.other_isas]:
         suffix = f"_{isa}" if isa else ""
         runtime_over_fixed[f"python_run{suffix}"] = {
             str(n): fig(f"python_run_dynamic_double{suffix}", n)["window_min"]
@@ -677,12 +682,12 @@ def main(argv: list[str] | None = None) -> int:
             for n in SIZES
             if fig(f"python_run_dynamic_double{suffix}", n)
         }
-    targets["runtime_within_1.5x_of_fixed"] = {
-        key: {"worst": max(ratios.values()), "met": max(ratios.values()) <= 1.5}
-        for key, ratios in runtime_over_fixed.items()
-        if ratios
-    }
-    # After over before, where a baseline was timed: < 1 is faster now.
+    return runtime_over_fixed
+
+
+def after_over_before_ratios(configs: dict) -> dict[str, dict]:
+    """After over before, where a baseline was timed: < 1 is faster now."""
+    fig = functools.partial(figure, configs)
     after_over_before = {}
     for config in sorted(configs):
         if config.startswith("baseline_") and config[len("baseline_") :] in configs:
@@ -692,85 +697,215 @@ def main(argv: list[str] | None = None) -> int:
                 for n in SIZES
                 if fig(now, n) and fig(config, n)
             }
+    return after_over_before
 
-    single = [r for r in accuracy if r["scalar"] in ("double", "float")]
-    float_1k = [r for r in single if r["scalar"] == "float" and r["rate_hz"] == 1000]
-    targets["float_within_1pct_at_t0_plus_0.1s_1kHz"] = {
-        r["source"]: {"max_rel_error": r["max_rel_error_at"]["0.10"], "met": r["max_rel_error_at"]["0.10"] <= 0.01}
-        for r in float_1k
+
+def derive(m: Measurements, builds: Builds) -> Derived:
+    import algid
+
+    fig = functools.partial(figure, m.configs)
+    wide_levels = list(builds.wide_dirs)
+    flops_per_dof = {r["n"]: r for r in m.flops if r["subject"] == "default"}
+    peak = {"default_flags": peak_figures(m.peak_default)}
+    for level, rows in m.peak_wide.items():
+        peak[f"x86-64-{level}"] = peak_figures(rows)
+    run_cpp = {"x86-64-v3": "batch_double_v3", "x86-64-v4": "batch_double_v4"}.get(algid.ISA, "default_double")
+    return Derived(
+        flops_per_dof=flops_per_dof,
+        rls_flops=next((r["flops_per_dof_sample"] for r in m.flops if r["subject"] == "rls"), None),
+        peak=peak,
+        bound=lower_bound(m, flops_per_dof, peak, wide_levels),
+        run_cpp=run_cpp if fig(run_cpp, 3) else "default_double",
+        rls_ratio={
+            str(n): fig("default_double", n)["ns_per_dof_sample_median"]
+            / fig("rls_double", n)["ns_per_dof_sample_median"]
+            for n in SIZES
+        },
+        rls_ratio_instructions={
+            str(n): fig("default_double", n)["instructions_per_dof_sample"]
+            / fig("rls_double", n)["instructions_per_dof_sample"]
+            for n in SIZES
+            if fig("default_double", n).get("instructions_per_dof_sample")
+            and fig("rls_double", n).get("instructions_per_dof_sample")
+        },
+        runtime_over_fixed=runtime_over_fixed_ratios(m, wide_levels),
+        after_over_before=after_over_before_ratios(m.configs),
+    )
+
+
+def python_run_targets(m: Measurements, d: Derived) -> dict[str, dict]:
+    """Python run() against the C++ loop it wraps, same build: ChainEstimator::record() blocks in
+    the wider builds (blocks for n = 1, the lane layout for n >= 3), update() sample by sample in
+    the baseline build."""
+    import algid
+
+    fig = functools.partial(figure, m.configs)
+    return {
+        str(n): {
+            "isa": algid.ISA,
+            "cpp_config": d.run_cpp,
+            "ratio": fig("python_run_double", n)["window_min"] / fig(d.run_cpp, n)["window_min"],
+            "ratio_to_cpp_default_update_median": fig("python_run_double", n)["window_min"]
+            / fig("default_double", n)["ns_per_dof_sample_median"],
+            "met": fig("python_run_double", n)["window_min"] <= 1.5 * fig(d.run_cpp, n)["window_min"],
+        }
+        for n in SIZES
+        if fig(d.run_cpp, n)
     }
 
-    result = {
-        "meta": {
-            "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-            "command": "python bench/per_sample.py"
-            + (" --quick" if args.quick else "")
-            + (f" --baseline {args.baseline}" if args.baseline else ""),
-            "machine": machine_info(),
-            "loadavg_before": load_before,
-            "loadavg_after": load_after,
-            "build": {
-                "default": "CMAKE_BUILD_TYPE=Release (-O3 -DNDEBUG), no -march: the flags of the "
-                "wheel's baseline module algid._core (which adds -fPIC -fvisibility=hidden)",
-                "v3": "same plus -march=x86-64-v3 -ffp-contract=off: the flags of algid._core_v3, which "
-                "algid imports on CPUs with AVX2/FMA (reported as *_v3)",
-                "v4": "same with -march=x86-64-v4: algid._core_v4, imported on CPUs with AVX-512 (reported as *_v4)",
-            },
-            "python_isa": algid.ISA,
-            "signals": "closed-form multisine chain (tests/cpp/closed_form.hpp SineChain), Table 1 for n = 3, 1 kHz",
-            "units": "ns per DOF-sample (ns_per_sample_median: per whole sample of all n DOF)",
-            "rounds": args.rounds,
-            "definitions": {
-                "ns_per_dof_sample_median": "median over 16-sample batches of the mean time per sample, / n; "
-                "the lowest of the rounds (round_medians lists all)",
-                "p99": "99th percentile of the same batch means, / n",
-                "max": "worst single update() over all rounds (steady_clock around one call, clock overhead "
-                "subtracted), / n; includes OS interference on this shared machine",
-                "max_path": "max over sample index of the min over windows of the single-update time, / n: "
-                "the worst data-dependent path with interference filtered out",
-                "window_min": "a whole window's batch pass / T, min over windows and rounds: the protocol of "
-                "python_run (whole-record run() call / T, min over calls)",
-                "instructions_per_dof_sample": "callgrind Ir of the update loop (batch: one record() call) "
-                "after 64 warm-up samples (continuous: 400), / (updates n)",
-                "numpy_reference_over_python_run_interleaved": "per repetition: the numpy reference (cached "
-                "weights) at 1000 and 4000 samples (marginal cost) "
-                "and Python run() (min of 5 calls on 2000 samples), "
-                "back to back; the ratio of each repetition",
-                "batch": "ChainEstimator::record() in 16-sample chunks (median, p99, max = slowest chunk) "
-                "and whole windows (window_min), writing every sample's estimates into arrays as the "
-                "Python run() does",
-            },
-            "continuous": continuous_note,
+
+def numpy_targets(m: Measurements) -> dict[str, dict]:
+    """The numpy reference over Python run(), per n."""
+    import algid
+
+    fig = functools.partial(figure, m.configs)
+    targets = {}
+    for n in SIZES:
+        run = fig("python_run_double", n)["window_min"]
+        cached = fig("numpy_reference_cached_weights_double", n)
+        entry = {
+            "isa": algid.ISA,
+            # the figure: numpy reference and run() timed back to back, median over repetitions
+            "ratio_interleaved_median": m.interleaved[str(n)]["ratio_median"],
+            "ratio_interleaved_min": m.interleaved[str(n)]["ratio_min"],
+            # the same from the separate measurements (numpy timed after every round)
+            "ratio_marginal_cached": cached["marginal_ns_per_dof_sample"] / run,
+            "ratio_whole_call_cached": cached["ns_per_dof_sample_median"] / run,
+        }
+        if fig("python_run_double_x86-64", n):
+            entry["ratio_marginal_cached_x86-64_build"] = (
+                cached["marginal_ns_per_dof_sample"] / fig("python_run_double_x86-64", n)["window_min"]
+            )
+        targets[str(n)] = entry
+    as_shipped = fig("numpy_reference_double", 3)
+    run3 = fig("python_run_double", 3)
+    if as_shipped and run3:
+        targets["3"]["ratio_whole_call_as_shipped"] = as_shipped["ns_per_dof_sample_median"] / run3["window_min"]
+    for t in targets.values():
+        t["met"] = t["ratio_interleaved_median"] >= 50
+    return targets
+
+
+def max_targets(configs: dict) -> dict[str, dict]:
+    """The worst single update() (raw, and its data-dependent path) over the median, per n."""
+    fig = functools.partial(figure, configs)
+    targets = {}
+    for n in SIZES:
+        median = fig("default_double", n)["ns_per_dof_sample_median"]
+        t = {
+            "max_over_median": fig("default_double", n)["max"] / median,
+            "max_path_over_median": fig("default_double", n)["max_path"] / median,
+        }
+        t["met_raw_max"] = t["max_over_median"] <= 5
+        t["met_path_max"] = t["max_path_over_median"] <= 5
+        targets[str(n)] = t
+    return targets
+
+
+def issue5_targets(m: Measurements, d: Derived) -> dict[str, dict]:
+    """Whether this run met issue 5's figures (recorded, never asserted)."""
+    fig = functools.partial(figure, m.configs)
+    n3 = fig("default_double", 3).get("ns_per_dof_sample_median")
+    n50 = fig("default_double", 50).get("ns_per_dof_sample_median")
+    float_1k = [r for r in m.accuracy if r["scalar"] == "float" and r["rate_hz"] == 1000]
+    return {
+        "median_ns_per_dof_sample_n3_le_100": {"value": n3, "limit": 100, "met": (n3 or 1e9) <= 100},
+        "linear_in_n_n50_per_dof_le_n3": {"n50": n50, "n3": n3, "met": (n50 or 1e9) <= (n3 or 0)},
+        "python_run_within_1.5x_of_cpp": python_run_targets(m, d),
+        "python_run_at_least_50x_faster_than_numpy_reference": numpy_targets(m),
+        "max_within_5x_of_median": max_targets(m.configs),
+        "runtime_within_1.5x_of_fixed": {
+            key: {"worst": max(ratios.values()), "met": max(ratios.values()) <= 1.5}
+            for key, ratios in d.runtime_over_fixed.items()
+            if ratios
         },
-        "configurations": configs,
+        "float_within_1pct_at_t0_plus_0.1s_1kHz": {
+            r["source"]: {"max_rel_error": r["max_rel_error_at"]["0.10"], "met": r["max_rel_error_at"]["0.10"] <= 0.01}
+            for r in float_1k
+        },
+    }
+
+
+DEFINITIONS = {
+    "ns_per_dof_sample_median": "median over 16-sample batches of the mean time per sample, / n; "
+    "the lowest of the rounds (round_medians lists all)",
+    "p99": "99th percentile of the same batch means, / n",
+    "max": "worst single update() over all rounds (steady_clock around one call, clock overhead "
+    "subtracted), / n; includes OS interference on this shared machine",
+    "max_path": "max over sample index of the min over windows of the single-update time, / n: "
+    "the worst data-dependent path with interference filtered out",
+    "window_min": "a whole window's batch pass / T, min over windows and rounds: the protocol of "
+    "python_run (whole-record run() call / T, min over calls)",
+    "instructions_per_dof_sample": "callgrind Ir of the update loop (batch: one record() call) "
+    "after 64 warm-up samples (continuous: 400), / (updates n)",
+    "numpy_reference_over_python_run_interleaved": "per repetition: the numpy reference (cached "
+    "weights) at 1000 and 4000 samples (marginal cost) "
+    "and Python run() (min of 5 calls on 2000 samples), "
+    "back to back; the ratio of each repetition",
+    "batch": "ChainEstimator::record() in 16-sample chunks (median, p99, max = slowest chunk) "
+    "and whole windows (window_min), writing every sample's estimates into arrays as the "
+    "Python run() does",
+}
+
+
+def meta(args: argparse.Namespace, m: Measurements) -> dict:
+    import algid
+
+    return {
+        "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "command": "python bench/per_sample.py"
+        + (" --quick" if args.quick else "")
+        + (f" --baseline {args.baseline}" if args.baseline else ""),
+        "machine": machine_info(),
+        "loadavg_before": m.load_before,
+        "loadavg_after": m.load_after,
+        "build": {
+            "default": "CMAKE_BUILD_TYPE=Release (-O3 -DNDEBUG), no -march: the flags of the "
+            "wheel's baseline module algid._core (which adds -fPIC -fvisibility=hidden)",
+            "v3": "same plus -march=x86-64-v3 -ffp-contract=off: the flags of algid._core_v3, which "
+            "algid imports on CPUs with AVX2/FMA (reported as *_v3)",
+            "v4": "same with -march=x86-64-v4: algid._core_v4, imported on CPUs with AVX-512 (reported as *_v4)",
+        },
+        "python_isa": algid.ISA,
+        "signals": "closed-form multisine chain (tests/cpp/closed_form.hpp SineChain), Table 1 for n = 3, 1 kHz",
+        "units": "ns per DOF-sample (ns_per_sample_median: per whole sample of all n DOF)",
+        "rounds": args.rounds,
+        "definitions": DEFINITIONS,
+        "continuous": m.continuous_note,
+    }
+
+
+def result_document(args: argparse.Namespace, m: Measurements, d: Derived, targets: dict) -> dict:
+    return {
+        "meta": meta(args, m),
+        "configurations": m.configs,
         "flops": {
-            "per_dof_sample": {str(k): v for k, v in flops_per_dof.items()},
-            "phases": [r for r in flops if r["subject"].startswith("phase")],
-            "rls_per_dof_sample": rls_flops,
+            "per_dof_sample": {str(k): v for k, v in d.flops_per_dof.items()},
+            "phases": [r for r in m.flops if r["subject"].startswith("phase")],
+            "rls_per_dof_sample": d.rls_flops,
         },
-        "peak": peak,
-        "lower_bound": bound,
-        "ratio_estimator_over_rls": {"time": rls_ratio, "instructions": rls_ratio_instructions},
-        "numpy_reference_over_python_run_interleaved": interleaved,
-        "runtime_over_fixed": runtime_over_fixed,
-        "after_over_before": {"baseline": args.baseline, "ratios": after_over_before},
-        "single_precision": accuracy,
+        "peak": d.peak,
+        "lower_bound": d.bound,
+        "ratio_estimator_over_rls": {"time": d.rls_ratio, "instructions": d.rls_ratio_instructions},
+        "numpy_reference_over_python_run_interleaved": m.interleaved,
+        "runtime_over_fixed": d.runtime_over_fixed,
+        "after_over_before": {"baseline": args.baseline, "ratios": d.after_over_before},
+        "single_precision": m.accuracy,
         "targets": targets,
     }
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(json.dumps(result, indent=1) + "\n")
 
-    # ---- table ---------------------------------------------------------------------------------
+
+def print_configurations(m: Measurements) -> None:
     print(
         f"\nns per DOF-sample (median / p99 / max / max_path), instructions per DOF-sample; "
-        f"load average {load_before[0]:.1f} -> {load_after[0]:.1f} on {os.cpu_count()} cores"
+        f"load average {m.load_before[0]:.1f} -> {m.load_after[0]:.1f} on {os.cpu_count()} cores"
     )
     header = f"{'configuration':34s} " + " ".join(f"{'n=' + str(n):>30s}" for n in SIZES)
     print(header)
-    for config in sorted(configs):
+    for config in sorted(m.configs):
         cells = []
         for n in SIZES:
-            f = configs[config].get(str(n))
+            f = m.configs[config].get(str(n))
             if not f:
                 cells.append(f"{'-':>30s}")
                 continue
@@ -780,24 +915,43 @@ def main(argv: list[str] | None = None) -> int:
             ins = f.get("instructions_per_dof_sample")
             cells.append(f"{'/'.join(parts) + (f' [{ins:.0f}i]' if ins else ''):>30s}")
         print(f"{config:34s} " + " ".join(cells))
+
+
+def print_flops_and_peak(d: Derived) -> None:
     print(
         "\nflops per DOF-sample (counted): "
-        + ", ".join(f"n={n}: {flops_per_dof[n]['flops_per_dof_sample']:.0f}" for n in SIZES if n in flops_per_dof)
-        + f"; RLS: {rls_flops:.0f}"
+        + ", ".join(f"n={n}: {d.flops_per_dof[n]['flops_per_dof_sample']:.0f}" for n in SIZES if n in d.flops_per_dof)
+        + f"; RLS: {d.rls_flops:.0f}"
     )
-    for name, p in peak.items():
+    for name, p in d.peak.items():
         print(
             f"peak ({name}, {p['isa']}): double {p['double_gflops']:.1f} GFLOP/s "
             f"(scalar {p['double_scalar_gflops']:.1f}), float {p['float_gflops']:.1f} GFLOP/s"
         )
-    b3 = bound["3"]
+    b3 = d.bound["3"]
     print(
         "lower bound n=3: "
         + ", ".join(f"{k[9:]} {v:.0f} ns" for k, v in b3.items() if k.startswith("bound_ns"))
         + f"; measured {b3['measured_ns']:.0f} ns ({b3.get('achieved_gflops', 0):.1f} GFLOP/s achieved)"
     )
+
+
+def print_ratios(label: str, by_key: dict[str, dict]) -> None:
+    """One line of ratios per configuration key: `key: n=1 0.98x, n=3 ...; key: ...`."""
+    print(
+        label
+        + "; ".join(
+            f"{key}: " + ", ".join(f"n={n} {r:.2f}x" for n, r in ratios.items())
+            for key, ratios in by_key.items()
+            if ratios
+        )
+    )
+
+
+def print_speed_targets(t: dict, d: Derived) -> None:
+    import algid
+
     print("\ntargets (issue 5):")
-    t = targets
     print(
         f"  median n=3 <= 100 ns/DOF-sample: {t['median_ns_per_dof_sample_n3_le_100']['value']:.0f} ns -> "
         f"{'met' if t['median_ns_per_dof_sample_n3_le_100']['met'] else 'NOT met'}"
@@ -807,27 +961,30 @@ def main(argv: list[str] | None = None) -> int:
         f"  linear in n (n=50 per DOF <= n=3): {lin['n50']:.0f} vs {lin['n3']:.0f} -> {'met' if lin['met'] else 'NOT met'}"
     )
     print(
-        f"  Python run() ({algid.ISA} build) / C++ {run_cpp} (whole record, min over repetitions): "
+        f"  Python run() ({algid.ISA} build) / C++ {d.run_cpp} (whole record, min over repetitions): "
         + ", ".join(
             f"n={n}: {v['ratio']:.2f}x{'' if v['met'] else ' (NOT met)'}"
             for n, v in t["python_run_within_1.5x_of_cpp"].items()
         )
     )
+    numpy = t["python_run_at_least_50x_faster_than_numpy_reference"]
     print(
         "  numpy reference / Python run(), back to back (median | min over repetitions): "
         + ", ".join(
-            f"n={n}: {v['ratio_interleaved_median']:.0f}x | {v['ratio_interleaved_min']:.0f}x"
-            for n, v in t["python_run_at_least_50x_faster_than_numpy_reference"].items()
+            f"n={n}: {v['ratio_interleaved_median']:.0f}x | {v['ratio_interleaved_min']:.0f}x" for n, v in numpy.items()
         )
     )
     print(
         "  (timed apart: marginal | whole call: "
         + ", ".join(
-            f"n={n}: {v['ratio_marginal_cached']:.0f}x | {v['ratio_whole_call_cached']:.0f}x"
-            for n, v in t["python_run_at_least_50x_faster_than_numpy_reference"].items()
+            f"n={n}: {v['ratio_marginal_cached']:.0f}x | {v['ratio_whole_call_cached']:.0f}x" for n, v in numpy.items()
         )
         + ")"
     )
+
+
+def print_targets(args: argparse.Namespace, m: Measurements, d: Derived, t: dict) -> None:
+    print_speed_targets(t, d)
     print(
         "  max / median (raw | path): "
         + ", ".join(
@@ -835,31 +992,31 @@ def main(argv: list[str] | None = None) -> int:
             for n, v in t["max_within_5x_of_median"].items()
         )
     )
-    print("  estimator / RLS per DOF-sample: " + ", ".join(f"n={n}: {r:.1f}x" for n, r in rls_ratio.items()))
+    print("  estimator / RLS per DOF-sample: " + ", ".join(f"n={n}: {r:.1f}x" for n, r in d.rls_ratio.items()))
     print(
         "  float at t0 + 0.1 s, 1 kHz: "
         + ", ".join(
             f"{src}: {v['max_rel_error']:.1e}" for src, v in t["float_within_1pct_at_t0_plus_0.1s_1kHz"].items()
         )
     )
-    print(f"  continuous configuration: {continuous_note}")
-    print(
-        "  run-time sized / fixed-size, same n: "
-        + "; ".join(
-            f"{key}: " + ", ".join(f"n={n} {r:.2f}x" for n, r in ratios.items())
-            for key, ratios in runtime_over_fixed.items()
-            if ratios
-        )
-    )
-    if after_over_before:
-        print(
-            f"  after / before ({args.baseline}), median ns per DOF-sample: "
-            + "; ".join(
-                f"{key}: " + ", ".join(f"n={n} {r:.2f}x" for n, r in ratios.items())
-                for key, ratios in after_over_before.items()
-                if ratios
-            )
-        )
+    print(f"  continuous configuration: {m.continuous_note}")
+    print_ratios("  run-time sized / fixed-size, same n: ", d.runtime_over_fixed)
+    if d.after_over_before:
+        print_ratios(f"  after / before ({args.baseline}), median ns per DOF-sample: ", d.after_over_before)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    load_before = os.getloadavg()
+    builds = build_benches(args)
+    measured = measure(args, builds, load_before)
+    derived = derive(measured, builds)
+    targets = issue5_targets(measured, derived)
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    args.output.write_text(json.dumps(result_document(args, measured, derived, targets), indent=1) + "\n")
+    print_configurations(measured)
+    print_flops_and_peak(derived)
+    print_targets(args, measured, derived, targets)
     print(f"\nwrote {args.output.relative_to(ROOT) if args.output.is_relative_to(ROOT) else args.output}")
     return 0
 
