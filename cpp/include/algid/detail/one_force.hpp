@@ -105,7 +105,7 @@ class OneForce {
   /// no forced DOF reaches through valid estimates is NaN. @realtime no allocation, no throw
   template <class Estimates>
   void propagate(Estimates (&estimate)[4]) noexcept {
-    constexpr Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     constexpr int far = std::numeric_limits<int>::max();
     Scalar carried = nan;  // the spring on the right of the last DOF, scaled
     int reach = far;       // DOF from that estimate to its forced DOF
