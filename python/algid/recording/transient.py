@@ -163,10 +163,10 @@ def baseline(u: np.ndarray, dt: float) -> np.ndarray:
     return median_filter(u, size=max(3, int(round(BASELINE_S / dt)) | 1), mode="nearest")
 
 
-def find_hits(u: np.ndarray, dt: float) -> tuple[list[Hit], float]:
+def find_hits(u: np.ndarray, dt: float, base: np.ndarray | None = None) -> tuple[list[Hit], float]:
     """Hits of the force ``u`` (T,) sampled every ``dt`` [s] and the share of the baseline-free
-    force's energy they hold (module docstring)."""
-    r = u - baseline(u, dt)
+    force's energy they hold (module docstring); ``base``: its :func:`baseline`, if at hand."""
+    r = u - (baseline(u, dt) if base is None else base)
     top = float(np.max(np.abs(r)))
     if top == 0.0:
         return [], 0.0
@@ -296,9 +296,9 @@ def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: 
     from .noise import channel
 
     drive = int(np.argmax(np.max(np.abs(u - np.median(u, axis=0)), axis=0)))
-    hits, share = find_hits(u[:, drive], dt)
-    T = u.shape[0]
     base = baseline(u[:, drive], dt)
+    hits, share = find_hits(u[:, drive], dt, base)
+    T = u.shape[0]
     if not is_transient(hits, share, T, float(np.max(np.abs(base - np.median(base))))):
         return None
     segs, pres = segments(hits, T, dt)
