@@ -52,6 +52,7 @@ from .integrals import integrals
 from .linear import LinearFit, fit_linear, force_scale, reconstruct_states
 from .locate import locate, noise_floor
 from .model import ModelVerdict, inertia, model_verdict, physical_uncertainty, transient_response
+from .timing import Timing, on_time
 from .units import SI, diagnosis_units
 from .windows import Prepared, detrend, parseval_weights, prepare, window_length
 
@@ -298,6 +299,7 @@ class Setup:
     hum: list = field(default_factory=list)  # mains lines notched out [Hz]
     transient: object = None  # an impact record's hits and band (algid.recording.transient)
     noise: NoiseLevels | None = None  # the sensor noise behind ``floor`` (:func:`noise_floors`)
+    timing: Timing | None = None  # the channels' skew found, and whether it was undone (:mod:`.timing`)
 
 
 def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
@@ -315,14 +317,18 @@ def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_h
     clock = time.perf_counter()
     rec, hum = without_hum(rec) if notch else (rec, [])
     rec, tr = transient_record(rec, band_hz)
-    a, u, dt = accelerations(rec), rec.u, float(rec.dt)
-    T = a.shape[0]
+    dt, T = float(rec.dt), rec.u.shape[0]
     skip = int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
     if tr is not None:  # the first hit carries the scale: no lead-in past it
         skip = min(skip, tr.hits[0].start)
+    L0 = window_length(dt, 1.0, T - skip)
+    timing = None
+    if tr is None:
+        _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: channel timing")
+        rec, timing = on_time(rec, boundary, L0, skip)
+    a, u = accelerations(rec), rec.u
     _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: linear fit")
     A = integrals(a, dt)
-    L0 = window_length(dt, 1.0, T - skip)
     lin0 = fit_linear(prepare(a, u, dt, L0, boundary, skip, A=A))
     kind, motion = recording_motion(rec)
     order = {"acceleration": 0, "velocity": 1, "displacement": 2}[kind]
@@ -363,6 +369,7 @@ def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_h
         hum=hum,
         transient=tr,
         noise=levels,
+        timing=timing,
     )
 
 
@@ -768,6 +775,7 @@ def diagnose(
             "noise_levels": st.noise,
             "given": named is not None,
             "transient": st.transient.to_json() if st.transient is not None else None,
+            "timing": st.timing.to_json() if st.timing is not None else None,
         },
         units=diagnosis_units(rec.units, recording_motion(rec)[0]),
         recording_units=dict(rec.units),

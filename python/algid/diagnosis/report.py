@@ -70,6 +70,7 @@ def to_json(d) -> dict:
         "combination": _combination_json(d.extra.get("combination")),
         "equation_form": d.extra.get("form", "acceleration"),
         "mains_hum_removed_hz": d.extra.get("mains_hz", []),
+        "channel_timing": d.extra.get("timing"),
         "band": d.band.to_json()
         | {
             "window_bins_kept": int(d.P.band_mask.sum()),
@@ -158,6 +159,19 @@ def _units_lines(d) -> list[str]:
     ]
 
 
+def _timing_lines(timing: dict | None) -> list[str]:
+    """The converter's channel skew, when the record was realigned (:mod:`.timing`)."""
+    if not timing or not timing["realigned"]:
+        return []
+    late = ", ".join(
+        f"{c} {d:+.3f} +- {timing['late_std_samples'][c]:.3f}" for c, d in timing["late_samples"].items()
+    )
+    return [
+        f"  channel skew (a multiplexed converter), undone before the fit [samples late]: {late}",
+        f"    linear-chain gap {timing['gap_before']:.4g} -> {timing['gap_after']:.4g} once realigned",
+    ]
+
+
 def location_text(loc) -> str:
     """``DOF 1`` or ``spring 2`` of an effect's location (``""`` without one)."""
     if not loc:
@@ -177,6 +191,7 @@ def to_text(d, source: str = "") -> str:
     )
     L.append("")
     L.extend(_units_lines(d))
+    L.extend(_timing_lines(d.extra.get("timing")))
     L.append("")
     L.extend(_chain_lines(linear_model(d), d.units, "Linear chain, the windowed equation-error fit", "  "))
     if d.effect != "none":

@@ -1,0 +1,167 @@
+"""Channel timing: the sub-sample skew of a multiplexed converter, found and undone.
+
+A multiplexed ADC samples its channels one after the other: channel ``c`` of a scan holds
+its signal ``delta_c`` samples late (``0 <= delta_c < 1``, one value per channel, the same
+for the whole record). To first order a late force is an input delay and a late sensor a
+sensor low-pass, so left in the record it would be diagnosed as one of them, or as nothing
+the vocabulary knows. What tells the converter apart is its pattern: *several* channels, each
+with its own sub-sample lateness, where an input delay or a sensor's low-pass makes one
+channel late and leaves the rest on time.
+
+The estimate (Gauss-Newton on the delays, variable projection on the chain): every channel
+``c`` but a reference is shifted by ``-delta_c`` (cubic spline), the linear chain is refitted
+on the shifted record (:func:`.linear.fit_linear` on the first pass's windows), and the
+Jacobian of its in-sample equation errors with respect to each delay is taken by finite
+differences of :data:`STEP` samples. The record is realigned only when
+
+* at least :data:`MIN_CHANNELS` channels sit apart from the median lateness by more than
+  :data:`Z_DELAY` of their standard deviations (the converter's pattern, not one late
+  channel),
+* every lateness lies within :data:`MAX_SPREAD` samples of the others (a scan lasts at most
+  one sample period), and
+* the realigned linear chain leaves a withheld gap at most :data:`GAIN` times the record's,
+  and at most :data:`GAIN` times what realigning the latest channel alone leaves (one late
+  channel, however many others its bias moves a little, is an input delay or a sensor's
+  low-pass: the candidates' business).
+
+A record with one force and one response channel has a single relative lateness: a late
+force there *is* an input delay in every respect the record can show, and it is left to the
+candidates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from ..recording import Recording, accelerations
+from ..recording import motion as recording_motion
+from .integrals import integrals
+from .linear import fit_linear
+from .windows import prepare
+
+#: Finite-difference step of the Jacobian [samples].
+STEP = 0.05
+#: Gauss-Newton passes at most, the largest step of one [samples], and the step that ends them.
+PASSES = 6
+MAX_STEP = 0.5
+TOLERANCE = 0.005
+#: A pass that leaves more than this share of the chain's squared in-sample errors ends the search.
+FIRST_GAIN = 0.8
+#: Channels apart from the median lateness that make a converter's pattern.
+MIN_CHANNELS = 2
+#: How far apart, in standard deviations of the estimate, a channel must sit.
+Z_DELAY = 6.0
+#: Largest spread of the latenesses [samples] a scan can have (with the estimate's slack).
+MAX_SPREAD = 1.1
+#: The realigned chain's withheld gap must be at most this fraction of the record's.
+GAIN = 0.7
+
+
+@dataclass
+class Timing:
+    """Channel latenesses found in a record.
+
+    channels : names of the channels, ``u<i>`` (forces) and ``y<i>`` (the recorded motion).
+    late : (C,) lateness of each channel relative to the median one [samples].
+    late_std : (C,) standard deviation of each [samples].
+    gap_before, gap_after : withheld gaps of the linear chain on the record and realigned.
+    realigned : whether the record was realigned (the pattern and the gain held).
+    """
+
+    channels: list[str]
+    late: np.ndarray
+    late_std: np.ndarray
+    gap_before: float
+    gap_after: float
+    realigned: bool
+
+    def to_json(self) -> dict:
+        return {
+            "realigned": self.realigned,
+            "late_samples": {c: float(d) for c, d in zip(self.channels, self.late)},
+            "late_std_samples": {c: float(s) for c, s in zip(self.channels, self.late_std)},
+            "gap_before": self.gap_before,
+            "gap_after": self.gap_after,
+        }
+
+
+def shifted(x: np.ndarray, late: float) -> np.ndarray:
+    """The column ``x`` taken ``late`` samples earlier: a channel recorded that late, on time."""
+    k = np.arange(x.shape[0], dtype=float)
+    return CubicSpline(k, x, extrapolate=True)(k - late)
+
+
+def _channels(rec: Recording) -> tuple[list[tuple[str, int]], np.ndarray]:
+    """The channels a converter sampled (every forced DOF's force, every motion column)."""
+    _, y = recording_motion(rec)
+    forced = np.nonzero(np.any(np.asarray(rec.u) != 0.0, axis=0))[0]
+    return [("u", int(i)) for i in forced] + [("y", i) for i in range(y.shape[1])], y
+
+
+def realign(rec: Recording, late: np.ndarray) -> Recording:
+    """The record with every channel moved ``late[c]`` samples earlier (:func:`_channels` order)."""
+    kind, y = recording_motion(rec)
+    chans, _ = _channels(rec)
+    u, y = np.array(rec.u, dtype=float), np.array(y, dtype=float)
+    for (which, i), d in zip(chans, late):
+        if d != 0.0:
+            x = u if which == "u" else y
+            x[:, i] = shifted(x[:, i], float(d))
+    field = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
+    return replace(rec, u=u, **{field: y})
+
+
+def _fit(rec: Recording, late: np.ndarray, boundary: str, L: int, skip: int):
+    """The linear chain on the record realigned by ``late``: (in-sample errors, withheld gap)."""
+    r = realign(rec, late)
+    a = accelerations(r)
+    P = prepare(a, np.asarray(r.u, dtype=float), float(r.dt), L, boundary, skip, A=integrals(a, float(r.dt)))
+    lin = fit_linear(P)
+    return lin.resid.ravel(), float(np.sqrt(lin.cv.test_sse.sum() / np.sum(P.y**2)))
+
+
+def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing | None:
+    """The latenesses of ``rec``'s channels (module docstring); None with fewer than three
+    channels (one relative lateness is an input delay or a sensor's, not a pattern)."""
+    chans, _ = _channels(rec)
+    C = len(chans)
+    if C < 3:
+        return None
+    late = np.zeros(C)
+    free = np.arange(1, C)  # the first channel is the reference: only differences are seen
+    r0, gap_before = _fit(rec, late, boundary, L, skip)
+    r, J = r0, None
+    for _ in range(PASSES):
+        J = np.stack([(_fit(rec, late + STEP * np.eye(C)[c], boundary, L, skip)[0] - r) / STEP for c in free], 1)
+        step = np.linalg.lstsq(J, -r, rcond=None)[0]
+        step *= min(1.0, MAX_STEP / max(float(np.max(np.abs(step))), 1e-300))
+        late[free] += step
+        r, _ = _fit(rec, late, boundary, L, skip)
+        if float(r @ r) > FIRST_GAIN * float(r0 @ r0):
+            break  # the shifts do not buy what a converter's skew would: no pattern to look for
+        if np.max(np.abs(step)) < TOLERANCE:
+            break
+    dof = max(r.size - free.size, 1)
+    cov = np.linalg.pinv(J.T @ J) * float(r @ r) / dof
+    std = np.zeros(C)
+    std[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    _, gap_after = _fit(rec, late, boundary, L, skip)
+    late = late - np.median(late)
+    apart = np.abs(late) > Z_DELAY * np.maximum(std, np.max(std[free]))
+    one = np.where(np.arange(C) == np.argmax(np.abs(late)), late, 0.0)  # the latest channel alone
+    _, gap_one = _fit(rec, one, boundary, L, skip)
+    pattern = int(np.sum(apart)) >= MIN_CHANNELS and float(np.ptp(late)) <= MAX_SPREAD
+    gain = gap_after <= GAIN * gap_before and gap_after <= GAIN * gap_one
+    names = [f"{w}{i + 1}" for w, i in chans]
+    return Timing(names, late, std, gap_before, gap_after, pattern and gain)
+
+
+def on_time(rec: Recording, boundary: str, L: int, skip: int) -> tuple[Recording, Timing | None]:
+    """``rec`` realigned when its channels show a converter's skew, and what was found."""
+    timing = channel_timing(rec, boundary, L, skip)
+    if timing is None or not timing.realigned:
+        return rec, timing
+    return realign(rec, timing.late), timing
