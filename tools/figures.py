@@ -65,6 +65,12 @@ def sec(x: float) -> str:
     return f"{x:.3f}".rstrip("0").rstrip(".")
 
 
+def sci(x: float, digits: int = 2) -> str:
+    """Scientific notation without a padded exponent: 8.24e-09 -> '8.2e-9'."""
+    mant, exp = f"{x:.{digits - 1}e}".split("e")
+    return f"{mant}e{int(exp)}"
+
+
 def table(header: list[str], rows: list[list[str]]) -> str:
     """A Markdown table."""
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
@@ -283,6 +289,251 @@ def identify_noisy() -> str:
     return table(["system", "m", "c", "k", "the paper's single window on the same records (m / c / k)"], rows)
 
 
+def warm_identify(forcing: str = "multisine", seconds: float = 20.0) -> dict:
+    """The warm ``identify_cost`` row of a forcing and record length."""
+    return next(r for r in result("identify_cost")["warm"] if r["forcing"] == forcing and r["duration_s"] == seconds)
+
+
+def identify_summary() -> str:
+    """The whole-record identification's headline figures."""
+    d = result("identify")
+    acc = d["accuracy"]
+    names = {"table1": "Table 1", "random5": "a random 5-DOF chain", "free3": "a free-end chain"}
+    worst = "; ".join(f"{' / '.join(pct(v['median_worst'][f]) for f in 'mck')} % on {names[k]}" for k, v in acc.items())
+    single = " / ".join(
+        span([v["median_worst_single_window"][f] for v in acc.values()], lambda x: f"{100 * x:.0f}") + " %"
+        for f in "mck"
+    )
+    slow = max(abs(r[k]) for r in d["slow"]["runs"] for k in ("mass_rel_error", "damping_rel_error"))
+    z = [v["median_abs_z"] for t in d["calibration"].values() for v in t["table"].values()]
+    snrs = [int(x) for x in next(iter(d["calibration"].values()))["table"]]
+    su = d["suites"]
+    impossible = len(su["valid_nonpositive_mass"]) + len(su["valid_negative"])
+    return (
+        f"Worst error per family m / c / k (median of {d['seeds']} seeds), 10 s at 1 kHz with 40 dB of noise on "
+        "forces and "
+        f"accelerations: {worst} (the paper's single window on the same records: {single}); a slow positioning "
+        f"axis (1 um encoder only): mass and damping within {pct(slow)} %, the spring `negligible`; median "
+        f"|error| / sigma {span(z, lambda x: f'{x:.2f}')} at every SNR from {min(snrs)} to {max(snrs)} dB "
+        f"(0.67 is exact); {'no' if impossible == 0 else impossible} valid impossible estimate in {su['records']} "
+        f"benchmark records. A 20 s 3-DOF record takes {warm_identify()['identify_s']:.2f} s in a warm process "
+        "(`docs/performance.md`).\n"
+    )
+
+
+def identify_short() -> str:
+    """The short clean record: the single window's error."""
+    d = result("identify")["short"]
+    return (
+        "**Short clean record.** Table 1, 0.2 s, noise-free: the "
+        f"{'single' if d['estimator'] == 'window' else d['estimator']}"
+        f" window is chosen; maximum relative error {sci(d['max_rel_error_at_0.1s'])} at 0.1 s and "
+        f"{sci(d['max_rel_error_end'])} at the end.\n"
+    )
+
+
+def identify_slow() -> str:
+    """The slow positioning axis, seed by seed."""
+    runs = result("identify")["slow"]["runs"]
+    rel = lambda key: " / ".join(f"{100 * r[key]:.3f}" for r in runs)  # noqa: E731
+    springs = ", ".join(f"{r['spring']:.2f} +- {r['spring_sigma']:.2f}" for r in runs)
+    status = {r["spring_status"] for r in runs}
+    negative = sum(len(r["valid_negative"]) for r in runs)
+    return (
+        f"Seeds {runs[0]['seed']}-{runs[-1]['seed']}: mass {rel('mass_rel_error')} %, damping "
+        f"{rel('damping_rel_error')} %, the spring (k1 + k2) {springs} N/m, "
+        f"{' / '.join(f'`{x}`' for x in sorted(status))}"
+        f"; {'every DOF valid' if all(r['valid'] for r in runs) else 'not every DOF valid'}, "
+        f"{'no' if negative == 0 else negative} valid negative parameter.\n"
+    )
+
+
+def identify_calibration() -> str:
+    """median |error| / sigma by SNR and record length."""
+    cal = result("identify")["calibration"]
+    lengths = list(cal)
+    rows = [
+        [f"{snr} dB"]
+        + [
+            f"{cal[t]['table'][snr]['median_abs_z']:.2f} ("
+            + " / ".join(f"{cal[t]['table'][snr]['per_family'][f]:.2f}" for f in "mck")
+            + ")"
+            for t in lengths
+        ]
+        for snr in cal[lengths[0]]["table"]
+    ]
+    values = {cal[t]["table"][snr]["values"] for t in lengths for snr in cal[t]["table"]}
+    head = ["SNR"] + [f"{t.removesuffix('s')} s: all (m / c / k)" for t in lengths]
+    return table(head, rows) + f"\nEach cell pools {' or '.join(map(str, values))} values.\n"
+
+
+def identify_one_force() -> str:
+    """One shaker: errors against the bound, and the same cases noise-free."""
+    of = result("identify_one_force")["one_force"]
+    rows = []
+    for key, v in of.items():
+        chain, dof = key.split("/")
+        worst = " / ".join(f"{100 * max(r['worst'][f] for r in v['runs']):.3f}" for f in "mck")
+        rows.append(
+            [
+                f"{chain}, force on DOF {dof.removeprefix('dof')}",
+                f"{sum(r['valid'] for r in v['runs'])}/{len(v['runs'])}",
+                f"{worst} %",
+                " / ".join(f"{v['x_crlb'][f]:.2f}" for f in "mck"),
+                f"{max(r['max_abs_z'] for r in v['runs']):.1f}",
+            ]
+        )
+    free = {k: v["noise_free_2s"]["max_rel_error"] for k, v in of.items()}
+    worst_key = max(free, key=free.get)
+    others = [v for k, v in free.items() if k != worst_key]
+    head = [
+        "chain, force on",
+        "valid",
+        "worst m / c / k error",
+        "x Cramer-Rao bound m / c / k",
+        "largest \\|error\\| / sigma",
+    ]
+    return (
+        table(head, rows) + f"\nThe same cases noise-free, 2 s: largest relative error {sci(free[worst_key])} "
+        f"({worst_key.replace('/dof', ', force on DOF ')}); {sci(min(others))} to {sci(max(others))} on the others.\n"
+    )
+
+
+def identify_fit_check() -> str:
+    """The fit check on the blind cases and on a linear chain."""
+    d = result("identify")
+    fc, band = d["suites"]["fit_check"], d["band"]
+    return (
+        f"Of the {fc['effect_cases']} cases with an effect, {fc['effect_cases_with_a_valid_estimate'] or 'none'} "
+        f"{'has' if fc['effect_cases_with_a_valid_estimate'] < 2 else 'have'} a valid estimate; of the "
+        f"{fc['none_cases']} without, every estimate is valid in {fc['none_cases_all_valid']}, the largest |error| / "
+        f"sigma of a valid one {fc['none_max_abs_z_valid']:.2f}. A linear 2-DOF chain under 0.5-25 Hz forcing "
+        f"(20 s, 40 dB, {len(band['runs'])} records): {sum(r['valid'] for r in band['runs'])} valid, the largest "
+        f"|error| / sigma {band['max_abs_z_valid']:.2f}.\n"
+    )
+
+
+def identify_suites() -> str:
+    """Impossible estimates over the suites."""
+    su = result("identify")["suites"]
+    kinds: dict[str, int] = {}
+    for r in su["rows"]:
+        kinds[r["record"].split("/")[0]] = kinds.get(r["record"].split("/")[0], 0) + 1
+    names = {"accuracy": "noise-free records of the accuracy suite", "blind": "cases of the blind diagnosis check"}
+    clean = not su["valid_nonpositive_mass"] and not su["valid_negative"]
+    return (
+        f"Over the {su['records']} records of the suites ("
+        + ", ".join(f"the {k} {names.get(s, s)}" for s, k in kinds.items())
+        + f"): {'no' if clean else 'a'} valid mass that is not positive, and "
+        f"{'no' if clean else 'a'} valid damping or spring below zero by more than three sigma.\n"
+    )
+
+
+def base_excitation() -> str:
+    """Base-excited records: modal errors, ratios or parameters, worst over the seeds."""
+    cases = result("base_excitation")["cases"]
+    names = {"table1": "Table 1", "random5": "random 5-DOF"}
+    worst = lambda runs, key: max(r[key] for r in runs)  # noqa: E731
+    rows = []
+    for key, runs in cases.items():
+        system, kind = key.split("/")
+        if kind == "support_only":
+            status = {s for r in runs for s in r["mass_statuses"]}
+            other = f"ratios within {pct(worst(runs, 'ratio_rel_error_max'))} %, masses " + ", ".join(
+                f"`{s}`" for s in sorted(status)
+            )
+        else:
+            errs = ", ".join(f"{pct(worst(runs, f'{p}_rel_error_max'))} %" for p in ("mass", "damping", "stiffness"))
+            other = f"m, c, k within {errs}, {'valid' if all(r['valid'] for r in runs) else 'not all valid'}"
+        rows.append(
+            [
+                f"{names[system]}, {'support only' if kind == 'support_only' else 'force on DOF 1 too'}",
+                sci(worst(runs, "frequency_rel_error_max")),
+                f"{pct(worst(runs, 'damping_ratio_rel_error_max'))} %",
+                other,
+            ]
+        )
+    runs = [r for v in cases.values() for r in v]
+    return (
+        table(["record", "natural frequencies", "damping ratios", "other"], rows)
+        + "\n(worst relative error over the modes or parameters and the seeds). The damping ratios' standard "
+        "deviations are somewhat optimistic: their largest |error| / sigma is "
+        f"{worst(runs, 'damping_ratio_z_max'):.1f} "
+        f"(frequencies {worst(runs, 'frequency_z_max'):.1f}).\n"
+    )
+
+
+def identify_friction() -> str:
+    """The random positioning axes with dry friction, linear and with the effect."""
+    f = result("identify")["friction"]
+    runs = f["runs"]
+    ok = [r["auto"] for r in runs if r["auto"]["valid"]]
+    bad = [r for r in runs if not r["auto"]["valid"]]
+    worst = lambda key: pct(max(abs(r[key]) for r in ok))  # noqa: E731
+    z = max((abs(r[k]), k[0]) for r in ok for k in ("m_z", "c_z", "force_z"))
+    family = {"m": "a mass", "c": "a viscous coefficient", "f": "a Coulomb level"}[z[1]]
+    same = f["valid"]["auto"] == f["valid"]["coulomb_friction:1"]
+    return (
+        f"The linear fit is valid on {f['linear_valid'] or 'none'} of the {f['cases']}. With `--effect auto` "
+        f"({'the same' if same else 'not the same'} with `--effect coulomb_friction:1`), {f['valid']['auto']} of "
+        f"{f['cases']} are valid, with errors up to {worst('m_rel_error')} % on the mass, {worst('c_rel_error')} % on "
+        f"the viscous coefficient and {worst('force_rel_error')} % on the Coulomb level; their largest |error| / "
+        f"sigma is {z[0]:.1f} on {family}. The other {len(bad)} are not valid; their Coulomb levels come out "
+        f"{span([r['auto']['force_rel_error'] for r in bad], pct)} % off, on encoders of "
+        f"{span([r['encoder_m'] * 1e6 for r in bad], lambda x: f'{x:.1f}')} um (the valid ones: "
+        f"{span([r['encoder_m'] * 1e6 for r in runs if r['auto']['valid']], lambda x: f'{x:.1f}')} um).\n"
+    )
+
+
+def frf_fit() -> str:
+    """FRF fits: noise-free and at 40 dB."""
+    d = result("frf_fit")
+    free = max(list(d["table1_noise_free"].values()) + list(d["table1_noise_free_damping"].values()))
+    all_cols, one = d["table1_40db"]
+    r5 = d["random5_40db"]
+    resid = [x for c in (all_cols, one, r5) for x in c["residual_over_noise"]]
+    valid = all(c["valid_share"] == 1 for c in (all_cols, one, r5))
+
+    def noisy(c: dict) -> str:
+        return (
+            f"within {pct(c['max_rel_error_mass_spring'])} % and {pct(c['max_rel_error_damping'])} %, `|error| / "
+            f"sigma` rms {c['z_rms']:.2f} (largest {c['z_max']:.1f})"
+        )
+
+    return (
+        f"{d['lines']:,} lines from {d['band']}, accelerances. Noise-free Table 1, all three columns or any single "
+        f"one: every parameter within {sci(free, 1) if free else '0'} relative; three random 5-DOF "
+        f"chains, one column: within {sci(max(d['random5_noise_free']), 1)}. At 40 dB ({d['noise']} on every line), "
+        f"{all_cols['seeds']} seeds: all columns, masses and springs / dampings {noisy(all_cols)}; force on DOF 1 "
+        f"only, {noisy(one)}; a random 5-DOF chain, one column, {noisy(r5)}. The residual over the FRFs' own noise "
+        f"stays within {span(resid, lambda x: f'{x:.3f}')}, and {'every' if valid else 'not every'} fit is valid.\n"
+    )
+
+
+def impact() -> str:
+    """The impact hammer: a simulated beam and the measured hits."""
+    d = result("impact")
+    sim, meas = d["simulated"], d["measured"]
+    hits = [h for h in sim["one_hit"] if h["in_table"]]
+    f = [h["frequency_hz"] for h in hits]
+    lo, hi = meas["band_hz"]
+    mh = [h for h in meas["one_hit"] if h["in_table"]]
+    x2 = lambda v: f"{v:.2f}"  # noqa: E731
+    return (
+        f"One hit of a simulated clamped-free beam ({len(sim['truth']['modes_hz'])} modes, 1 ms half-sine with a "
+        f"double hit and baseline drift, 40 dB, 10 kHz) gives the first mode within "
+        f"{pct(max(abs(h['frequency_error']) for h in hits), 1)} % ({span(f, x2)} against "
+        f"{sim['truth']['frequency_hz']:.2f} Hz) and its damping ratio "
+        f"{span([h['damping_ratio_over_reference'] for h in hits], x2)} times the truth ({len(hits)} noise seeds); "
+        f"each of the {len(mh)} measured hits of `/work/shared/data/impact_hammer` with `--band {lo:g}:{hi:g}` gives "
+        f"{span([h['frequency_hz'] for h in mh], x2)} Hz ({pct(max(abs(h['frequency_error']) for h in mh), 1)} % "
+        f"from the decay's Hilbert-envelope value) and a damping ratio "
+        f"{span([h['damping_ratio_over_reference'] for h in mh], x2)} times the envelope's. `diagnose` on the "
+        f"{len(mh)} hits joined: `{meas['diagnose_five_hits_joined']['verdict']}`, "
+        f"{meas['diagnose_five_hits_joined']['force_response']}.\n"
+    )
+
+
 # -- docs/diagnosis.md --------------------------------------------------------------------
 
 
@@ -339,7 +590,8 @@ def constant_row(noise: str, name: str, e: dict) -> str:
     """One estimator's row of the constant-parameter table."""
     cells = [
         " / ".join(
-            "-" if e["summary"][f][t]["median"] is None
+            "-"
+            if e["summary"][f][t]["median"] is None
             else f"{100 * e['summary'][f][t]['median']:.3f} ({100 * e['summary'][f][t]['p95']:.3f})"
             for t in TIMES
         )
@@ -443,7 +695,8 @@ def continuous_crlb_rows() -> list[list[str]]:
         ],
         [
             "20 dB: bias below 0.2 % on masses and springs at 60 s",
-            f"{verdict(max(both + accel) < 0.002)}: median errors of m / k at 60 s {bias} on the accelerations-only noise, "
+            f"{verdict(max(both + accel) < 0.002)}: median errors of m / k at 60 s {bias} on the "
+            "accelerations-only noise, "
             f"{span(both, lambda x: pct(x, 2))} % with noise on both",
         ],
         ["20 dB: within 3x of the bound at 10 s", f"{verdict(ok20)}: {at20}"],
@@ -461,7 +714,11 @@ def continuous_ukf_row() -> list[str]:
     def med(s, noise, name, f):
         return est(s, noise, name)["summary"][f]["10s"]["median"]
 
-    pairs = {(s, f): (med(s, "accel@20dB", "continuous", f), med(s, "accel@20dB", "ukf", f)) for s in sys_names for f in "mck"}
+    pairs = {
+        (s, f): (med(s, "accel@20dB", "continuous", f), med(s, "accel@20dB", "ukf", f))
+        for s in sys_names
+        for f in "mck"
+    }
     at40 = all(med(s, "accel@40dB", "continuous", f) < med(s, "accel@40dB", "ukf", f) for s in sys_names for f in "mck")
     text = "; ".join(
         f"{label} " + ", ".join(f"{f} {100 * pairs[s, f][0]:.3f} vs {100 * pairs[s, f][1]:.3f} %" for f in "mck")
@@ -488,10 +745,18 @@ def continuous_tracking_row() -> list[str]:
         for s, b in cont()["tracking"].items()
     )
     within = all(w == 1.0 for r in runs40 for w in r["drift_within"])
-    const = [e for b in cont()["constant"].values() for k, v in b.items() if k != "crlb_40db_accel" for e in [v["continuous"]]]
+    const = [
+        e
+        for b in cont()["constant"].values()
+        for k, v in b.items()
+        if k != "crlb_40db_accel"
+        for e in [v["continuous"]]
+    ]
     events = sum(sum(e["events_per_run"]) for e in const)
     runs = sum(len(e["events_per_run"]) for e in const)
-    track = [r for b in cont()["tracking"].values() for k, v in b.items() if isinstance(v, dict) for r in [v["continuous"]]]
+    track = [
+        r for b in cont()["tracking"].values() for k, v in b.items() if isinstance(v, dict) for r in [v["continuous"]]
+    ]
     alarms = sum(sum(r["false_alarms"]) for r in track)
     n_track = sum(len(r["false_alarms"]) for r in track)
     free = [x for r in tracking_runs("accel+force@none") for x in r["drift_max"]]
@@ -499,7 +764,8 @@ def continuous_tracking_row() -> list[str]:
     ok = max(steps40) < 1 and within and events == 0 and alarms == 0
     return [
         "20 % step within 2 % in under 1 s at 40 dB, drift within 2 % throughout, no false alarm",
-        f"{verdict(ok)}: step {span(steps40, lambda x: f'{x:.2f}')} s on both systems, all seeds; drift worst {drift40} "
+        f"{verdict(ok)}: step {span(steps40, lambda x: f'{x:.2f}')} s on both systems, all seeds; "
+        f"drift worst {drift40} "
         f"at 40 dB{', within 2 % all the time' if within else ''}; {events} events in all {runs} constant runs, "
         f"{alarms} false alarms in the {n_track} tracking runs; noise-free the drift stays within "
         f"{span(free, lambda x: pct(x, 3))} %. At 20 dB the step takes "
@@ -546,7 +812,9 @@ def cost_row(method: str, n: int, rows: str = "rows") -> dict:
 def continuous_cost_row() -> list[str]:
     """Cost per sample against the UKF (its cost from the benchmark run, in Python)."""
     five = cost_row("weak_form", 5)
-    ukf = [e["ukf"]["us_per_sample"] for b in cont()["constant"].values() for v in b.values() if "ukf" in v for e in [v]]
+    ukf = [
+        e["ukf"]["us_per_sample"] for b in cont()["constant"].values() for v in b.values() if "ukf" in v for e in [v]
+    ]
     below = [u / (five["median_ns"] / 1e3) for u in ukf]
     ratio = {n: cost_row("weak_form", n)["max_over_median"] for n in (3, 5, 10)}
     ok = min(below) >= 20 and max(ratio.values()) <= 5
@@ -573,7 +841,9 @@ def continuous_long_windows() -> str:
         slash([est(s, "accel@40dB", file=f16)["x_crlb"][f][t] for t in ("10s", "60s")]) for s in SYSTEMS for f in "mck"
     ]
     worst = max(x for s in SYSTEMS for t in ("10s", "60s") for x in xcrlb(s, "accel@40dB", t, f16))
-    share = slash([est(s, "accel@40dB", file=f16)["three_seed_share_within_2x"] for s in SYSTEMS], lambda x: f"{100 * x:.0f}")
+    share = slash(
+        [est(s, "accel@40dB", file=f16)["three_seed_share_within_2x"] for s in SYSTEMS], lambda x: f"{100 * x:.0f}"
+    )
     long_s = cont(f16)["config"]["continuous_defaults"]["long_window_s"]
     label = "3 `window_s` (1.5 s), the default" if long_s == -1 else f"{long_s:g} s"
     return table(
@@ -616,6 +886,17 @@ BLOCKS = {
     "continuous-targets": continuous_targets,
     "continuous-long-windows": continuous_long_windows,
     "continuous-summary": continuous_summary,
+    "identify-short": identify_short,
+    "identify-slow": identify_slow,
+    "identify-calibration": identify_calibration,
+    "identify-one-force": identify_one_force,
+    "identify-fit-check": identify_fit_check,
+    "identify-suites": identify_suites,
+    "identify-friction": identify_friction,
+    "base-excitation": base_excitation,
+    "frf-fit": frf_fit,
+    "identify-summary": identify_summary,
+    "impact": impact,
 }
 
 
