@@ -873,6 +873,100 @@ def continuous_summary() -> str:
     )
 
 
+def misses(name: str) -> str:
+    """The wrong answers of a blind check, most frequent first: 'truth called pred (count of truth's cases)'."""
+    cases = result(name)["cases"]
+    wrong: dict[tuple[str, str], int] = {}
+    for c in cases:
+        if not c["effect_ok"]:
+            wrong[c["truth"], c["pred"]] = wrong.get((c["truth"], c["pred"]), 0) + 1
+    total = {t: sum(c["truth"] == t for c in cases) for t, _ in wrong}
+    parts = [
+        f"`{t}` called `{p}` {k}" + (f" of {total[t]}" if k > 1 else "")
+        for (t, p), k in sorted(wrong.items(), key=lambda kv: (-kv[1], kv[0]))
+    ]
+    return f"Misses ({sum(wrong.values())} of {len(cases)}): " + ", ".join(parts) + ".\n"
+
+
+def realistic_misses() -> str:
+    return misses("realistic_blind")
+
+
+def fresh_rate(x: float, digits: int = 3) -> str:
+    return f"{pct(x, digits)} %" if x else "0 %"
+
+
+def realistic_fresh() -> str:
+    """The fresh acquisitions against the targets."""
+    s = result("realistic_blind_fresh")["summary"]
+    cases = result("realistic_blind_fresh")["cases"]
+    alarms: dict[str, int] = {}
+    for c in cases:
+        if c["truth"] == "none" and c["pred"] != "none":
+            alarms[c["pred"]] = alarms.get(c["pred"], 0) + 1
+    none_on_effect = sum(c["truth"] != "none" and c["pred"] == "none" for c in cases)
+    alarm_list = ", ".join(f"{k} `{p}`" for p, k in sorted(alarms.items(), key=lambda kv: -kv[1]))
+    rows = [
+        [
+            "`none` on a case with an effect",
+            "<= 5 %",
+            f"**{fresh_rate(s['false_none_on_effect'], 2)}** ({none_on_effect} of {s['real_effect_cases']})",
+        ],
+        ["top-1 effect accuracy", ">= 90 %", f"**{fresh_rate(s['top1_accuracy'])}**"],
+        ["location among correct effects", ">= 90 %", f"**{fresh_rate(s['location_accuracy_among_correct'])}**"],
+        ["main parameter within 20 %", ">= 80 %", f"**{fresh_rate(s['param_within_20pct_among_correct'])}**"],
+        ["median in-band gap shrink, effect cases", "-", f"{s['median_gap_shrink_real']:.2f}x"],
+        [
+            "false alarms on `none` cases",
+            "-",
+            f"{fresh_rate(s['false_alarm_rate_none'])} ({sum(alarms.values())} of {s['none_cases']}: {alarm_list})",
+        ],
+        ["time per record", "-", f"median {s['wall_s_median']:.2f} s, at most {s['wall_s_max']:.2g} s"],
+    ]
+    first, end = result("realistic_blind_fresh")["seeds"].split(":")
+    return table(["figure", "target", f"seeds {first}-{int(end) - 1} ({s['cases']} cases)"], rows)
+
+
+def realistic_fresh_split() -> str:
+    """The fresh acquisitions by nuisance and by rig."""
+    s = result("realistic_blind_fresh")["summary"]
+    keys = [
+        "top1_accuracy",
+        "location_accuracy_among_correct",
+        "param_within_20pct_among_correct",
+        "false_none_on_effect",
+        "false_alarm_rate_none",
+    ]
+    rows = [
+        [name, str(v["cases"])] + [fresh_rate(v[k], 2 if k == "false_none_on_effect" else 3) for k in keys]
+        for part in ("per_nuisance", "per_rig")
+        for name, v in s[part].items()
+    ]
+    head = ["cases", "n", "top-1", "location", "parameter within 20 %", "`none` on an effect", "false alarms on `none`"]
+    return table(head, rows)
+
+
+def fresh_misses() -> str:
+    """What the fresh acquisitions' misses were answered, and the skew's share of them."""
+    cases = result("realistic_blind_fresh")["cases"]
+    wrong = [c for c in cases if not c["effect_ok"]]
+    answers = {"unknown": 0, "input_delay": 0, "none": 0}
+    for c in wrong:
+        key = c["pred"] if c["pred"] in answers else "another effect"
+        answers[key] = answers.get(key, 0) + 1
+    skew = [c for c in wrong if "skew" in c["fresh"]]
+    clean = [c for c in cases if "skew" not in c["fresh"]]
+    top1 = sum(c["effect_ok"] for c in clean) / len(clean)
+    return (
+        f"Of the {len(wrong)} misses, "
+        + ", ".join(
+            f"{k} {'are ' if i == 0 else ''}{'`' + a + '`' if a != 'another effect' else a}"
+            for i, (a, k) in enumerate(answers.items())
+        )
+        + f"; {len(skew)} drew `skew` (top-1 {pct(top1, 3)} % on the {len(clean)} cases without it).\n"
+    )
+
+
 BLOCKS = {
     "demo-runs": demo_table,
     "demo-rig": demo_rig,
@@ -897,6 +991,10 @@ BLOCKS = {
     "frf-fit": frf_fit,
     "identify-summary": identify_summary,
     "impact": impact,
+    "realistic-misses": realistic_misses,
+    "realistic-fresh": realistic_fresh,
+    "realistic-fresh-split": realistic_fresh_split,
+    "fresh-misses": fresh_misses,
 }
 
 
