@@ -1148,7 +1148,8 @@ def blind_text() -> str:
     vis = ", ".join(f"{x:.3g}x ({k})" for k, x in s["median_gap_shrink_by_visibility"].items())
     return (
         f"The band rule finds 0-{s['median_band_hz']:.0f} Hz (median; "
-        f"{pct(s['median_band_white_noise_fraction'])} % of the white sensor noise). After the right effect the in-band gap sits at the in-band noise floor (median "
+        f"{pct(s['median_band_white_noise_fraction'])} % of the white sensor noise). After the right effect the "
+        "in-band gap sits at the in-band noise floor (median "
         f"{s['median_gap_after_over_noise_floor_correct']:.2f} of it), so the shrink is bounded by the drawn effect "
         f"sizes - gap before / floor is {s['median_gap_before_over_noise_floor_real']:.2g}x in band "
         f"({s['median_gap_before_over_noise_floor_real_fullband']:.3g}x full band) - not by the fit: by visibility "
