@@ -1157,6 +1157,152 @@ def blind_text() -> str:
     )
 
 
+# -- docs/reliability.md ------------------------------------------------------------------
+
+
+def outlier_screen() -> str:
+    """The outlier screen's margin on clean records."""
+    d = result("outlier_screen")
+    rows = [
+        [
+            name,
+            str(f["records"]),
+            f"{f['worst_ratio']:.2f} ({f['worst_record']})",
+            str(f["screened_records"]),
+            f"{f['smallest_1e3_rms_over_range']:.0f} R",
+        ]
+        for name, f in d["families"].items()
+    ]
+    head = ["clean records", "records", "largest deviation / R (worst record)", "screened"]
+    return table(head + ["an outlier of 1e3 RMS is at least"], rows)
+
+
+def diagnose_cost() -> str:
+    """Peak memory and wall time of loading, identify and diagnose against the record length."""
+    d = result("diagnose_cost")
+    step = lambda r: f"{r['peak_mb']:.0f} MB, {r['wall_s']:.1f} s"  # noqa: E731
+    rows = [
+        [r["record"], f"{r['csv_mb']:.2f} MB", f"{r['data_mb']:.2f} MB", step(r["load"]), step(r["identify"]),
+         step(r["diagnose"])]
+        for r in d["rows"]
+    ]  # fmt: skip
+    head = ["record", "CSV", "float64 data", "`load_recording`", "`algid identify`", "`algid diagnose`"]
+    base = d["baseline"]
+    return (
+        table(head, rows)
+        + f"\nPython with numpy and algid imported takes {base['peak_mb']:.0f} MB. The growth between records is what "
+        "the length costs, **memory per MB of input**:\n\n"
+        + table(
+            ["records", "step", "MB per MB of float64 data", "MB per MB of CSV", "s per s of record"],
+            [
+                [
+                    f"{m['from_s']:g} -> {m['to_s']:g} s",
+                    k,
+                    f"{v['mb_per_data_mb']:.1f}",
+                    f"{v['mb_per_csv_mb']:.1f}",
+                    f"{v['s_per_record_s']:.3f}",
+                ]
+                for m in d["marginal"]
+                for k, v in m.items()
+                if isinstance(v, dict)
+            ],
+        )  # fmt: skip
+    )
+
+
+SOAKS = {
+    "soak24_n3_40db": "Table 1, n = 3",
+    "soak24_n3_20db": "Table 1, n = 3",
+    "soak24_n10_40db": "random, n = 10",
+    "soak24_n10_20db": "random, n = 10",
+}
+
+
+def soak_row(chain: str, hours: list[dict]) -> list[str]:
+    """One soak: events, memory, cost per sample and the largest error at an hour's end."""
+    last = hours[-1]
+    return [
+        chain,
+        f"{hours[0]['snr_db']:.0f} dB",
+        str(len(hours)),
+        f"**{sum(h['false_alarms'] for h in hours)}**",
+        f"{span([h['rss_mb'] for h in hours], lambda x: f'{x:.1f}')} MB",
+        f"{span([h['us_per_sample_median'] for h in hours], lambda x: f'{x:.1f}')} us "
+        f"({max(h['us_per_sample_worst_chunk'] for h in hours):.1f} us)",
+        f"{num(max(h['max_rel_error_pct'] for h in hours))} % ({num(last['max_rel_error_pct'])} % at {last['hour']} h)",
+    ]
+
+
+def soak() -> str:
+    """The 24-hour soaks."""
+    head = ["chain", "noise", "hours", "change events (false alarms)", "resident memory",
+            "cost per sample, range of the hourly medians (worst minute)", "largest error at an hour's end"]  # fmt: skip
+    return table(head, [soak_row(chain, result(name)) for name, chain in SOAKS.items()])
+
+
+def soak_dropouts() -> str:
+    """The soak with a dropout every minute."""
+    hours = result("soak_dropouts")
+    rows = []
+    for snr in sorted({h["snr_db"] for h in hours}, reverse=True):
+        hs = [h for h in hours if h["snr_db"] == snr]
+        rows.append(
+            [
+                f"n = {hs[0]['n']}",
+                f"{snr:.0f} dB",
+                str(len(hs)),
+                str(sum(h["dropouts_injected"] for h in hs)),
+                str(sum(h["dropout_runs_reported"] for h in hs)),
+                f"{sum(h['bad_input_samples'] for h in hs):,}".replace(",", " "),
+                f"**{sum(h['false_alarms'] for h in hs)}**",
+                f"{num(max(h['max_rel_error_pct'] for h in hs))} %",
+            ]
+        )
+    head = ["chain", "noise", "hours", "dropouts injected", "stuck or clipped runs reported", "NaN samples discarded",
+            "change events", "largest error at an hour's end"]  # fmt: skip
+    return table(head, rows)
+
+
+def magnitude(x: float) -> str:
+    """73 -> '73', 1000.0 -> '1e3'."""
+    return f"{x:g}" if abs(x) < 1000 else sci(x, 1)
+
+
+def outlier_rows(at_s: float, config: str = "defaults") -> list[dict]:
+    """``bench/outlier_bias.py``'s runs of a configuration: the clean one and the outliers at ``at_s``."""
+    rows = result("outlier_bias")["rows"]
+    return [r for r in rows if r["configuration"] == config and (r["a1"] is None or r["at_s"] == at_s)]
+
+
+def outlier_bias() -> str:
+    """One absurd acceleration at 1 s, with the defaults."""
+    rows = [
+        [
+            "(clean)" if r["a1"] is None else magnitude(r["a1"]),
+            sci(r["worst_rel_error"]),
+            str(r["events"]),
+            f"{sci(r['accel_noise_rms'])} m/s^2",
+            str(r["screened_windows"]),
+        ]
+        for r in outlier_rows(1.0)
+    ]
+    head = ["a1 at 1 s [m/s^2]", "worst relative error at 30 s", "change events", "accel noise estimate"]
+    return table(head + ["windows screened"], rows)
+
+
+def outlier_first() -> str:
+    """The same outliers as the very first sample (finding 11)."""
+    rows = outlier_rows(0.0)
+    clean = next(r for r in rows if r["a1"] is None)
+    bad = [r for r in rows if r["a1"] is not None]
+    values = ", ".join(magnitude(r["a1"]) for r in bad[:-1]) + f" and {magnitude(bad[-1]['a1'])}"
+    return (
+        f"The same outliers as the very first sample: worst error at 30 s {span([r['worst_rel_error'] for r in bad], sci)} for "
+        f"{values} m/s^2, noise estimate "
+        f"{span([r['accel_noise_rms'] for r in bad], sci)} m/s^2 (the clean record: {sci(clean['accel_noise_rms'])}).\n"
+    )
+
+
 BLOCKS = {
     "demo-runs": demo_table,
     "demo-rig": demo_rig,
@@ -1193,6 +1339,12 @@ BLOCKS = {
     "blind-table": blind_table,
     "blind-text": blind_text,
     "blind-fresh-misses": blind_fresh_misses,
+    "outlier-screen": outlier_screen,
+    "diagnose-cost": diagnose_cost,
+    "soak": soak,
+    "soak-dropouts": soak_dropouts,
+    "outlier-bias": outlier_bias,
+    "outlier-first": outlier_first,
 }
 
 
