@@ -1236,7 +1236,8 @@ def soak_row(chain: str, hours: list[dict]) -> list[str]:
 def soak() -> str:
     """The 24-hour soaks."""
     head = ["chain", "noise", "hours", "change events (false alarms)", "resident memory",
-            "cost per sample, range of the hourly medians (worst minute)", "largest error at an hour's end"]  # fmt: skip
+            "cost per sample, range of the hourly medians (worst minute)",
+            "largest error at an hour's end"]  # fmt: skip
     return table(head, [soak_row(chain, result(name)) for name, chain in SOAKS.items()])
 
 
@@ -1297,8 +1298,8 @@ def outlier_first() -> str:
     bad = [r for r in rows if r["a1"] is not None]
     values = ", ".join(magnitude(r["a1"]) for r in bad[:-1]) + f" and {magnitude(bad[-1]['a1'])}"
     return (
-        f"The same outliers as the very first sample: worst error at 30 s {span([r['worst_rel_error'] for r in bad], sci)} for "
-        f"{values} m/s^2, noise estimate "
+        "The same outliers as the very first sample: worst error at 30 s "
+        f"{span([r['worst_rel_error'] for r in bad], sci)} for {values} m/s^2, noise estimate "
         f"{span([r['accel_noise_rms'] for r in bad], sci)} m/s^2 (the clean record: {sci(clean['accel_noise_rms'])}).\n"
     )
 
