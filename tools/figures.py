@@ -197,7 +197,8 @@ def demo_snr() -> str:
     """The SNR the noisy demo achieved on its accelerations."""
     achieved = [x for r in demo_runs("continuous_40dB") for x in r["accel_snr_achieved_db"]]
     seeds = len(demo_runs("continuous_40dB"))
-    return f"Achieved: {span(achieved, lambda x: f'{x:.1f}')} dB on the 5 s Table 1 runs (`--noise-db 40`, {seeds} seeds).\n"
+    db = span(achieved, lambda x: f"{x:.1f}")
+    return f"Achieved: {db} dB on the 5 s Table 1 runs (`--noise-db 40`, {seeds} seeds).\n"
 
 
 # -- docs/performance.md ------------------------------------------------------------------
