@@ -1,4 +1,4 @@
-"""The measured figures of the docs, built from ``bench/results/*.json``.
+"""The measured figures of the docs (``docs/*.md`` and ``README.md``), built from ``bench/results/*.json``.
 
 A page holds a generated block between two markers::
 
@@ -190,6 +190,17 @@ def demo_controller() -> str:
                 "window in the same loop (seed 0)",
             ],
         ],
+    )
+
+
+def demo_headline() -> str:
+    """What `algid demo` prints, in one sentence (README)."""
+    h = result("demo_report")["scenarios"]["continuous_noise_free"]["headline"]
+    return (
+        f"The demo prints the true and estimated parameters of the paper's Table 1 chain under closed-loop control: "
+        f"all estimates first within 1 % at {sec(h['all_first_within_1pct_s'])} s, all stay within 1 % from "
+        f"{sec(h['all_stay_within_1pct_s'])} s, peak tracking error after 1 s "
+        f"{num(h['peak_tracking_after_1s_pct_stroke'])} % of the 5 mm stroke (`docs/demo.md`).\n"
     )
 
 
@@ -1355,6 +1366,7 @@ BLOCKS = {
     "outlier-bias": outlier_bias,
     "outlier-first": outlier_first,
     "demo-snr": demo_snr,
+    "demo-headline": demo_headline,
 }
 
 
@@ -1371,9 +1383,9 @@ def fill(text: str, where: str) -> str:
 
 
 def stale(write: bool) -> list[str]:
-    """The pages whose blocks differ from the results (rewritten when ``write``)."""
+    """The pages (README.md and docs/) whose blocks differ from the results (rewritten when ``write``)."""
     out = []
-    for page in sorted(DOCS.rglob("*.md")):
+    for page in [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]:
         text = page.read_text()
         new = fill(text, str(page.relative_to(ROOT)))
         if new != text:
