@@ -422,6 +422,67 @@ def identify_cost() -> str:
     )
 
 
+# -- docs/theory.md ----------------------------------------------------------------------
+
+
+def rel(x: float) -> str:
+    """A relative error: '0.19' above a percent, '4.7e-9' below."""
+    return num(x) if x >= 0.01 else sci(x)
+
+
+def seconds_or_never(x: float | None, within: str = "") -> str:
+    return f"{sec(x)} s" if x is not None else f"never{within}"
+
+
+def quadrature() -> str:
+    """The quadrature's order against its start-up and accuracy."""
+    rows = [
+        [
+            f"{q['points']}" + (" (piecewise linear, trapezoid-like)" if q["points"] == 2 else ""),
+            seconds_or_never(q["time_to_1pct_s"], " in 0.5 s"),
+            seconds_or_never(q["time_to_1e-6_s"], " in 0.5 s"),
+            sci(q["max_rel_error_at_0.1s"]),
+        ]
+        for q in result("accuracy")["quadrature"]
+    ]
+    rows[-1] = [f"**{c}**" for c in [rows[-1][0] + " (default)", *rows[-1][1:]]]
+    return table(["interpolation points P (order)", "time to 1 %", "time to 1e-6", "error at 0.1 s"], rows)
+
+
+ACCURACY_ROWS = {
+    "Table 1, multisine + offset": r"table1_multisine",
+    "Table 1, band-limited step from rest (5 ms edge at 12 ms)": r"table1_step_bandlimited",
+    "Table 1, ideal step from rest, sampled mid-jump": r"table1_step_ideal",
+    "random n = {ns}, multisine": r"random_n\d+_multisine",
+    "random n = {ns}, band-limited step": r"random_n\d+_step_bandlimited",
+    "free right end n = {ns}, multisine": r"free_end_n\d+_multisine",
+}
+
+
+def accuracy() -> str:
+    """The estimator's accuracy noise-free, per scenario family (worst over a family)."""
+    scen = result("accuracy")["scenarios"]
+    rows = []
+    for label, pattern in ACCURACY_ROWS.items():
+        runs = [r for r in scen if re.fullmatch(pattern, r["scenario"])]
+        few = len(runs) > 1
+        up = "<= " if few else ""
+        t6 = [r["time_to_1e-6_s"] for r in runs]
+        t6_text = "never" if None in t6 else f"{up if len(set(t6)) > 1 else ''}{sec(max(t6))} s"
+        t1 = [r["time_to_1pct_s"] for r in runs]
+        rows.append(
+            [
+                label.format(ns=" / ".join(str(r["n"]) for r in runs)),
+                up + rel(max(r["max_rel_error_at_0.05s"] for r in runs)),
+                up + rel(max(r["max_rel_error_at_0.5s"] for r in runs)),
+                f"{up if len(set(t1)) > 1 else ''}{sec(max(t1))} s",
+                t6_text,
+            ]
+        )
+    head = ["scenario", "max rel. error at t0 + 0.05 s", "at t0 + 0.5 s", "time to 1 %", "time to 1e-6"]
+    return table(head, rows)
+
+
 # -- docs/identify.md ---------------------------------------------------------------------
 
 
@@ -1503,6 +1564,8 @@ BLOCKS = {
     "continuous-cost": continuous_cost,
     "binding-cost": binding_cost,
     "identify-cost": identify_cost,
+    "quadrature": quadrature,
+    "accuracy": accuracy,
 }
 
 
