@@ -8,8 +8,9 @@ largest, so that up to :data:`RANGE_RANK` absurd samples cannot set it; a sample
 ``d > OUTLIER_RANGE * R`` is screened. The margin of that threshold on the clean records of
 every suite (the identify and blind-diagnosis benchmarks, the realistic rigs, impact-hammer
 tests with one to four hits, Silverbox and every F-16 record; the worst a single short hammer
-hit) is measured by ``bench/outlier_screen.py`` (``docs/reliability.md``). A channel with ``R = 0`` (constant but for at most :data:`RANGE_RANK` samples, an
-unforced DOF with a glitch) has every sample off its constant screened. More than
+hit) is measured by ``bench/outlier_screen.py`` (``docs/reliability.md``). A channel with
+``R = 0`` (constant but for at most :data:`RANGE_RANK` samples, an unforced DOF with a glitch)
+has every sample off its constant screened. More than
 :data:`RANGE_RANK` absurd samples in one channel set its range and are not screened.
 
 A screened sample is treated like a NaN: in the record handed to the noise model, the hum
