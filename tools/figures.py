@@ -1143,7 +1143,8 @@ def realistic_misses() -> str:
 
 
 def blind_fresh_misses() -> str:
-    return "On the fresh seeds: " + misses("blind_diagnosis.fresh5000")
+    text = misses("blind_diagnosis.fresh5000")
+    return "On the fresh seeds, m" + text[1:]
 
 
 def fresh_rate(x: float, digits: int = 3) -> str:
