@@ -395,11 +395,7 @@ def main() -> None:
         help="a ContinuousEstimator option instead of its default, e.g. long_window_s=2 (repeatable)",
     )
     ap.add_argument("--json", type=Path, default=None)
-    ap.add_argument("--markdown", type=Path, default=None, help="print the doc tables of a results JSON and exit")
     args = ap.parse_args()
-    if args.markdown:
-        print(markdown(json.loads(args.markdown.read_text())))
-        return
     if args.tune is not None:
         rep = tune(tuple(args.tune) or ("rls", "ukf"))
         if args.json:
@@ -582,73 +578,6 @@ def _json_default(x):
     if isinstance(x, np.ndarray):
         return x.tolist()
     raise TypeError(type(x))
-
-
-def markdown(results: dict) -> str:
-    """The tables of docs/continuous.md from a results JSON."""
-    lines = []
-    for sname, block in results["constant"].items():
-        crlb40 = block["crlb_40db_accel"]
-        lines.append(f"\n#### {sname}: constant parameters\n")
-        lines.append(
-            "CRLB at 40 dB on the accelerations (median over seeds and family, %), 1 / 10 / 60 s: "
-            + "; ".join(f"{f} " + " / ".join(f"{100 * crlb40[f][f'{t:g}s']:.3f}" for t in TIMES) for f in crlb40)
-        )
-        lines.append("")
-        lines.append(
-            "| noise | estimator | m: median (p95) at 1 / 10 / 60 s [%] | c | k | first within 1 % m / c / k [s] | x CRLB at 10 s m / c / k |"
-        )
-        lines.append("|---|---|---|---|---|---|---|")
-        for key, est in block.items():
-            if key == "crlb_40db_accel" or "none" in key:
-                continue
-            for name, e in est.items():
-                if name.startswith("_"):
-                    continue
-                cells = []
-                for f in ("m", "c", "k"):
-                    parts = []
-                    for t in TIMES:
-                        v = e["summary"][f][f"{t:g}s"]
-                        parts.append("-" if v["median"] is None else f"{100 * v['median']:.3f} ({100 * v['p95']:.3f})")
-                    cells.append(" / ".join(parts))
-                t1 = " / ".join(
-                    "-" if not np.isfinite(e["t_within_1pct_s"][f]) else f"{e['t_within_1pct_s'][f]:.2f}"
-                    for f in ("m", "c", "k")
-                )
-                xc = (
-                    " / ".join(
-                        "-" if e.get("x_crlb", {}).get(f, {}).get("10s") is None else f"{e['x_crlb'][f]['10s']:.1f}"
-                        for f in ("m", "c", "k")
-                    )
-                    if "x_crlb" in e
-                    else "-"
-                )
-                ev = f" (events {sum(e['events_per_run'])})" if "events_per_run" in e else ""
-                lines.append(f"| {key} | {name}{ev} | " + " | ".join(cells) + f" | {t1} | {xc} |")
-    for sname, block in results["tracking"].items():
-        lines.append(
-            f"\n#### {sname}: tracking ({block['step_param']} -20 % at 30 s, {block['drift_param']} -10 % over 60 s)\n"
-        )
-        lines.append(
-            "| noise | estimator | step: within 2 % after [s] | drift: worst error 10-60 s [%] | drift: time within 2 % | false alarms |"
-        )
-        lines.append("|---|---|---|---|---|---|")
-        for key, per in block.items():
-            if not isinstance(per, dict):
-                continue
-            for name, d in per.items():
-                fa = ", ".join(str(x) for x in d["false_alarms"]) if "false_alarms" in d else "n/a"
-                lines.append(
-                    f"| {key} | {name} | "
-                    + ", ".join("never" if not np.isfinite(x) else f"{x:.2f}" for x in d["step_delay"])
-                    + " | "
-                    + ", ".join("-" if x is None else f"{100 * x:.2f}" for x in d["drift_max"])
-                    + " | "
-                    + ", ".join("-" if x is None else f"{100 * x:.0f} %" for x in d["drift_within"])
-                    + f" | {fa} |"
-                )
-    return "\n".join(lines)
 
 
 def print_block(sname, key, block, fam):

@@ -9,7 +9,7 @@
 /// Prefilter. The accelerations and the forces pass through the same Butterworth low-pass
 /// (`prefilter_hz`, default fs/20; order 4). Eq. 1 is linear and time-invariant, so the
 /// filtered signals obey it with the same parameters, while the white noise above the cut-off,
-/// which biases the windows (noise in the regressors: -5 % on masses at 20 dB without it) and
+/// which biases the windows (noise in the regressors: the masses come out low at 20 dB) and
 /// scatters them, is gone; a force that is 0 stays exactly 0. The windows start once the
 /// filter's start-up transient has decayed to 1e-6 (115 ms at 50 Hz).
 ///

@@ -25,8 +25,8 @@ struct ScreenConfig {
   /// An acceleration that has moved and then repeats one value exactly for this many samples in
   /// a row is a dead sensor (detail/dropout.hpp): its samples are discarded like bad input and
   /// update() returns kDropout; 0: off. Short, because the windows harvested before a run is
-  /// recognised keep its frozen samples (a2 frozen 2 s in tests/test_dropouts.py: masses and
-  /// springs within 0.5 % with 16, 4.8 % off with 500).
+  /// recognised keep its frozen samples (tests/test_dropouts.py; docs/reliability.md, sensor
+  /// dropouts).
   long stuck_samples = 16;
   /// An acceleration that repeats its largest or smallest value so far for this many samples in
   /// a row is clipped: discarded the same way; 0: off.

@@ -26,8 +26,8 @@
 ///   Sigma_ij = sum_c s_c^2 sum_{d,e} l_icd l_jce G_de + delta_ij s_{u,i}^2 G_22,
 /// (l_icd the loadings above, G_de = dt^2 sum psi^(d) psi^(e)^T the Gram matrices of the test
 /// functions), a known function of the parameters. W = Sigma^-1 over all rows (the rows of
-/// neighbouring DOFs share channels; weighting each DOF's rows alone left 2.5x the Cramer-Rao
-/// bound on the 5-DOF springs in the numpy prototype, the full covariance 1.6x) is refreshed in
+/// neighbouring DOFs share channels; weighting each DOF's rows alone left the 5-DOF springs
+/// further from the Cramer-Rao bound in the numpy prototype than the full covariance) is refreshed in
 /// the background from the owner's running estimate (set_model()).
 ///
 /// Bias compensation. The regressor noise adds E[N^T W N] to the normal matrix: for every

@@ -29,8 +29,8 @@ struct WeakFormSourceConfig : JointConfig<Scalar> {
   Scalar window_s = Scalar(0.5);         ///< window length W [s] (rounded to a multiple of K samples)
   int stagger = 4;                       ///< windows in flight K, started W/K apart (<= MaxStagger)
   /// independent fraction of the staggered window results, (0, 1]. Successive weak-form results
-  /// are more correlated than algebraic ones (sin^4 taper, K = 4): CUSUM false alarms on
-  /// dampings with 0.5 (40 dB, tones) and 0.3 (20 dB, bench/continuous.py), none with 0.25.
+  /// are more correlated than algebraic ones (sin^4 taper, K = 4): larger values raised CUSUM
+  /// false alarms on dampings (docs/continuous.md, defaults).
   Scalar overlap_efficiency = Scalar(0.25);
   Scalar band_hz = Scalar(-1);      ///< highest test-function frequency [Hz]; -1: 0.05 / dt
   Scalar accel_noise = Scalar(-1);  ///< acceleration noise RMS [m/s^2]; -1: estimated

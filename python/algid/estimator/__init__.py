@@ -22,7 +22,7 @@ from ..messages.display import Displayed, number, parameter_rows, validity
 from ..model.chain import parameter_names
 
 #: Chain sizes compiled as fixed-size C++ instantiations; any other n >= 1 runs the run-time
-#: sized estimator (the same arithmetic; about 1.1-1.4x the cost per DOF-sample).
+#: sized estimator (the same arithmetic; its cost against the fixed sizes: ``docs/performance.md``).
 SIZES: tuple[int, ...] = tuple(_core.SIZES)
 
 Status = _core.Status
