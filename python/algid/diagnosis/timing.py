@@ -42,6 +42,8 @@ from .integrals import integrals
 from .linear import fit_linear
 from .windows import prepare
 
+#: Windows of the record the latenesses are estimated on.
+WINDOWS = 16
 #: Finite-difference step of the Jacobian [samples].
 STEP = 0.05
 #: Gauss-Newton passes at most, the largest step of one [samples], and the step that ends them.
@@ -123,13 +125,22 @@ def _fit(rec: Recording, late: np.ndarray, boundary: str, L: int, skip: int):
     return lin.resid.ravel(), float(np.sqrt(lin.cv.test_sse.sum() / np.sum(P.y**2)))
 
 
+def _head(rec: Recording, samples: int) -> Recording:
+    """The first ``samples`` samples of ``rec`` (every per-sample array cut alike)."""
+    cut = {k: getattr(rec, k)[:samples] for k in ("t", "u", "a", "v", "x", "base", "missing") if getattr(rec, k) is not None}
+    return replace(rec, dt=float(rec.dt), **cut)
+
+
 def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing | None:
-    """The latenesses of ``rec``'s channels (module docstring); None with fewer than three
-    channels (one relative lateness is an input delay or a sensor's, not a pattern)."""
+    """The latenesses of ``rec``'s channels (module docstring), estimated on its first
+    :data:`WINDOWS` windows of ``L`` samples after ``skip`` (the latenesses are the
+    converter's, the same all along); None with fewer than three channels (one relative
+    lateness is an input delay or a sensor's, not a pattern)."""
     chans, _ = _channels(rec)
     C = len(chans)
     if C < 3:
         return None
+    rec = _head(rec, skip + WINDOWS * L)
     late = np.zeros(C)
     free = np.arange(1, C)  # the first channel is the reference: only differences are seen
     r0, gap_before = _fit(rec, late, boundary, L, skip)
