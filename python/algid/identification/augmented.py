@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Callable
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from ..diagnosis.candidates import EFFECTS, MAIN_PARAM, PHYSICAL
 from ..diagnosis.corrected import corrected_model, effect_parts, linear_model
 from ..diagnosis.engine import FIT_FLOOR_RATIO, diagnose
 from ..diagnosis.report import location_text
+from ..recording.noise import NoiseModel
 from .motion import band_limited_motion
 from .plan import Plan
 from .screen import Signals
@@ -115,7 +117,9 @@ class ModelCheck:
     misfit: str
 
 
-def model_check(sig: Signals, nm, boundary: str, effects: list, skipped: str, progress) -> ModelCheck:
+def model_check(
+    sig: Signals, nm: NoiseModel, boundary: str, effects: list, skipped: str, progress: Callable[[str], None]
+) -> ModelCheck:
     """Identify's model check (module docstring), before any estimator runs: the fit with the
     ``effects``, else the fit check (``skipped``: why not, "" to run it) whose misfit, but on
     an impact record (the diagnosis's windows do not fit a decay), makes the diagnosis's linear
