@@ -1,4 +1,5 @@
-"""Whether eq. 1 explains a record, and eq. 1 with named effects estimated together.
+"""Whether eq. 1 explains a record, and eq. 1 with named effects estimated together:
+identify's model check (:func:`model_check`), before the plan.
 
 0. The fit check of every linear identification (:func:`fit_check`): the diagnosis's
    verdict on the record. Unless it is ``none``, a biased linear fit is not called valid.
@@ -21,16 +22,19 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from typing import Callable
 
 import numpy as np
 
 from ..diagnosis.candidates import EFFECTS, MAIN_PARAM, PHYSICAL
-from ..diagnosis.corrected import corrected_model, effect_parts
+from ..diagnosis.corrected import corrected_model, effect_parts, linear_model
 from ..diagnosis.engine import FIT_FLOOR_RATIO, diagnose
 from ..diagnosis.report import location_text
+from ..recording.noise import NoiseModel
 from .motion import band_limited_motion
 from .plan import Plan
+from .screen import Signals
 from .surrogate import surrogate_band
 from .verdicts import judge
 
@@ -98,6 +102,47 @@ def fit_check(rec, boundary: str, band_hz: tuple | None = None) -> tuple[dict, o
         f"the noise floor, and the diagnosis's test finds {found}: run {hint}"
     )
     return {**out, "diagnosis": found, "misfit": why}, d
+
+
+@dataclass(frozen=True)
+class ModelCheck:
+    """Identify's model check: ``result`` the fields of the :class:`~.result.Identification`
+    beyond the recording's when the diagnosis's fit is the answer (the chain with the effects
+    asked for; the linear chain of a record it does not explain), None when the estimators are
+    to run; ``fit`` the check's ``model_fit`` for them, ``misfit`` its reason ("" when the linear
+    chain explains the record)."""
+
+    result: dict | None
+    fit: dict
+    misfit: str
+
+
+def model_check(
+    sig: Signals, nm: NoiseModel, boundary: str, effects: list, skipped: str, progress: Callable[[str], None]
+) -> ModelCheck:
+    """Identify's model check (module docstring), before any estimator runs: the fit with the
+    ``effects``, else the fit check (``skipped``: why not, "" to run it) whose misfit, but on
+    an impact record (the diagnosis's windows do not fit a decay), makes the diagnosis's linear
+    fit the answer: one linear fit per record, whichever command prints it.
+    ``progress(stage)`` before each diagnosis."""
+    note = ""
+    if effects:
+        progress("diagnose")
+        fitted, note = fit_with_effects(sig.rec, sig.motion, sig.kind, nm, boundary, effects)
+        if fitted is not None:
+            return ModelCheck(fitted, {}, "")
+    progress("withheld-window test")
+    band = None if sig.transient is None else sig.transient.band_hz
+    check, d = ({"misfit": ""}, None) if skipped else fit_check(sig.raw, boundary, band)
+    misfit = check.pop("misfit")
+    fit = {**check, **({"source": note} if note else {})}
+    if misfit and sig.transient is None:
+        fields = diagnosis_fields(
+            sig.rec, sig.motion, sig.kind, nm, boundary, d, linear_model(d), "the linear chain", misfit
+        )
+        fields["model_fit"].update(check)
+        return ModelCheck(fields, fit, misfit)
+    return ModelCheck(None, fit, misfit)
 
 
 def _specs(d) -> list[tuple[str, dict]]:

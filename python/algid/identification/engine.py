@@ -1,37 +1,36 @@
 """``algid.identify(recording)``: the whole-record identification with uncertainty and
-verdicts, in stages, each entered once:
+verdicts, in stages, each entered once and each in one module; between them the record and
+the results pass as small dataclasses:
 
-0. Screen: finite samples far outside their channel's robust range are taken out and
-   treated as missing (:mod:`.screen`).
-1. Signals: mains hum notched out of every channel alike (:func:`algid.recording.noise.without_hum`);
-   an impact record's hits found, its force cleaned and force and motion band-passed alike
-   around the modes the chain is to hold (:mod:`algid.recording.transient`); the measured
-   accelerations, or the derivatives of the velocities or displacements
-   (:func:`algid.recording.accelerations`); the forces.
-2. Noise model and signal band of the recording (:mod:`algid.recording.noise`).
-3. Fit check (:func:`.augmented.fit_check`): the diagnosis's verdict on the record. Unless
-   it is ``none``, the linear chain reported is the diagnosis's fit of it, the one linear
-   fit of the record whichever command prints it
-   (:func:`algid.diagnosis.corrected.linear_model`), its determined estimates
-   ``model_misfit``, and stages 4-6 are skipped. (Not on an impact record: the diagnosis's
-   windows do not yet fit a decay, so its own estimate is reported, ``model_misfit``.)
-4. Plan (:mod:`.plan`): which estimator and its settings, from the recording's time scales
-   and a first look at the chain (:func:`.motion.equation_error_fit`: eq. 1 on the DFT bins
-   the forces excite), whose lowest natural frequency sets the window length; for an impact
-   record, from the response's modes in the band.
-5. Estimate: the plan run over the whole record (:mod:`.runner`); the algebraic windows'
-   length is first chosen among multiples of the plan's by the error a bootstrap measures
-   on each (:func:`.surrogate.select_window`).
-6. Uncertainty (:mod:`.uncertainty`): the weak-form windows' own covariance, or a parametric
-   bootstrap for the algebraic windows; the method's own error; the window results' scatter
-   beyond what noise explains.
-7. Verdicts per parameter and DOF (:mod:`.verdicts`).
+1. Screen (:func:`.screen.screened_signals` -> :class:`.screen.Signals`): finite samples far
+   outside their channel's robust range taken out and treated as missing, mains hum notched
+   out of every channel alike, an impact record's hits found, its force cleaned and force and
+   motion band-passed alike around the modes the chain is to hold
+   (:mod:`algid.recording.transient`), the accelerations the estimators read.
+2. Noise model and signal band of the recording (:func:`algid.recording.noise.analyse` ->
+   :class:`~algid.recording.noise.NoiseModel`).
+
+   Model check (:func:`.augmented.model_check` -> :class:`.augmented.ModelCheck`), before any
+   estimator runs: with ``effects``, the diagnosis's fit of eq. 1 with them is the result;
+   otherwise the fit check, the diagnosis's verdict on the record. Unless it is ``none``, the
+   linear chain reported is the diagnosis's fit of it, the one linear fit of the record
+   whichever command prints it (:func:`algid.diagnosis.corrected.linear_model`), its
+   determined estimates ``model_misfit``, and stages 3-6 are skipped. (Not on an impact
+   record: the diagnosis's windows do not yet fit a decay, so its own estimate is reported,
+   ``model_misfit``.)
+3. Plan (:func:`.plan.plan_record` -> :class:`.plan.Plan`): which estimator and its settings,
+   from the recording's time scales and a first look at the chain, whose lowest natural
+   frequency sets the window length; for an impact record, from the response's modes in the band.
+4. Estimate (:func:`.estimate.estimate` -> :class:`.estimate.Estimate`): the plan run over the
+   whole record; the algebraic windows' length is first chosen among candidates by the error a
+   bootstrap measures on each.
+5. Uncertainty (:func:`.uncertainty.estimate_uncertainty` -> :class:`.uncertainty.Uncertainty`):
+   the weak-form windows' own covariance, or a parametric bootstrap for the algebraic windows;
+   the method's own error; the window results' scatter beyond what noise explains.
+6. Verdicts per parameter and DOF (:func:`.verdicts.judge_estimate` -> :class:`.verdicts.Judged`).
 
 A base-excited record (a support motion ``a0``) runs every stage on the chain whose DOF 0 is
 the support, dropped at the end (:mod:`.base`); its fit check is skipped (:data:`.base.FIT_CHECK_SKIPPED`).
-
-With ``effects``, stages 3-7 are the diagnosis's fit of eq. 1 with the effects and its check
-(:mod:`.augmented`).
 """
 
 from __future__ import annotations
@@ -39,25 +38,19 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Callable, Optional
 
-import numpy as np
-
-from ..diagnosis.corrected import linear_model
-from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations, as_recording, parameter_units
-from ..recording import motion as recording_motion
+from ..recording import Recording, as_recording, parameter_units
 from ..recording.frf_file import is_frf_source
-from ..recording.noise import analyse, without_hum
-from ..recording.transient import transient_record
-from .augmented import diagnosis_fields, fit_check, fit_with_effects
+from ..recording.noise import analyse
+from .augmented import model_check
 from .base import FIT_CHECK_SKIPPED, augment, reduce
+from .estimate import Estimate, estimate
 from .frf_fit import identify_frf
-from .motion import equation_error_fit
-from .plan import make_plan, natural_frequencies_hz
+from .plan import plan_record
 from .result import Identification
-from .runner import run_plan
-from .screen import screen
-from .surrogate import REPLICATES, select_window
-from .uncertainty import estimate_uncertainty
-from .verdicts import judge
+from .screen import Signals, screened_signals
+from .surrogate import REPLICATES
+from .uncertainty import Uncertainty, estimate_uncertainty
+from .verdicts import Judged, judge_estimate
 
 ProgressFn = Optional[Callable[[str, float], None]]
 
@@ -67,46 +60,9 @@ def _progress(cb: ProgressFn, stage: str, fraction: float) -> None:
         cb(stage, fraction)
 
 
-def _estimate(rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, joint=True, transient=None):
-    """Stages 4-6: the plan, its run over the record and the run's uncertainty."""
-    duration, forced = rec.t.size * rec.dt, np.any(rec.u != 0.0, axis=0)
-    if transient is None:
-        first = natural_frequencies_hz(equation_error_fit(rec.u, motion, nm, boundary), rec.n, boundary)
-    else:
-        first = np.array(transient.in_band_hz)
-    plan = make_plan(nm, duration, estimator, first, joint, transient)
-    _progress(progress, "estimate", 0.0)
-    if plan.method == "algebraic":
-        plan, run = select_window(
-            a,
-            rec.u,
-            motion,
-            nm,
-            plan,
-            boundary,
-            forced,
-            duration,
-            seed,
-            missing,
-            lambda f: _progress(progress, "estimate", f),
-        )
-    else:
-        run = run_plan(a, rec.u, float(rec.dt), boundary, plan, missing=missing)
-    _progress(progress, "estimate", 1.0)
-    unc = estimate_uncertainty(
-        run,
-        motion,
-        nm,
-        plan,
-        boundary,
-        forced,
-        int(replicates),
-        seed,
-        DEFAULT_DIFF_POINTS,
-        missing,
-        progress=lambda f: _progress(progress, "uncertainty", f),
-    )
-    return plan, run, unc
+def _at(cb: ProgressFn, stage: str) -> Callable[[float], None]:
+    """``fraction -> cb(stage, fraction)`` for one stage."""
+    return lambda fraction: _progress(cb, stage, fraction)
 
 
 def _checked(boundary: str, replicates: int, effects) -> list:
@@ -118,21 +74,43 @@ def _checked(boundary: str, replicates: int, effects) -> list:
     return [effects] if isinstance(effects, str) else list(effects)
 
 
-def _recording_fields(rec, boundary, nm, kind, hum, screened, transient) -> dict:
-    """The fields of an :class:`Identification` that describe the record (stages 0-2)."""
+def _recording_fields(sig: Signals, boundary: str, nm) -> dict:
+    """The fields of an :class:`Identification` that describe the record (stages 1-2)."""
+    rec = sig.rec
     return dict(
         n=rec.n,
         boundary=boundary,
         dt=float(rec.dt),
         samples=int(rec.t.size),
         noise=nm,
-        motion=kind,
+        motion=sig.kind,
         path=rec.path,
-        hum_hz=tuple(hum),
+        hum_hz=sig.hum_hz,
         units=parameter_units(rec),
         recording_notes=tuple(rec.notes),
-        screened=screened,
-        transient=transient,
+        screened=sig.screened,
+        transient=sig.transient,
+    )
+
+
+def _identification(common: dict, est: Estimate, unc: Uncertainty, judged: Judged, fit: dict) -> Identification:
+    """The :class:`Identification` of stages 3-6 (``fit``: the model check's ``model_fit``)."""
+    run = est.run
+    return Identification(
+        **common,
+        plan=est.plan,
+        theta=judged.theta,
+        sigma=judged.sigma,
+        raw=run.theta,
+        bias=unc.bias,
+        method_bias=unc.method_bias,
+        verdicts=judged.verdicts,
+        time_s=run.time_s,
+        history=run.history,
+        history_sigma=unc.history_sigma,
+        windows=run.windows,
+        replicates=unc.replicates,
+        model_fit=fit,
     )
 
 
@@ -199,57 +177,17 @@ def identify(
             raise ValueError("effects cannot be estimated on a base-excited record (a support motion a0)")
         rec, scale = augment(rec)
     effects = _checked(boundary, replicates, effects)
-    rec, screened = screen(rec, reach=0 if rec.a is not None else DEFAULT_DIFF_POINTS // 2)
-    missing = screened.rows
-    rec, hum = without_hum(rec)
-    raw, (rec, transient) = rec, transient_record(rec, band_hz)
-    if transient is not None:
-        missing = missing | transient.missing
-    n, dt = rec.n, float(rec.dt)
-    a = accelerations(rec, DEFAULT_DIFF_POINTS)
-    kind, motion = recording_motion(rec)
-    nm = analyse(rec.u, motion, dt, kind)
-    forced = np.any(rec.u != 0.0, axis=0)
-    common = _recording_fields(rec, boundary, nm, kind, hum, screened, transient)
-    effect_note = ""
-    if effects:
-        _progress(progress, "diagnose", None)
-        fitted, effect_note = fit_with_effects(rec, motion, kind, nm, boundary, effects)
-        if fitted is not None:
-            return Identification(**common, **fitted)
-    _progress(progress, "withheld-window test", None)
+    sig = screened_signals(rec, band_hz)  # 1. screen
+    nm = analyse(sig.rec.u, sig.motion, sig.dt, sig.kind)  # 2. noise model
+    common = _recording_fields(sig, boundary, nm)
     skipped = FIT_CHECK_SKIPPED if base else ""
-    band = None if transient is None else transient.band_hz
-    check, d = ({"misfit": ""}, None) if skipped else fit_check(raw, boundary, band)
-    misfit = check.pop("misfit")
-    if misfit and transient is None:  # one linear fit per record: the diagnosis's, whose gap is measured
-        fields = diagnosis_fields(rec, motion, kind, nm, boundary, d, linear_model(d), "the linear chain", misfit)
-        fields["model_fit"].update(check)
-        return Identification(**common, **fields)
+    check = model_check(sig, nm, boundary, effects, skipped, lambda stage: _progress(progress, stage, None))
+    if check.result is not None:  # the diagnosis's fit: with the effects, or of a record the linear chain misfits
+        return Identification(**common, **check.result)
     # the support's equation of a base-excited record with a force stays out of the others' (:mod:`.base`)
-    pooled = not (base and not scale)
-    plan, run, unc = _estimate(
-        rec, a, motion, nm, boundary, estimator, replicates, seed, missing, progress, pooled, transient
-    )
-    joint = True  # every estimator carries the scale along the springs (weak form: joint solve; else eq. 7 ratios)
-    verdicts = judge(unc.theta, unc.sigma, n, boundary, unc.motion, rec.u, forced, nm, joint, misfit)
-    # no value at all where the record has no scale for it (an unforced DOF) or the
-    # estimator's systems were singular
-    blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])
-    result = Identification(
-        **common,
-        plan=plan,
-        theta=np.where(blank, np.nan, unc.theta),
-        sigma=np.where(blank, np.nan, unc.sigma),
-        raw=run.theta,
-        bias=unc.bias,
-        method_bias=unc.method_bias,
-        verdicts=verdicts,
-        time_s=run.time_s,
-        history=run.history,
-        history_sigma=unc.history_sigma,
-        windows=run.windows,
-        replicates=unc.replicates,
-        model_fit={**check, **({"source": effect_note} if effect_note else {})},
-    )
-    return reduce(result, scale, verdicts, skipped) if base else result
+    plan = plan_record(sig, nm, boundary, estimator, joint=not (base and not scale))  # 3. plan
+    est = estimate(sig, nm, plan, boundary, seed, _at(progress, "estimate"))  # 4. estimate
+    unc = estimate_uncertainty(est, sig, nm, boundary, replicates, seed, _at(progress, "uncertainty"))  # 5. uncertainty
+    judged = judge_estimate(unc, sig, nm, boundary, check.misfit)  # 6. verdicts
+    result = _identification(common, est, unc, judged, check.fit)
+    return reduce(result, scale, judged.verdicts, skipped) if base else result

@@ -1,5 +1,6 @@
 """How to estimate from a recording: the single window or the continuous estimator, and
-their settings, from the recording's own time scales.
+their settings, from the recording's own time scales. Identify's plan stage is
+:func:`plan_record`: a first look at the chain's time scales, then the rules below.
 
 Rules (every threshold named below):
 
@@ -18,7 +19,7 @@ Rules (every threshold named below):
   for the weak-form windows, whose long windows (three times as long) join them; half a
   period as the first guess of the algebraic windows, whose length is then the best of its
   multiples :data:`WINDOW_MULTIPLES` by the error the bootstrap measures
-  (:func:`.surrogate.select_window`). Without a mode in the band, one period of the force's
+  (:func:`.estimate.select_window`). Without a mode in the band, one period of the force's
   median frequency (a chain without springs, such as a positioning axis, has no mode; its
   windows must hold whole moves). Clipped to at least :data:`MIN_WINDOW_SAMPLES` samples and
   at most the record over :data:`MIN_WINDOW_RESULTS` / ``stagger``.
@@ -53,6 +54,8 @@ import numpy as np
 
 from ..model.chain import stiffness_matrix
 from ..recording.noise import NoiseModel
+from .motion import equation_error_fit
+from .screen import Signals
 
 #: In-band SNR [dB] of every channel above which a record counts as noise-free.
 CLEAN_SNR_DB = 90.0
@@ -238,6 +241,18 @@ def make_plan(
         rms = [float(np.sqrt(np.mean([c.sigma**2 for c in chans]))) for chans in (nm.motions, nm.forces)]
         plan = replace(plan, noise_rms=tuple(rms))
     return plan
+
+
+def plan_record(sig: Signals, nm: NoiseModel, boundary: str, requested: str = "auto", joint: bool = True) -> Plan:
+    """Identify's plan stage: :func:`make_plan` for the record ``sig`` with noise model ``nm``,
+    given the natural frequencies [Hz] of a first estimate of the chain
+    (:func:`.motion.equation_error_fit`: eq. 1 on the DFT bins the forces excite), or of the
+    response's modes in the band for an impact record."""
+    if sig.transient is None:
+        first = natural_frequencies_hz(equation_error_fit(sig.rec.u, sig.motion, nm, boundary), sig.rec.n, boundary)
+    else:
+        first = np.array(sig.transient.in_band_hz)
+    return make_plan(nm, sig.duration_s, requested, first, joint, sig.transient)
 
 
 def window_candidates(plan: Plan, nm: NoiseModel, duration_s: float) -> list[Plan]:

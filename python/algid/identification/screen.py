@@ -21,6 +21,13 @@ instants whose derivative stencil reaches it) as not a number in every channel: 
 window reseeds there, the continuous estimator drops the windows in flight. The
 bootstrap's surrogates see the same instants as not a number, so the uncertainty includes
 what the lost samples cost.
+
+:func:`screened_signals` is identify's first stage: the screen, then the mains hum notched out
+of every channel alike (:func:`algid.recording.noise.without_hum`), an impact record's hits
+found, its force cleaned and force and motion band-passed alike around the modes the chain is
+to hold (:mod:`algid.recording.transient`), and the accelerations the estimators read (measured,
+or the derivatives of the velocities or displacements): the record as every later stage sees it
+(:class:`Signals`).
 """
 
 from __future__ import annotations
@@ -28,6 +35,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations
+from ..recording import motion as recording_motion
+from ..recording.noise import without_hum
+from ..recording.transient import Transient, transient_record
 
 #: Deviations from the median that the robust range ignores (the largest ones).
 RANGE_RANK = 4
@@ -144,3 +156,57 @@ def screen(rec, reach: int = 0):
         rows=rows,
     )
     return replace(rec, **fields), found
+
+
+@dataclass(frozen=True)
+class Signals:
+    """The record as identify's stages after the screen see it (:func:`screened_signals`).
+
+    rec : the recording screened, notched and, for an impact record, band-passed; raw : the
+    same before the band-pass (the fit check reads it); a : (T, n) accelerations [m/s^2] the
+    estimators read; kind, motion : the recorded motion's kind and (T, n) values; missing : (T,)
+    bool, the instants the estimators see as not a number; hum_hz : the mains lines notched out
+    [Hz]; screened : what the screen took out; transient : an impact record's hits, band and
+    modes (None otherwise); dt [s], duration_s [s] (samples times dt); forced : (n,) bool, the
+    DOFs that carry a force.
+    """
+
+    rec: Recording
+    raw: Recording
+    a: np.ndarray
+    kind: str
+    motion: np.ndarray
+    missing: np.ndarray
+    hum_hz: tuple
+    screened: Screened
+    transient: Transient | None
+    dt: float
+    duration_s: float
+    forced: np.ndarray
+
+
+def screened_signals(rec: Recording, band_hz: tuple | None = None) -> Signals:
+    """Identify's first stage (module docstring); ``band_hz``: an impact record's band
+    (:func:`algid.recording.transient.transient_record`)."""
+    # a derived acceleration's stencil reaches half its width past a screened sample
+    rec, found = screen(rec, reach=0 if rec.a is not None else DEFAULT_DIFF_POINTS // 2)
+    missing = found.rows
+    rec, hum = without_hum(rec)
+    raw, (rec, transient) = rec, transient_record(rec, band_hz)
+    if transient is not None:
+        missing = missing | transient.missing
+    kind, motion = recording_motion(rec)
+    return Signals(
+        rec=rec,
+        raw=raw,
+        a=accelerations(rec, DEFAULT_DIFF_POINTS),
+        kind=kind,
+        motion=motion,
+        missing=missing,
+        hum_hz=tuple(hum),
+        screened=found,
+        transient=transient,
+        dt=float(rec.dt),
+        duration_s=rec.t.size * rec.dt,
+        forced=np.any(rec.u != 0.0, axis=0),
+    )

@@ -34,7 +34,7 @@ model error (effects outside eq. 1) are not in it; :func:`algid.diagnose` looks 
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
@@ -43,17 +43,11 @@ from ..parallel import parallel_map
 from ..recording import derivative, second_derivative
 from ..recording.noise import NoiseModel
 from .motion import Motion, band_limited_motion, chain_forces, unforced_consistent
-from .plan import Plan, natural_frequencies_hz, window_candidates, window_limits
-from .runner import Run, run_plan
+from .plan import Plan, natural_frequencies_hz
+from .runner import run_plan
 
 #: Replicates of the bootstrap.
 REPLICATES = 8
-#: Replicates per candidate window when the algebraic windows' length is chosen.
-SELECT_REPLICATES = 4
-#: When the best window is the longest (shortest) tried, longer (shorter) ones by this
-#: factor are tried, at most this many times, while they score better.
-EXTEND_FACTOR = 1.4
-EXTEND_STEPS = 4
 
 
 def replicate_signals(
@@ -167,80 +161,3 @@ def surrogate_band(nm: NoiseModel, theta: np.ndarray, n: int, boundary: str) -> 
     """Band edge [Hz] of the surrogate motion: the signal band, widened to hold every natural
     frequency of the estimate with a margin."""
     return max([nm.f_hi] + [1.25 * float(f) for f in natural_frequencies_hz(theta, n, boundary)])
-
-
-def select_window(
-    a: np.ndarray,
-    u: np.ndarray,
-    motion_rec: np.ndarray,
-    nm: NoiseModel,
-    plan: Plan,
-    boundary: str,
-    forced: np.ndarray,
-    duration: float,
-    seed: int,
-    missing: np.ndarray | None,
-    progress: Callable[[float], None] | None = None,
-) -> tuple[Plan, Run]:
-    """The algebraic windows' length: every candidate of ``plan`` (:func:`.plan.window_candidates`)
-    run on the record and scored by the root-mean-square error the bootstrap measures on
-    :data:`SELECT_REPLICATES` surrogates (in shares of the force, mean over the parameters);
-    beyond the ends of the range while that improves. Longer windows average more but
-    integrate more of the noise the differentiation coloured (their bias grows): the record
-    decides. Returns the best plan and its run."""
-    from .verdicts import scales
-
-    n = u.shape[1]
-    cands = window_candidates(plan, nm, duration)
-
-    def score(cand: Plan) -> tuple[float, Run]:
-        run = run_plan(a, u, nm.dt, boundary, cand, missing=missing)
-        f_cut = surrogate_band(nm, run.theta, n, boundary)
-        boot = bootstrap(
-            run.theta,
-            motion_rec,
-            nm,
-            cand,
-            boundary,
-            f_cut,
-            forced,
-            SELECT_REPLICATES,
-            seed,
-            history=False,
-            missing=missing,
-        )
-        with np.errstate(invalid="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: parameters not estimated
-            rmse = np.sqrt(np.nanmean((boot.replicates - run.theta) ** 2, axis=0))
-        share = rmse * scales(n, boundary, boot.motion, u, forced)[0]
-        return (float(np.nanmean(share)) if np.any(np.isfinite(share)) else np.inf), run
-
-    def tick() -> None:
-        if progress is not None:
-            progress(min(len(scored) / (len(cands) + EXTEND_STEPS), 1.0))
-
-    scored: list[tuple[float, Run]] = []
-    for cand in cands:
-        scored.append(score(cand))
-        tick()
-    best = min(range(len(cands)), key=lambda q: scored[q][0])
-    lengths = sorted(c.window_s for c in cands)
-    lo, hi = window_limits(nm, duration)
-    step = None
-    if cands[best].window_s == lengths[-1]:
-        step = EXTEND_FACTOR
-    elif cands[best].window_s == lengths[0]:
-        step = 1.0 / EXTEND_FACTOR
-    for _ in range(EXTEND_STEPS if step else 0):  # the best is at an end of the range: look beyond
-        L = float(np.clip(cands[best].window_s * step, lo, hi))
-        if abs(L / cands[best].window_s - 1.0) < 0.05:
-            break
-        cand = replace(cands[best], window_s=L, window_basis=f"{L / plan.window_s:.3g} x ({plan.window_basis})")
-        result = score(cand)
-        tick()
-        if not result[0] < scored[best][0]:
-            break
-        cands.append(cand)
-        scored.append(result)
-        best = len(cands) - 1
-    return cands[best], scored[best][1]

@@ -29,10 +29,11 @@ from typing import Callable
 
 import numpy as np
 
+from ..recording import DEFAULT_DIFF_POINTS
 from ..recording.noise import NoiseModel
+from .estimate import Estimate
 from .motion import Motion, band_limited_motion
-from .plan import Plan
-from .runner import Run
+from .screen import Signals
 from .surrogate import bootstrap, surrogate_band
 
 #: A bootstrap bias is taken off the estimate when it exceeds this many of its standard
@@ -72,20 +73,18 @@ def _combine(theta, sigma, bias, bias_stderr, method_bias, excess):
 
 
 def estimate_uncertainty(
-    run: Run,
-    motion_rec: np.ndarray,
+    est: Estimate,
+    sig: Signals,
     nm: NoiseModel,
-    plan: Plan,
     boundary: str,
-    forced: np.ndarray,
     replicates: int,
     seed: int,
-    diff_points: int,
-    missing: np.ndarray | None,
     progress: Callable[[float], None] | None = None,
 ) -> Uncertainty:
-    """The uncertainty of ``run`` (module docstring); ``motion_rec`` (T, n) is the recorded
-    motion of kind ``nm.motion``."""
+    """Identify's uncertainty stage: the uncertainty of the estimate ``est`` of the record
+    ``sig`` (module docstring), with ``replicates`` bootstrap replicates of ``seed``."""
+    run, plan, motion_rec, forced, missing = est.run, est.plan, sig.motion, sig.forced, sig.missing
+    replicates = int(replicates)
     n = motion_rec.shape[1]
     f_cut = surrogate_band(nm, run.theta, n, boundary)
     weak = plan.method == "weak_form"
@@ -105,7 +104,7 @@ def estimate_uncertainty(
         forced,
         0 if weak else replicates,
         seed,
-        diff_points,
+        DEFAULT_DIFF_POINTS,
         progress=progress,
         history=not weak,
         missing=missing,

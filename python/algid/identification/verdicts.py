@@ -43,12 +43,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..model.chain import dof_parameter_names, parameter_names, spring_deformation
 from ..recording.noise import NoiseModel
 from .motion import Motion
+from .screen import Signals
+
+if TYPE_CHECKING:  # uncertainty imports this module (through estimate)
+    from .uncertainty import Uncertainty
 
 #: Uncertainty share above which a parameter is not determined by the record.
 UNDETERMINED = 0.2
@@ -214,6 +219,27 @@ def judge(
                 v = Verdict(name, "model_misfit", f"{_WHAT[fam]} biased: {misfit}", v.share, v.sigma_share)
             out.append(v)
     return out
+
+
+@dataclass(frozen=True)
+class Judged:
+    """Identify's verdicts and the estimates as reported: ``theta``, ``sigma`` (3n+1,) with no
+    value (NaN) where the record has no scale for it (an unforced DOF) or the estimator's
+    systems were singular."""
+
+    verdicts: list
+    theta: np.ndarray
+    sigma: np.ndarray
+
+
+def judge_estimate(unc: Uncertainty, sig: Signals, nm: NoiseModel, boundary: str, misfit: str = "") -> Judged:
+    """Identify's verdicts stage: :func:`judge` of the estimate with its uncertainty ``unc``
+    on the record ``sig``; every estimator carries the scale along the springs (the weak form's
+    joint solve; the single window and the algebraic windows through eq. 7's ratios)."""
+    u = sig.rec.u
+    verdicts = judge(unc.theta, unc.sigma, sig.rec.n, boundary, unc.motion, u, sig.forced, nm, True, misfit)
+    blank = np.array([v.status == "not_identifiable" and not np.isfinite(v.share) for v in verdicts])
+    return Judged(verdicts, np.where(blank, np.nan, unc.theta), np.where(blank, np.nan, unc.sigma))
 
 
 _WHAT = {"m": "mass", "c": "damping", "k": "stiffness"}
