@@ -138,7 +138,8 @@ def estimate(
     mean of their ratio estimates (NaN for springs with no column of their own).
     ``extra_rows``: rows beyond M per DOF (least squares). A sample is trusted as the chain's
     (:func:`algid.estimator.reference.estimate`): ``index + points - 1 >= min_samples``, a
-    finite weight and a Hadamard measure >= ``min_hadamard``.
+    finite weight and a Hadamard measure of at least :func:`hadamard_threshold` (the chain's
+    ``min_hadamard`` up to 4 unknowns).
     """
     y = np.atleast_2d(np.asarray(y, dtype=float))
     u = np.atleast_2d(np.asarray(u, dtype=float))
@@ -152,7 +153,11 @@ def estimate(
         S, b = dof_system(network, i, Gy, Gu[i - 1], tau, M + extra_rows)
         theta, logw = solve(S, b, tau)
         had = hadamard(S)
-        good = np.isfinite(logw) & (had >= hadamard_threshold(min_hadamard, M)) & (np.arange(tau.size) + points - 1 >= min_samples)
+        good = (
+            np.isfinite(logw)
+            & (had >= hadamard_threshold(min_hadamard, M))
+            & (np.arange(tau.size) + points - 1 >= min_samples)
+        )
         out.append(
             {
                 "names": [f"m{i}", f"c{i}"] + [f"k{s}" for s, _ in network.columns(i)],

@@ -92,9 +92,11 @@ class Network:
     def parameter_names(self) -> list[str]:
         """``m1..mn, c1..cn, k1..kS``: the order of every packed parameter vector."""
         n = self.n
-        return [f"m{i}" for i in range(1, n + 1)] + [f"c{i}" for i in range(1, n + 1)] + [
-            f"k{s}" for s in range(1, self.size + 1)
-        ]
+        return (
+            [f"m{i}" for i in range(1, n + 1)]
+            + [f"c{i}" for i in range(1, n + 1)]
+            + [f"k{s}" for s in range(1, self.size + 1)]
+        )
 
     def deformation_matrix(self) -> np.ndarray:
         """``D`` (S, n) with ``d = D x``: ``d_s = x_b - x_a`` [m] for spring ``s = (a, b)``."""

@@ -69,8 +69,8 @@ class Plant:
         self.K = K
         D = chain.deformation_matrix()  # d = D x, d_s = x_hi - x_lo (ground 0)
         self.D = D
-        #: (lo, hi) 0-based DOFs of every spring, -1 for ground: d_s = x_hi - x_lo
-        self.ends = [(int(np.argmin(row)) if row.min() < 0 else -1, int(np.argmax(row)) if row.max() > 0 else -1) for row in D]
+        #: (lo, hi) 0-based DOFs of every spring, -1 for ground
+        self.ends = spring_ends(D)
         # (kind, dof, level, static level, Stribeck velocity, regularisation velocity)
         self.dof_terms: list[tuple[str, int, float, float, float, float]] = []
         for q, e in enumerate(effects):
@@ -148,6 +148,12 @@ class Plant:
             d, dd = x @ self.ad_D.T, v @ self.ad_D.T
             f -= (self.ad_c * np.abs(d) * dd) @ self.ad_D
         return f
+
+
+def spring_ends(D: np.ndarray) -> list[tuple[int, int]]:
+    """``(lo, hi)`` per spring from the deformation matrix ``D`` (S, n): ``d_s = x_hi - x_lo``,
+    0-based DOFs, -1 for ground."""
+    return [(int(np.argmin(r)) if r.min() < 0 else -1, int(np.argmax(r)) if r.max() > 0 else -1) for r in D]
 
 
 def effect_forces(
