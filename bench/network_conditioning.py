@@ -4,9 +4,10 @@ M = 2 + deg(i) (issue 39): for every DOF of the example networks (half-car, tors
 multisine, the 2-norm condition number of the time-scaled system after column equilibration
 and the relative error of the instantaneous (eq. 5) and eq. 7 estimates of the numpy reference
 (:mod:`algid.estimator.network_reference`) at a few instants, with the square system (rows
-q = 0..M-1) and with least squares on extra rows; beside them the same rows of every sample
-in [t/2, t] stacked into one least-squares problem (a design candidate: what a running normal
-matrix of the M-row systems would solve); then the median over DOFs of equal M. It decides the
+q = 0..M-1) and with least squares on extra rows; beside them the first ``--stack-rows`` rows
+(default 4, the chain's q = 0..3) of every sample in [t/2, t] stacked into one least-squares
+problem (a design candidate: what a running M x M normal matrix would solve); then the median
+over DOFs of equal M. It decides the
 C++ design (Cramer or least squares, how many rows).
 
     python bench/network_conditioning.py                  # prints the table (about 10 s)
@@ -27,7 +28,7 @@ from algid.simulator.exact import multisine, simulate_chain
 from algid.simulator.scenarios import NETWORKS, network_model
 
 
-def dof_rows(name: str, seconds: float, times: list[float], points: int, extra: list[int]) -> list[dict]:
+def dof_rows(name: str, seconds: float, times: list[float], points: int, extra: list[int], stack: int) -> list[dict]:
     """One row per DOF and row count: M, condition number and errors at ``times`` [s]."""
     model = network_model(name)
     net, truth, names = model.network, model.packed(), model.network.parameter_names()
@@ -47,11 +48,11 @@ def dof_rows(name: str, seconds: float, times: list[float], points: int, extra: 
             cond = nr.condition(S[at])
             err = np.max(np.abs(theta[at] / exact - 1), axis=1)
             err7 = np.max(np.abs(fused[at] / exact - 1), axis=1)
-            stack = [stacked(S, b, tau, k) for k in at]
+            st = [stacked(S[:, :stack], b[:, :stack], tau, k) for k in at]
             row = {"network": name, "dof": i, "M": M, "rows": M + e, "condition": cond.tolist()}
             row |= {"error_inst": err.tolist(), "error_eq7": err7.tolist()}
-            row |= {"condition_stacked": [c for c, _ in stack]}
-            row |= {"error_stacked": [float(np.max(np.abs(th / exact - 1))) for _, th in stack]}
+            row |= {"condition_stacked": [c for c, _ in st]}
+            row |= {"error_stacked": [float(np.max(np.abs(th / exact - 1))) for _, th in st]}
             out.append(row)
     return out
 
@@ -87,13 +88,17 @@ def main() -> None:
     ap.add_argument("--times", type=float, nargs="+", default=[0.05, 0.1, 0.2, 1.0], help="instants [s]")
     ap.add_argument("--points", type=int, default=8, help="quadrature points (the core's default 8)")
     ap.add_argument("--extra", type=int, nargs="+", default=[0, 2, 4], help="rows beyond M (0: square)")
+    ap.add_argument("--stack-rows", type=int, default=4, help="rows per sample in the stacked problem")
     ap.add_argument("--json", type=Path, help="write the rows and settings here")
     args = ap.parse_args()
     times = [t for t in args.times if t <= args.seconds]
-    rows = [r for name in NETWORKS for r in dof_rows(name, args.seconds, times, args.points, args.extra)]
+    rows = [
+        r for name in NETWORKS for r in dof_rows(name, args.seconds, times, args.points, args.extra, args.stack_rows)
+    ]
     summary(rows, times)
     if args.json is not None:
-        settings = {"seconds": args.seconds, "times": times, "points": args.points, "fs_hz": 1000.0}
+        settings = {"seconds": args.seconds, "times": times, "points": args.points, "stack_rows": args.stack_rows}
+        settings["fs_hz"] = 1000.0
         args.json.write_text(json.dumps({"settings": settings, "rows": rows}, indent=1) + "\n", encoding="utf-8")
 
 
