@@ -13,6 +13,7 @@ C++ design (Cramer or least squares, how many rows).
     python bench/network_conditioning.py                  # prints the table (about 10 s)
     python bench/network_conditioning.py --json bench/results/network_conditioning.json
     python bench/network_conditioning.py --points 12      # the 12-point quadrature rule
+    python bench/network_conditioning.py --snr 40 --seconds 5 --times 1 5 --extra 0  # 40 dB noise
 """
 
 from __future__ import annotations
@@ -28,11 +29,24 @@ from algid.simulator.exact import multisine, simulate_chain
 from algid.simulator.scenarios import NETWORKS, network_model
 
 
-def dof_rows(name: str, seconds: float, times: list[float], points: int, extra: list[int], stack: int) -> list[dict]:
+def record(model, args) -> tuple[np.ndarray, np.ndarray]:
+    """Accelerations and forces (T, n) under the tests' multisine, with white noise of
+    ``args.snr`` dB (RMS ratio per channel) on both if given."""
+    _, a, u, _ = simulate_chain(model, multisine(model.n), args.seconds)
+    if args.snr is not None:
+        rng = np.random.default_rng(args.seed)
+        ratio = 10.0 ** (-args.snr / 20.0)
+        a = a + ratio * np.sqrt(np.mean(a**2, axis=0)) * rng.standard_normal(a.shape)
+        u = u + ratio * np.sqrt(np.mean(u**2, axis=0)) * rng.standard_normal(u.shape)
+    return a, u
+
+
+def dof_rows(name: str, args, times: list[float]) -> list[dict]:
     """One row per DOF and row count: M, condition number and errors at ``times`` [s]."""
     model = network_model(name)
     net, truth, names = model.network, model.packed(), model.network.parameter_names()
-    _, a, u, _ = simulate_chain(model, multisine(model.n), seconds)
+    a, u = record(model, args)
+    points, extra, stack = args.points, args.extra, args.stack_rows
     top = 2 + max(len(net.columns(i)) for i in range(1, net.n + 1)) + max(extra)
     Gy, Gu, tau = nr.moments_of(a, u, 1e-3, top, points)
     at = [int(round(t * 1000)) for t in times]
@@ -88,17 +102,17 @@ def main() -> None:
     ap.add_argument("--times", type=float, nargs="+", default=[0.05, 0.1, 0.2, 1.0], help="instants [s]")
     ap.add_argument("--points", type=int, default=8, help="quadrature points (the core's default 8)")
     ap.add_argument("--extra", type=int, nargs="+", default=[0, 2, 4], help="rows beyond M (0: square)")
+    ap.add_argument("--snr", type=float, help="white noise on accelerations and forces [dB] (default none)")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the noise")
     ap.add_argument("--stack-rows", type=int, default=4, help="rows per sample in the stacked problem")
     ap.add_argument("--json", type=Path, help="write the rows and settings here")
     args = ap.parse_args()
     times = [t for t in args.times if t <= args.seconds]
-    rows = [
-        r for name in NETWORKS for r in dof_rows(name, args.seconds, times, args.points, args.extra, args.stack_rows)
-    ]
+    rows = [r for name in NETWORKS for r in dof_rows(name, args, times)]
     summary(rows, times)
     if args.json is not None:
         settings = {"seconds": args.seconds, "times": times, "points": args.points, "stack_rows": args.stack_rows}
-        settings["fs_hz"] = 1000.0
+        settings |= {"fs_hz": 1000.0, "snr_db": args.snr, "seed": args.seed}
         args.json.write_text(json.dumps({"settings": settings, "rows": rows}, indent=1) + "\n", encoding="utf-8")
 
 
