@@ -48,12 +48,17 @@ def dof_system(network: Network, i: int, G: list[np.ndarray], Gu: np.ndarray, ta
     return A * R[:, :, None] * C[:, None, :], B * R * (inv**2)[:, None]
 
 
+#: Lowest moment order computed: the 12 rows of a DOF with 10 unknowns (the lattice's centre)
+#: and two extra, so that one set of quadrature weights (slow to build, cached) serves them all.
+MIN_ORDER = 13
+
+
 def moments_of(y: np.ndarray, u: np.ndarray, dt: float, rows: int, points: int = 8):
     """Moments (:func:`algid.estimator.reference.moments`) of every acceleration and force up
-    to the order ``rows + 1`` that R rows need, and ``tau`` (T,) [s]."""
+    to the order ``rows + 1`` that R rows need (at least :data:`MIN_ORDER`), and ``tau`` (T,) [s]."""
     T = y.shape[0]
     tau = dt * np.arange(T)
-    order = rows + 1
+    order = max(rows + 1, MIN_ORDER)
     Gy = [moments(y[:, i], tau, dt, points, order) for i in range(y.shape[1])]
     Gu = [moments(u[:, i], tau, dt, points, order) for i in range(u.shape[1])]
     return Gy, Gu, tau
