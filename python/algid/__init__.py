@@ -6,6 +6,7 @@ from .fleet import batch
 from .identification import Identification, identify
 from .messages.deprecation import install_moved_modules, moved_module
 from .model.chain import TABLE1, Chain
+from .model.network import Network, NetworkModel
 from .recording import Recording, as_recording, load_recording
 from .recording.frf_file import FrfData, load_frf
 
@@ -21,6 +22,8 @@ __all__ = [
     "FrfData",
     "ISA",
     "Identification",
+    "Network",
+    "NetworkModel",
     "Recording",
     "SIZES",
     "Status",

@@ -56,15 +56,16 @@ def iterated_integrals(f: np.ndarray, h: float, points: int, max_order: int = MA
     return out
 
 
-def moments(f: np.ndarray, delta: np.ndarray, h: float, points: int) -> np.ndarray:
-    """``G[p, r, j] = I^r(Delta^p f)(t_j)`` for p = 0, 1, 2, r = 0..MAX_ORDER, from the chain
+def moments(f: np.ndarray, delta: np.ndarray, h: float, points: int, max_order: int = MAX_ORDER) -> np.ndarray:
+    """``G[p, r, j] = I^r(Delta^p f)(t_j)`` for p = 0, 1, 2, r = 0..max_order, from the chain
     of ``f`` alone and the integration-by-parts identity (what the C++ core does)."""
-    I = iterated_integrals(f, h, points, MAX_ORDER + 2)
-    r = np.arange(MAX_ORDER + 1)[:, None]
-    G = np.empty((3, MAX_ORDER + 1, f.size))
-    G[0] = I[: MAX_ORDER + 1]
-    G[1] = delta * I[: MAX_ORDER + 1] - r * I[1 : MAX_ORDER + 2]
-    G[2] = delta**2 * I[: MAX_ORDER + 1] - 2 * r * delta * I[1 : MAX_ORDER + 2] + r * (r + 1) * I[2 : MAX_ORDER + 3]
+    top = max_order
+    I = iterated_integrals(f, h, points, top + 2)
+    r = np.arange(top + 1)[:, None]
+    G = np.empty((3, top + 1, f.size))
+    G[0] = I[: top + 1]
+    G[1] = delta * I[: top + 1] - r * I[1 : top + 2]
+    G[2] = delta**2 * I[: top + 1] - 2 * r * delta * I[1 : top + 2] + r * (r + 1) * I[2 : top + 3]
     return G
 
 

@@ -27,8 +27,12 @@ with the sensitivities from the forward sensitivity equations, integrated exactl
 plant (one block-triangular LTI system: filters, chain, and one chain copy per parameter).
 The bound on parameter j is sqrt((F^-1)_jj); the initial state is marginalised out.
 
+A spring network (:class:`~algid.model.network.NetworkModel`) goes through the same steps
+with its own stiffness matrix ``K = D^T diag(k) D`` and parameters ``m, c, k_1..k_S``.
+
 The benchmarks judge the estimators against this bound (``bench/continuous.py``,
-``bench/identify.py``, ``bench/soak.py``); ``python bench/crlb.py`` prints it for Table 1.
+``bench/identify.py``, ``bench/soak.py``); ``python bench/crlb.py`` prints it for Table 1,
+``--network NAME`` for one of the example networks.
 """
 
 from __future__ import annotations
@@ -40,19 +44,17 @@ from scipy.linalg import expm
 from scipy.signal import butter
 
 from ..model.chain import Chain
+from ..model.network import Network, NetworkModel
 
 # ---------------------------------------------------------------------------------------------
 # model
 
 
-def chain_blocks(m: np.ndarray, c: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Continuous chain dynamics y' = A y + B u with y = [x; v] (2n)."""
+def chain_blocks(m: np.ndarray, c: np.ndarray, k: np.ndarray, network: Network | None = None):
+    """Continuous dynamics y' = A y + B u with y = [x; v] (2n) of the chain (springs
+    ``k_1..k_{n+1}``) or of ``network`` (springs ``k_1..k_S``)."""
     n = m.size
-    K = np.zeros((n, n))
-    for i in range(n):
-        K[i, i] = k[i] + k[i + 1]
-        if i + 1 < n:
-            K[i, i + 1] = K[i + 1, i] = -k[i + 1]
+    K = (Network.chain(n) if network is None else network).stiffness_matrix(k)
     Minv = np.diag(1.0 / m)
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
@@ -102,11 +104,11 @@ class Record:
     t: np.ndarray  #: (T,) sample times [s]
     a: np.ndarray  #: (T, n) clean accelerations [m/s^2]
     u: np.ndarray  #: (T, n) clean forces [N]
-    truth: np.ndarray  #: (T, 3n+1) true parameters m, c, k_1..k_{n+1} at each sample
+    truth: np.ndarray  #: (T, 3n+1) true parameters m, c, k_1..k_{n+1} (a network's k_1..k_S) at each sample
     y0: np.ndarray  #: (2n,) chain state at t = 0
     z0: np.ndarray  #: full simulator state at t = 0 (filters then chain)
     w: np.ndarray  #: (T, n) ZOH white-noise input of the force filters
-    chain: Chain = field(repr=False, default=None)
+    chain: Chain | NetworkModel = field(repr=False, default=None)
     band_hz: float = 20.0
 
     @property
@@ -137,14 +139,20 @@ def rms(x: np.ndarray) -> np.ndarray:
     return np.sqrt(np.mean(x**2, axis=0))
 
 
-def params_of(chain: Chain) -> np.ndarray:
+def params_of(chain: Chain | NetworkModel) -> np.ndarray:
     return np.concatenate([chain.mass, chain.damping, chain.stiffness])
 
 
-def _plant(p: np.ndarray, n: int, Af, Bf, Cf, h: float):
-    """Exact discretisation of (force filters -> chain) with parameters p = (m, c, k)."""
+def topology(model: Chain | NetworkModel) -> Network:
+    """The springs of the packed parameters: a chain's all n+1 (a free end's k_{n+1} = 0
+    included), a network model's own."""
+    return model.network if isinstance(model, NetworkModel) else Network.chain(model.n)
+
+
+def _plant(p: np.ndarray, n: int, Af, Bf, Cf, h: float, network: Network | None = None):
+    """Exact discretisation of (force filters -> chain or ``network``) with parameters p = (m, c, k)."""
     nf = Af.shape[0]
-    A, B = chain_blocks(p[:n], p[n : 2 * n], p[2 * n :])
+    A, B = chain_blocks(p[:n], p[n : 2 * n], p[2 * n :], network)
     nz = nf + 2 * n
     Az = np.zeros((nz, nz))
     Az[:nf, :nf] = Af
@@ -170,7 +178,7 @@ def _filter_gain(band_hz: float, h: float, force_rms: float) -> float:
 
 
 def simulate(
-    chain: Chain,
+    chain: Chain | NetworkModel,
     duration_s: float,
     fs_hz: float = 1000.0,
     *,
@@ -202,7 +210,8 @@ def simulate(
     if forced is not None:
         w[:, np.setdiff1d(np.arange(n), forced)] = 0.0
     p = params_of(chain)
-    Phi, Gam = _plant(p, n, Af, Bf, Cf, h)
+    net = topology(chain)
+    Phi, Gam = _plant(p, n, Af, Bf, Cf, h, net)
     z = np.zeros(nf + 2 * n)
     for k in range(B0):
         z = Phi @ z + Gam @ w[k]
@@ -214,21 +223,15 @@ def simulate(
             p_new = np.asarray(schedule(k * h), dtype=float)
             if not np.array_equal(p_new, p):
                 p = p_new
-                Phi, Gam = _plant(p, n, Af, Bf, Cf, h)
+                Phi, Gam = _plant(p, n, Af, Bf, Cf, h, net)
         truth[k] = p
         Z[k] = z
         z = Phi @ z + Gam @ w[B0 + k]
     u = Z[:, :nf] @ Cf.T
     x, v = Z[:, nf : nf + n], Z[:, nf + n :]
     m, c, kk = truth[:, :n], truth[:, n : 2 * n], truth[:, 2 * n :]
-    a = np.empty((T, n))
-    for i in range(n):
-        spring = (kk[:, i] + kk[:, i + 1]) * x[:, i]
-        if i > 0:
-            spring -= kk[:, i] * x[:, i - 1]
-        if i + 1 < n:
-            spring -= kk[:, i + 1] * x[:, i + 1]
-        a[:, i] = (u[:, i] - c[:, i] * v[:, i] - spring) / m[:, i]
+    D = net.deformation_matrix()
+    a = (u - c * v - (kk * (x @ D.T)) @ D) / m  # spring forces k_s d_s on both ends
     return Record(
         t=np.arange(T) * h,
         a=a,
@@ -246,8 +249,14 @@ def simulate(
 # Cramer-Rao bound
 
 
-def identified_mask(chain: Chain) -> np.ndarray:
-    """Which of (m, c, k_1..k_{n+1}) are unknown: all, except k_{n+1} = 0 with a free end."""
+def identified_mask(chain: Chain | NetworkModel) -> np.ndarray:
+    """Which of (m, c, k_1..k_{n+1}) are unknown: all, except k_{n+1} = 0 with a free end; a
+    network model's (m, c, k_1..k_S): all, and none for springs in parallel (only their sum)."""
+    if isinstance(chain, NetworkModel):
+        reasons = chain.network.identifiability()
+        if reasons:
+            raise ValueError(f"no per-parameter bound: {'; '.join(sorted(set(reasons.values())))}")
+        return np.ones(2 * chain.n + chain.network.size, dtype=bool)
     mask = np.ones(3 * chain.n + 1, dtype=bool)
     if chain.boundary == "free":
         mask[-1] = False
@@ -284,22 +293,27 @@ def sensitivities(rec: Record) -> tuple[np.ndarray, np.ndarray]:
     return driven_sensitivities(rec.chain, theta, rec.y0, drive, rec.dt)
 
 
-def _parameter_derivatives(theta: np.ndarray, idx: np.ndarray, n: int) -> tuple[list, list]:
-    """d A / d theta_j and d B / d theta_j of the chain, by central differences: exact for c
-    and k (A is linear in them), O(eps^2) for m."""
+def _parameter_derivatives(theta: np.ndarray, idx: np.ndarray, n: int, network: Network) -> tuple[list, list]:
+    """d A / d theta_j and d B / d theta_j of the chain or network, by central differences:
+    exact for c and k (A is linear in them), O(eps^2) for m."""
     dA, dB = [], []
     for j in idx:
         e = np.zeros_like(theta)
         e[j] = 1e-6 * theta[j]
-        Ap, Bp = chain_blocks(*np.split(theta + e, [n, 2 * n]))
-        Am, Bm = chain_blocks(*np.split(theta - e, [n, 2 * n]))
+        Ap, Bp = chain_blocks(*np.split(theta + e, [n, 2 * n]), network)
+        Am, Bm = chain_blocks(*np.split(theta - e, [n, 2 * n]), network)
         dA.append((Ap - Am) / (2 * e[j]))
         dB.append((Bp - Bm) / (2 * e[j]))
     return dA, dB
 
 
 def driven_sensitivities(
-    chain: Chain, theta: np.ndarray, y0: np.ndarray, drive: Drive, h: float, u_samples: np.ndarray | None = None
+    chain: Chain | NetworkModel,
+    theta: np.ndarray,
+    y0: np.ndarray,
+    drive: Drive,
+    h: float,
+    u_samples: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`sensitivities` of ``chain`` (parameters ``theta``, state ``y0`` at t = 0) under
     ``drive``: one block-triangular LTI system (input stage, chain, one chain copy per
@@ -309,8 +323,9 @@ def driven_sensitivities(
     n, T = chain.n, drive.w.shape[0]
     idx = np.nonzero(identified_mask(chain))[0]
     p = idx.size
-    A, B = chain_blocks(theta[:n], theta[n : 2 * n], theta[2 * n :])
-    dA, dB = _parameter_derivatives(theta, idx, n)
+    net = topology(chain)
+    A, B = chain_blocks(theta[:n], theta[n : 2 * n], theta[2 * n :], net)
+    dA, dB = _parameter_derivatives(theta, idx, n, net)
     Af, Bf, Cf, Df = drive.Af, drive.Bf, drive.Cf, drive.Df
     nf, ny = Af.shape[0], 2 * n
     q = p + ny  # sensitivity columns: parameters, then the initial state

@@ -16,23 +16,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BOUNDARIES = ("fixed", "free")
+from .network import BOUNDARIES, Network
+
+
+def _walls(n: int) -> Network:
+    """The chain with walls at both ends: every one of the n+1 springs of the packed vector
+    (a free chain's ``k_{n+1}`` is 0 there)."""
+    return Network.chain(n, "fixed")
 
 
 def stiffness_matrix(k: np.ndarray) -> np.ndarray:
     """Stiffness matrix K (n, n) [N/m] of eq. 1 from the springs ``k_1 .. k_{n+1}`` (n+1,)."""
-    n = len(k) - 1
-    K = np.zeros((n, n))
-    for i in range(n):
-        K[i, i] = k[i] + k[i + 1]
-        if i + 1 < n:
-            K[i, i + 1] = K[i + 1, i] = -k[i + 1]
-    return K
+    return _walls(len(k) - 1).stiffness_matrix(k)
 
 
 def parameter_names(n: int) -> list[str]:
     """``m1..mn, c1..cn, k1..k{n+1}``: the order of every packed parameter vector."""
-    return [f"m{i + 1}" for i in range(n)] + [f"c{i + 1}" for i in range(n)] + [f"k{j + 1}" for j in range(n + 1)]
+    return _walls(n).parameter_names()
 
 
 def dof_parameter_names(i: int) -> list[str]:
@@ -47,26 +47,14 @@ def spring_columns(n: int, boundary: str) -> list[list[tuple[int, int]]]:
     For n = 1 the two springs act in parallel: one column (x_1) identifies k_1 + k_2 and
     is attributed to spring 1. With a free right end spring n+1 does not exist.
     """
-    out = []
-    for e in range(n):
-        cols = [(e + 1, e - 1 if e >= 1 else -1)]
-        if n == 1:
-            out.append(cols)
-            continue
-        if e + 1 < n:
-            cols.append((e + 2, e + 1))
-        elif boundary == "fixed":
-            cols.append((e + 2, -1))
-        out.append(cols)
-    return out
+    net = Network.chain(n, boundary)
+    return [[(j, other - 1) for j, other in net.columns(e + 1)] for e in range(n)]
 
 
 def springs(n: int, boundary: str) -> list[int]:
     """Springs (1-based) that exist and can be told apart: 1..n+1 (fixed), 1..n (free),
     only 1 for n = 1."""
-    if n == 1:
-        return [1]
-    return list(range(1, n + 1 + (boundary == "fixed")))
+    return Network.chain(n, boundary).identifiable_springs()
 
 
 def equation_parameter_names(n: int, boundary: str, e: int) -> list[str]:
@@ -76,36 +64,19 @@ def equation_parameter_names(n: int, boundary: str, e: int) -> list[str]:
 
 def spring_sides(n: int, j: int) -> list[tuple[int, float]]:
     """(DOF equation (0-based), sign) pairs where a force of spring ``j`` (1-based) enters:
-    DOF j (+), DOF j-1 (-); for n = 1 only DOF 1."""
-    if n == 1:
-        return [(0, 1.0)]
-    out = []
-    if j - 1 < n:
-        out.append((j - 1, 1.0))
-    if j - 2 >= 0:
-        out.append((j - 2, -1.0))
-    return out
+    DOF j (+), DOF j-1 (-); for n = 1 only DOF 1 (spring 1, the parallel pair's column)."""
+    return [(i - 1, sign) for i, sign in _walls(n).sides(1 if n == 1 else j)]
 
 
 def deformation_matrix(n: int) -> np.ndarray:
     """``D`` (n+1, n) with ``d = D x``: ``d_j = x_j - x_{j-1}`` [m] for every spring (walls at 0)."""
-    D = np.zeros((n + 1, n))
-    for j in range(n + 1):
-        if j < n:
-            D[j, j] = 1.0
-        if j >= 1:
-            D[j, j - 1] = -1.0
-    return D
+    return _walls(n).deformation_matrix()
 
 
 def spring_deformation(x: np.ndarray, j: int, n: int) -> np.ndarray:
     """Deformation ``d_j = x_j - x_{j-1}`` (T,) [m] of spring ``j`` (1-based) from positions
     ``x`` (T, n) (walls at 0); for n = 1, ``x_1`` (both springs in parallel)."""
-    if n == 1:
-        return x[:, 0]
-    right = x[:, j - 1] if j - 1 < n else 0.0
-    left = x[:, j - 2] if j - 2 >= 0 else 0.0
-    return right - left
+    return _walls(n).deformation(x, 1 if n == 1 else j)
 
 
 @dataclass(frozen=True)
@@ -153,6 +124,15 @@ class Chain:
     def n(self) -> int:
         """Number of degrees of freedom."""
         return int(self.mass.size)
+
+    @property
+    def network(self) -> Network:
+        """The chain's topology (:meth:`Network.chain`)."""
+        return Network.chain(self.n, self.boundary)
+
+    def deformation_matrix(self) -> np.ndarray:
+        """``D`` (n+1, n) of all n+1 springs of the packed vector (``d = D x``)."""
+        return deformation_matrix(self.n)
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Mass, damping and stiffness matrices (M, C, K) of eq. 1."""

@@ -35,7 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .chain import Chain, deformation_matrix
+from .chain import Chain
+from .network import NetworkModel
 
 KINDS = ("underdamped", "overdamped", "rigid")
 #: Eigenvalues closer than this (relative) are repeated: no first-order uncertainty there.
@@ -213,15 +214,15 @@ def modes(chain: Chain) -> ModalAnalysis:
 
 
 def rank_one_derivatives(chain: Chain, V: np.ndarray, Vinv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(a, b)``, each (3n+1, 2n): ``V^-1 (dA / dtheta_p) V = outer(a_p, b_p)`` for every
-    parameter ``theta = m1..mn, c1..cn, k1..k{n+1}``. Each derivative of ``A`` is rank one:
+    """``(a, b)``, each (2n+S, 2n): ``V^-1 (dA / dtheta_p) V = outer(a_p, b_p)`` for every
+    parameter ``theta = m1..mn, c1..cn, k1..kS`` (a chain: S = n+1). Each derivative of ``A`` is rank one:
     mass ``i`` scales its row of ``[-M^-1 K, -M^-1 C]`` (``-A[n+i] / m_i``), damper ``i`` is
     ``-1/m_i`` on its diagonal, spring ``j`` adds ``-M^-1 d_j d_j^T`` (``d_j`` its row of the
     deformation matrix)."""
     n = chain.n
     A = state_matrix(chain)
     m = chain.mass
-    D = deformation_matrix(n)
+    D = chain.deformation_matrix()
     a = np.concatenate([Vinv[:, n:].T, Vinv[:, n:].T, (Vinv[:, n:] @ (-(D / m).T)).T])
     b = np.concatenate([-(A[n:] @ V) / m[:, None], -V[n:] / m[:, None], D @ V[:n]])
     return a, b
@@ -266,7 +267,7 @@ def jacobian(chain: Chain, ma: ModalAnalysis | None = None) -> np.ndarray:
     a, b = rank_one_derivatives(chain, V, np.linalg.inv(V))  # (P, 2n) each
     dlam = a * b
     k = len(ma.modes)
-    J = np.full((2 * k + k * n, 3 * n + 1), np.nan)
+    J = np.full((2 * k + k * n, a.shape[0]), np.nan)
     for m, mode in enumerate(ma.modes):
         i = int(np.argmin(np.abs(lam - mode.eigenvalues[0])))
         others = np.abs(np.delete(lam, i) - lam[i])
@@ -285,11 +286,13 @@ def modal_analysis(source, sigma=None, covariance=None) -> ModalAnalysis:
 
     Parameters
     ----------
-    source : :class:`algid.Chain`, an :class:`algid.Identification`, or an ``algid identify``
-        JSON document (dict or path); the last two carry their own standard deviations.
-    sigma : (3n+1,) standard deviations of ``m1..mn, c1..cn, k1..k{n+1}`` [kg, N s/m, N/m],
-        taken as independent; or
-    covariance : (3n+1, 3n+1) their covariance.
+    source : :class:`algid.Chain`, a :class:`~algid.model.network.NetworkModel`, an
+        :class:`algid.Identification`, or an ``algid identify`` JSON document (dict or path);
+        the last two carry their own standard deviations.
+    sigma : (3n+1,) standard deviations of ``m1..mn, c1..cn, k1..k{n+1}`` [kg, N s/m, N/m]
+        (a :class:`~algid.model.network.NetworkModel`: (2n+S,), ``k1..kS``), taken as
+        independent; or
+    covariance : (3n+1, 3n+1) their covariance (a network model: (2n+S, 2n+S)).
 
     Returns
     -------
@@ -303,7 +306,7 @@ def modal_analysis(source, sigma=None, covariance=None) -> ModalAnalysis:
     ma = modes(chain)
     if covariance is None and sigma is None:
         return ma
-    size = 3 * chain.n + 1
+    size = 2 * chain.n + chain.stiffness.size
     cov = np.diag(np.asarray(sigma, dtype=float) ** 2) if covariance is None else np.asarray(covariance, dtype=float)
     if cov.shape != (size, size):
         raise ValueError(f"the covariance must be ({size}, {size}) for n = {chain.n}, got {cov.shape}")
@@ -321,7 +324,7 @@ def modal_analysis(source, sigma=None, covariance=None) -> ModalAnalysis:
 
 def _chain_and_sigma(source) -> tuple[Chain, np.ndarray | None]:
     """The chain and the standard deviations of its parameters (None if unknown)."""
-    if isinstance(source, Chain):
+    if isinstance(source, (Chain, NetworkModel)):
         return source, None
     if isinstance(source, (dict, str, Path)):
         doc = Chain.read_json(source)

@@ -6,7 +6,9 @@ closed loop.
 ``g`` collects the switched-on :class:`Effect` forces (none by default). Spring ``j``
 (1-based, ``j = 1 .. n+1``) joins DOF ``j-1`` and DOF ``j``; DOF 0 and DOF ``n+1`` are the
 walls. Its *deformation* is ``d_j = x_j - x_{j-1}`` (wall positions 0); a spring force
-``s(d_j)`` pushes DOF ``j`` by ``-s`` and DOF ``j-1`` by ``+s``.
+``s(d_j)`` pushes DOF ``j`` by ``-s`` and DOF ``j-1`` by ``+s``. A spring network
+(:class:`~algid.model.network.NetworkModel`) is simulated the same way, open loop: its spring
+``s = (a, b)`` has ``d_s = x_b - x_a`` and pushes DOF ``b`` by ``-s``, DOF ``a`` by ``+s``.
 
 Integration
 -----------
@@ -112,6 +114,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..model.chain import Chain
+from ..model.network import NetworkModel
 from .closed_loop import ClosedLoop
 from .effects import COULOMB_V_EPS, EFFECT_NAMES, Effect
 from .inputs import ForceInput, RunInputs, validate_inputs
@@ -136,7 +139,7 @@ __all__ = [
 
 
 def simulate(
-    chain: Chain,
+    chain: Chain | NetworkModel,
     force: ForceInput,
     duration_s: float,
     fs_hz: float = 1000.0,
@@ -160,8 +163,10 @@ def simulate(
 
     Parameters
     ----------
-    chain : Chain
-        Plant parameters and boundary.
+    chain : Chain or NetworkModel
+        Plant parameters and boundary, or a spring network's
+        (:class:`~algid.model.network.NetworkModel`: open loop only; effects at its springs
+        by the network's spring numbers).
     force : callable, array or None
         Force command [N]: ``f(t) -> (n,)``, samples ``(T, n)`` at ``fs_hz`` (at least
         ``T = round(duration_s * fs_hz)`` rows), or None (no force, or a controller).

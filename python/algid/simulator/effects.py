@@ -10,6 +10,7 @@ from typing import Any
 
 from ..messages.deprecation import warn_renamed
 from ..model.chain import Chain
+from ..model.network import NetworkModel
 
 __all__ = ["COULOMB_V_EPS", "EFFECT_LOCATIONS", "EFFECT_NAMES", "Effect", "as_effect"]
 
@@ -147,8 +148,8 @@ class Effect:
         """1-based spring index, or None for a DOF effect."""
         return self.location.get("spring")
 
-    def check(self, chain: Chain) -> None:
-        """Raise ``ValueError`` if the location does not exist on ``chain``."""
+    def check(self, chain: Chain | NetworkModel) -> None:
+        """Raise ``ValueError`` if the location does not exist on ``chain`` (or a network model)."""
         n = chain.n
         if "dof" in self.location:
             i = self.location["dof"]
@@ -156,9 +157,10 @@ class Effect:
                 raise ValueError(f"effect {self.name!r}: dof {i} outside 1..{n}")
         else:
             j = self.location["spring"]
-            top = n + 1 if chain.boundary == "fixed" else n
+            top = chain.network.size
+            where = f"{chain.boundary} right end" if isinstance(chain, Chain) else "the network's springs"
             if not 1 <= j <= top:
-                raise ValueError(f"effect {self.name!r}: spring {j} outside 1..{top} ({chain.boundary} right end)")
+                raise ValueError(f"effect {self.name!r}: spring {j} outside 1..{top} ({where})")
 
     def to_dict(self) -> dict:
         """JSON-friendly ``{"effect", "location", "params"}``."""

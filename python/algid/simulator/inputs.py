@@ -12,6 +12,7 @@ from typing import Any, Callable, Union
 import numpy as np
 
 from ..model.chain import Chain
+from ..model.network import NetworkModel
 from .effects import Effect, as_effect
 from .protocol import Controller
 from .sensors import SensorNoise
@@ -31,7 +32,7 @@ class RunInputs:
     state; ``delays`` (n,) input delay of every DOF [s]; the rest as :func:`algid.simulator.simulate`.
     """
 
-    chain: Chain
+    chain: Chain | NetworkModel
     duration_s: float
     fs_hz: float
     t: np.ndarray
@@ -96,8 +97,10 @@ def validate_inputs(
 ) -> RunInputs:
     """Check the arguments of :func:`algid.simulator.simulate` (same names and units) and
     raise ``ValueError`` on the first one that is wrong."""
-    if not isinstance(chain, Chain):
-        raise ValueError(f"chain must be an algid.Chain, got {type(chain).__name__}")
+    if not isinstance(chain, (Chain, NetworkModel)):
+        raise ValueError(f"chain must be an algid.Chain or an algid.NetworkModel, got {type(chain).__name__}")
+    if isinstance(chain, NetworkModel) and controller is not None:
+        raise ValueError("the controllers drive chains only: simulate a network model open loop (force=...)")
     if mode not in ("continuous", "sampled"):
         raise ValueError(f"mode must be 'continuous' or 'sampled', got {mode!r}")
     if force_interp not in ("cubic", "linear"):

@@ -9,7 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from ..model.chain import Chain, deformation_matrix
+from ..model.chain import Chain
+from ..model.network import NetworkModel
 from .effects import COULOMB_V_EPS, Effect, as_effect
 
 __all__ = ["Plant", "effect_forces"]
@@ -39,33 +40,37 @@ class Plant:
                 f[i] -= level * math.tanh(vi / eps)
             else:
                 f[i] -= a * vi * abs(vi)
-        for kind, j, a, b in self.spring_terms:  # spring j (0-based) joins DOF j-1 and DOF j
-            d = (xs[j] if j < n else 0.0) - (xs[j - 1] if j >= 1 else 0.0)
+        for kind, j, a, b in self.spring_terms:  # spring j (0-based) joins DOF lo and DOF hi
+            lo, hi = self.ends[j]
+            d = (xs[hi] if hi >= 0 else 0.0) - (xs[lo] if lo >= 0 else 0.0)
             if kind == "cs":
                 s = a * d * d * d
             elif kind == "cl":
                 ad = abs(d) - a
                 s = b * ad * (1.0 if d > 0 else -1.0) if ad > 0 else 0.0
             elif kind == "ad":
-                dd = (vs[j] if j < n else 0.0) - (vs[j - 1] if j >= 1 else 0.0)
+                dd = (vs[hi] if hi >= 0 else 0.0) - (vs[lo] if lo >= 0 else 0.0)
                 s = a * abs(d) * dd
             else:
                 s = a * t * d
-            if j < n:
-                f[j] -= s
-            if j >= 1:
-                f[j - 1] += s
+            if hi >= 0:
+                f[hi] -= s
+            if lo >= 0:
+                f[lo] += s
         return np.array(f)
 
-    def __init__(self, chain: Chain, effects: Sequence[Effect], duration_s: float, v_eps: dict[int, float]) -> None:
-        n = chain.n
+    def __init__(
+        self, chain: Chain | NetworkModel, effects: Sequence[Effect], duration_s: float, v_eps: dict[int, float]
+    ) -> None:
         _, _, K = chain.matrices()
-        self.n = n
+        self.n = chain.n
         self.minv = 1.0 / chain.mass
         self.c = chain.damping.copy()
         self.K = K
-        D = deformation_matrix(n)  # d = D x, d_j = x_j - x_{j-1} (walls 0)
+        D = chain.deformation_matrix()  # d = D x, d_s = x_hi - x_lo (ground 0)
         self.D = D
+        #: (lo, hi) 0-based DOFs of every spring, -1 for ground
+        self.ends = spring_ends(D)
         # (kind, dof, level, static level, Stribeck velocity, regularisation velocity)
         self.dof_terms: list[tuple[str, int, float, float, float, float]] = []
         for q, e in enumerate(effects):
@@ -110,7 +115,8 @@ class Plant:
         out = [vals[n + i] > 0.0 for kind, i, *_ in self.dof_terms if kind == "cf"]
         for kind, j, gap, _ in self.spring_terms:
             if kind == "cl":
-                d = (vals[j] if j < n else 0.0) - (vals[j - 1] if j >= 1 else 0.0)
+                lo, hi = self.ends[j]
+                d = (vals[hi] if hi >= 0 else 0.0) - (vals[lo] if lo >= 0 else 0.0)
                 out.append(abs(d) > gap)
         return tuple(out)
 
@@ -142,6 +148,12 @@ class Plant:
             d, dd = x @ self.ad_D.T, v @ self.ad_D.T
             f -= (self.ad_c * np.abs(d) * dd) @ self.ad_D
         return f
+
+
+def spring_ends(D: np.ndarray) -> list[tuple[int, int]]:
+    """``(lo, hi)`` per spring from the deformation matrix ``D`` (S, n): ``d_s = x_hi - x_lo``,
+    0-based DOFs, -1 for ground."""
+    return [(int(np.argmin(r)) if r.min() < 0 else -1, int(np.argmax(r)) if r.max() > 0 else -1) for r in D]
 
 
 def effect_forces(

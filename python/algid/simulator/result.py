@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..model.chain import Chain
+from ..model.network import NetworkModel
 from .effects import Effect
 
 __all__ = ["LIMIT_NAMES", "Samples", "SimulationResult"]
@@ -31,7 +32,7 @@ class SimulationResult:
     u : (T, n) recorded forces [N]: what the force sensors read (noisy if asked)
     u_applied : (T, n) forces acting on the masses [N]
     x_meas : (T, n) measured positions [m] (noisy if asked)
-    chain : the simulated :class:`~algid.model.chain.Chain`
+    chain : the simulated :class:`~algid.model.chain.Chain` (or :class:`~algid.model.network.NetworkModel`)
     effects : the effects switched on
     fs_hz : sample rate [Hz]
     mode : "continuous" or "sampled"
@@ -55,7 +56,7 @@ class SimulationResult:
     u: np.ndarray
     u_applied: np.ndarray
     x_meas: np.ndarray
-    chain: Chain
+    chain: Chain | NetworkModel
     effects: tuple[Effect, ...]
     fs_hz: float
     mode: str = "continuous"

@@ -10,6 +10,9 @@ the realistic blind check.
   its spring, damping and friction; force and displacement measured. Any simulator effect
   of its one DOF or spring (dry friction, a clearance or backlash, micro-slip ...).
 
+* :func:`torsion_frame`, :func:`half_car`, :func:`lattice`: the spring networks of issue 39
+  (:data:`NETWORKS`), and :func:`network_recording`, a record of one of them.
+
 * :func:`write_fleet_recording`: one recording of a generated fleet of machines (folders)
   for ``algid batch``: simulated chains with a mix of noise levels and effects.
 
@@ -27,6 +30,7 @@ import numpy as np
 
 from ..control.positioning import BangBangReference, PositioningController
 from ..model.chain import Chain
+from ..model.network import Network, NetworkModel
 from ..recording import Recording, save_recording
 from . import effect_forces, simulate
 from .exact import multisine
@@ -36,7 +40,8 @@ from .exact import multisine
 class Scenario:
     """A generated recording and its truth.
 
-    recording : what the rig's logger writes; chain : the linear part of the plant;
+    recording : what the rig's logger writes; chain : the linear part of the plant (a
+    :class:`~algid.model.network.NetworkModel` for a network);
     effects : unmodelled effects (simulator ``Effect`` dicts); info : scenario settings.
     """
 
@@ -200,3 +205,79 @@ def write_fleet_recording(folder: Path, machine: int, index: int, n: int, durati
     effect, noise_db = FLEET_EFFECTS[seed % len(FLEET_EFFECTS)], FLEET_NOISE_DB[seed % len(FLEET_NOISE_DB)]
     rec = fleet_recording(chain, duration_s, seed, effect, noise_db)
     return save_recording(folder / f"m{machine:02d}" / f"rec{index:04d}{suffix}", rec)
+
+
+# --- spring networks (issue 39) --------------------------------------------------------------
+
+
+def torsion_frame(seed: int = 39) -> NetworkModel:
+    """A torsionally coupled 3-storey frame, 9 DOF: ``x, y, theta`` of floor f are DOF
+    ``3f-2, 3f-1, 3f`` (the rotation as the arc ``r theta`` [m] at the floor's radius of
+    gyration, its mass the floor's). Springs join the three DOF of a floor (eccentric
+    stiffness couples sway and twist), each DOF to the same DOF of the floor above, and the
+    first floor's three DOF to ground. Masses 1-3 kg, springs 1e3-1e4 N/m, dampers 1-5 N s/m
+    drawn from ``seed``."""
+    pairs = []
+    for f in range(3):
+        x, y, th = 3 * f + 1, 3 * f + 2, 3 * f + 3
+        pairs += [(x, y), (x, th), (y, th)]
+        below = (0, 0, 0) if f == 0 else (x - 3, y - 3, th - 3)
+        pairs += list(zip(below, (x, y, th)))
+    return _drawn(Network(9, pairs), seed)
+
+
+def half_car(seed: int = 39) -> NetworkModel:
+    """A half-car, 4 DOF: the body as two points (front DOF 1, rear DOF 2) joined by the
+    body's spring, each over its wheel (front DOF 3, rear DOF 4) on a suspension spring, the
+    wheels on tyre springs to ground. Body points 2.5-3 kg, wheels 1 kg, tyres 8e3-1e4 N/m,
+    suspensions 1.5e3-2.5e3 N/m, the body spring 4e3-6e3 N/m, from ``seed``."""
+    rng = np.random.default_rng(seed)
+    net = Network(4, [(1, 2), (3, 1), (4, 2), (0, 3), (0, 4)])
+    m = np.array([rng.uniform(2.5, 3.0), rng.uniform(2.5, 3.0), 1.0, 1.0])
+    k = np.array([rng.uniform(4e3, 6e3), *rng.uniform(1.5e3, 2.5e3, 2), *rng.uniform(8e3, 1e4, 2)])
+    return NetworkModel(net, m, rng.uniform(1.0, 5.0, 4), k)
+
+
+def lattice(seed: int = 39) -> NetworkModel:
+    """A 3x3 lattice, 9 DOF (row r, column c is DOF ``3r + c + 1``): springs along every edge,
+    both diagonals of each of the four cells, and the four corners to ground; the centre DOF
+    has eight springs. Values as :func:`torsion_frame`'s."""
+    dof = lambda r, c: 3 * r + c + 1  # noqa: E731
+    pairs = [(dof(r, c), dof(r, c + 1)) for r in range(3) for c in range(2)]
+    pairs += [(dof(r, c), dof(r + 1, c)) for r in range(2) for c in range(3)]
+    for r in range(2):
+        for c in range(2):
+            pairs += [(dof(r, c), dof(r + 1, c + 1)), (dof(r, c + 1), dof(r + 1, c))]
+    pairs += [(0, dof(r, c)) for r in (0, 2) for c in (0, 2)]
+    return _drawn(Network(9, pairs), seed)
+
+
+def _drawn(net: Network, seed: int) -> NetworkModel:
+    """Masses 1-3 kg, dampers 1-5 N s/m, springs 1e3-1e4 N/m (log-uniform) drawn from ``seed``."""
+    rng = np.random.default_rng(seed)
+    k = np.exp(rng.uniform(np.log(1e3), np.log(1e4), net.size))
+    return NetworkModel(net, rng.uniform(1.0, 3.0, net.n), rng.uniform(1.0, 5.0, net.n), k)
+
+
+#: The issue's example networks by name.
+NETWORKS = {"frame": torsion_frame, "half_car": half_car, "lattice": lattice}
+
+
+def network_model(name: str, seed: int = 39) -> NetworkModel:
+    """The example network ``name`` (one of :data:`NETWORKS`)."""
+    if name not in NETWORKS:
+        raise ValueError(f"unknown network {name!r}: one of {', '.join(NETWORKS)}")
+    return NETWORKS[name](seed)
+
+
+def network_recording(
+    name: str, duration_s: float = 1.0, seed: int = 0, noise_db: float | None = None, fs_hz: float = 1000.0
+) -> Scenario:
+    """A recording of the example network ``name`` (:data:`NETWORKS`) under the tests'
+    multisine force on every DOF (:func:`algid.simulator.exact.multisine`), accelerations and
+    forces with ``noise_db`` of sensor noise (None: noise-free)."""
+    model = network_model(name)
+    sim = simulate(
+        model, multisine(model.n, seed), duration_s, fs_hz, noise_db=noise_db, noise_on=("accel", "force"), seed=seed
+    )
+    return Scenario(Recording(t=sim.t, u=sim.u, a=sim.a), model, [], {"network": name, "noise_db": noise_db})

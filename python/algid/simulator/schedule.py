@@ -55,8 +55,7 @@ def _clearance_substeps(inp: RunInputs) -> int:
     ns = 1 if inp.substeps is None else inp.substeps
     for e in inp.effects:
         if e.name == "clearance" and inp.substeps is None:
-            j = e.spring - 1
-            adj = [chain.mass[i] for i in (j - 1, j) if 0 <= i < inp.n]
+            adj = [chain.mass[i - 1] for i, _ in chain.network.sides(e.spring)]
             w = math.sqrt(e.params["k_contact"] / min(adj))
             ns = max(ns, int(math.ceil(h * w / 0.25)))
     return ns
