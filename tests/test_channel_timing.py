@@ -11,7 +11,6 @@ from algid.diagnosis.timing import channel_timing, realign, shifted
 from algid.diagnosis.windows import window_length
 from algid.model.chain import TABLE1
 from algid.recording import Recording
-
 from algid.simulator import simulate
 
 #: A scan of six channels in this order (u1, u2, u3, a1, a2, a3): lateness k/6 of a sample.
@@ -90,3 +89,17 @@ def test_the_diagnosis_of_a_skewed_linear_chain_is_none_and_says_what_it_realign
     assert set(d.extra["timing"]["late_samples"]) == {"u1", "u2", "u3", "y1", "y2", "y3"}
     assert "channel skew (a multiplexed converter), undone before the fit" in to_text(d)
     assert to_json(d)["channel_timing"]["late_samples"]["u2"] == pytest.approx(SCAN[1] - np.median(SCAN), abs=0.04)
+
+
+@pytest.mark.slow
+def test_identify_realigns_a_skewed_record_and_its_estimates_are_valid(table1):
+    from algid import identify
+
+    res = identify(skewed(table1, SCAN))
+    assert res.channel_timing["realigned"]
+    assert "channel skew (a multiplexed converter), undone before the fit" in res.summary()
+    assert res.to_json()["channel_timing"]["late_samples"]["y1"] == pytest.approx(SCAN[3] - np.median(SCAN), abs=0.04)
+    truth = np.r_[TABLE1.mass, TABLE1.damping, TABLE1.stiffness]
+    ok = [v.status == "ok" for v in res.verdicts]
+    assert all(ok)
+    assert np.all(np.abs(res.theta - truth) <= 5 * res.sigma)

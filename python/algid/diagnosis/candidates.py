@@ -128,6 +128,14 @@ STRIBECK_Z = 4.0
 STRIBECK_SIGN = 0.05
 #: Longest input delay searched [samples]; the analysis skips at least this many samples.
 MAX_DELAY_SAMPLES = 100
+
+
+def lead_in(T: int, dt: float) -> int:
+    """Samples the analysis skips at the start of a record of ``T``: 0.1 s, at least
+    :data:`MAX_DELAY_SAMPLES` (the delay candidate looks that far back), at most a tenth."""
+    return int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
+
+
 #: Points of a candidate's grid (:func:`_fit_grid`), and of the quick grid (no refinement)
 #: that :func:`algid.identify`'s fit check searches.
 N_GRID = 24

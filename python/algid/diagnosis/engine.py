@@ -35,7 +35,6 @@ from .band import Band, signal_band
 from .candidates import (
     ADDITIVE,
     EFFECTS,
-    MAX_DELAY_SAMPLES,
     N_GRID,
     QUICK_GRID,
     CandidateFit,
@@ -43,6 +42,7 @@ from .candidates import (
     all_candidates,
     fit_candidate,
     fit_combination,
+    lead_in,
     physical,
     raw_residual,
 )
@@ -312,20 +312,20 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
 
 
-def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_hz=None) -> Setup:
+def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_hz=None, realign: bool = True) -> Setup:
     """Windows, band and form (module docstring, steps 1-2), linear fit, noise, model."""
     clock = time.perf_counter()
     rec, hum = without_hum(rec) if notch else (rec, [])
     rec, tr = transient_record(rec, band_hz)
     dt, T = float(rec.dt), rec.u.shape[0]
-    skip = int(min(max(MAX_DELAY_SAMPLES, round(0.1 / dt)), T // 10))
+    skip = lead_in(T, dt)
     if tr is not None:  # the first hit carries the scale: no lead-in past it
         skip = min(skip, tr.hits[0].start)
     L0 = window_length(dt, 1.0, T - skip)
     timing = None
-    if tr is None:
+    if tr is None and realign:
         _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: channel timing")
-        rec, timing = on_time(rec, boundary, L0, skip)
+        rec, timing = on_time(rec, boundary)
     a, u = accelerations(rec), rec.u
     _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: linear fit")
     A = integrals(a, dt)
@@ -671,6 +671,7 @@ def diagnose(
     quick: bool = False,
     notch: bool = True,
     band_hz: tuple[float, float] | None = None,
+    realign: bool = True,
     **reading,
 ) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
@@ -697,6 +698,9 @@ def diagnose(
         Notch the mains hum out first (False: the caller has, as :func:`algid.identify` does).
     band_hz : (low, high) [Hz] or None
         Impact records: the band of the modes the chain holds (:mod:`algid.recording.transient`).
+    realign : bool
+        Find a multiplexed converter's channel skew and undo it first (:mod:`.timing`; False:
+        the caller has, as :func:`algid.identify` does).
     **reading
         How to read a path or a DataFrame, as ``algid diagnose``'s options say (``force``,
         ``accel``, ``units``, ``rate``...: :func:`algid.recording.options.reading_options`).
@@ -715,7 +719,7 @@ def diagnose(
         raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
     clock = time.perf_counter()
     named = None if given is None else [parse_effect(g, rec.n, boundary) for g in given]
-    st = _prepare(rec, boundary, progress, notch, band_hz)
+    st = _prepare(rec, boundary, progress, notch, band_hz, realign)
     P, lin, denom = st.P, st.lin, st.denom
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
     gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))

@@ -9,6 +9,7 @@ import numpy as np
 from .candidates import MAIN_PARAM
 from .core import METRIC, METRIC_FORCE
 from .corrected import corrected_model, linear_model
+from .timing import timing_lines
 from .units import SI
 
 
@@ -159,19 +160,6 @@ def _units_lines(d) -> list[str]:
     ]
 
 
-def _timing_lines(timing: dict | None) -> list[str]:
-    """The converter's channel skew, when the record was realigned (:mod:`.timing`)."""
-    if not timing or not timing["realigned"]:
-        return []
-    late = ", ".join(
-        f"{c} {d:+.3f} +- {timing['late_std_samples'][c]:.3f}" for c, d in timing["late_samples"].items()
-    )
-    return [
-        f"  channel skew (a multiplexed converter), undone before the fit [samples late]: {late}",
-        f"    linear-chain gap {timing['gap_before']:.4g} -> {timing['gap_after']:.4g} once realigned",
-    ]
-
-
 def location_text(loc) -> str:
     """``DOF 1`` or ``spring 2`` of an effect's location (``""`` without one)."""
     if not loc:
@@ -191,7 +179,7 @@ def to_text(d, source: str = "") -> str:
     )
     L.append("")
     L.extend(_units_lines(d))
-    L.extend(_timing_lines(d.extra.get("timing")))
+    L.extend(timing_lines(d.extra.get("timing")))
     L.append("")
     L.extend(_chain_lines(linear_model(d), d.units, "Linear chain, the windowed equation-error fit", "  "))
     if d.effect != "none":

@@ -38,9 +38,10 @@ from scipy.interpolate import CubicSpline
 
 from ..recording import Recording, accelerations
 from ..recording import motion as recording_motion
+from .candidates import lead_in
 from .integrals import integrals
 from .linear import fit_linear
-from .windows import prepare
+from .windows import prepare, window_length
 
 #: Windows of the record the latenesses are estimated on.
 WINDOWS = 16
@@ -90,6 +91,17 @@ class Timing:
         }
 
 
+def timing_lines(doc: dict | None, indent: str = "  ") -> list[str]:
+    """What the report says of a record realigned (``doc``: :meth:`Timing.to_json`)."""
+    if not doc or not doc["realigned"]:
+        return []
+    late = ", ".join(f"{c} {d:+.3f} +- {doc['late_std_samples'][c]:.3f}" for c, d in doc["late_samples"].items())
+    return [
+        f"{indent}channel skew (a multiplexed converter), undone before the fit [samples late]: {late}",
+        f"{indent}  linear-chain gap {doc['gap_before']:.4g} -> {doc['gap_after']:.4g} once realigned",
+    ]
+
+
 def shifted(x: np.ndarray, late: float) -> np.ndarray:
     """The column ``x`` taken ``late`` samples earlier: a channel recorded that late, on time."""
     k = np.arange(x.shape[0], dtype=float)
@@ -127,7 +139,11 @@ def _fit(rec: Recording, late: np.ndarray, boundary: str, L: int, skip: int):
 
 def _head(rec: Recording, samples: int) -> Recording:
     """The first ``samples`` samples of ``rec`` (every per-sample array cut alike)."""
-    cut = {k: getattr(rec, k)[:samples] for k in ("t", "u", "a", "v", "x", "base", "missing") if getattr(rec, k) is not None}
+    cut = {
+        k: getattr(rec, k)[:samples]
+        for k in ("t", "u", "a", "v", "x", "base", "missing")
+        if getattr(rec, k) is not None
+    }
     return replace(rec, dt=float(rec.dt), **cut)
 
 
@@ -170,9 +186,12 @@ def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing |
     return Timing(names, late, std, gap_before, gap_after, pattern and gain)
 
 
-def on_time(rec: Recording, boundary: str, L: int, skip: int) -> tuple[Recording, Timing | None]:
-    """``rec`` realigned when its channels show a converter's skew, and what was found."""
-    timing = channel_timing(rec, boundary, L, skip)
+def on_time(rec: Recording, boundary: str) -> tuple[Recording, Timing | None]:
+    """``rec`` realigned when its channels show a converter's skew, and what was found (on
+    the diagnosis's first windows: half a second, after its lead-in)."""
+    T, dt = rec.u.shape[0], float(rec.dt)
+    skip = lead_in(T, dt)
+    timing = channel_timing(rec, boundary, window_length(dt, 1.0, T - skip), skip)
     if timing is None or not timing.realigned:
         return rec, timing
     return realign(rec, timing.late), timing

@@ -86,8 +86,8 @@ def fit_check(rec, boundary: str, band_hz: tuple | None = None) -> tuple[dict, o
     chain's determined estimates ``model_misfit`` ("" when it explains the record); and the
     diagnosis itself. ``band_hz``: an impact record's band (:mod:`algid.recording.transient`)."""
     d = diagnose(
-        rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False, band_hz=band_hz
-    )  # identify notched it
+        rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False, band_hz=band_hz, realign=False
+    )  # identify notched and realigned it
     out = {"gap": d.gap_before, "noise_floor": float(d.extra["noise_floor"]), "explains_record": d.effect == "none"}
     if d.effect == "none":
         return {**out, "diagnosis": "none", "misfit": ""}, d
@@ -162,7 +162,9 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
     auto = list(effects) == ["auto"]
     if "auto" in effects and not auto:
         raise ValueError("--effect auto takes the diagnosis's effect: give it alone")
-    d = diagnose(rec, boundary, given=None if auto else list(effects), notch=False)  # identify notched it
+    d = diagnose(
+        rec, boundary, given=None if auto else list(effects), notch=False, realign=False
+    )  # identify notched and realigned it
     if d.best is None:
         return None, f"the diagnosis reports {d.effect!r}: no effect to add"
     cm = corrected_model(d)

@@ -86,6 +86,7 @@ def _recording_fields(sig: Signals, boundary: str, nm) -> dict:
         motion=sig.kind,
         path=rec.path,
         hum_hz=sig.hum_hz,
+        channel_timing=sig.timing,
         units=parameter_units(rec),
         recording_notes=tuple(rec.notes),
         screened=sig.screened,
@@ -177,7 +178,7 @@ def identify(
             raise ValueError("effects cannot be estimated on a base-excited record (a support motion a0)")
         rec, scale = augment(rec)
     effects = _checked(boundary, replicates, effects)
-    sig = screened_signals(rec, band_hz)  # 1. screen
+    sig = screened_signals(rec, band_hz, boundary, realign=not base)  # 1. screen
     nm = analyse(sig.rec.u, sig.motion, sig.dt, sig.kind)  # 2. noise model
     common = _recording_fields(sig, boundary, nm)
     skipped = FIT_CHECK_SKIPPED if base else ""

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..diagnosis.report import location_text
+from ..diagnosis.timing import timing_lines
 from ..estimator.continuous import PackedParameters, unpack
 from ..messages.display import Displayed, number, parameter_rows
 from ..model.chain import parameter_names
@@ -169,6 +170,8 @@ class Identification(PackedEstimates):
     motion: str
     path: Path | None = None
     hum_hz: tuple = ()  #: mains lines notched out of every channel [Hz]
+    #: the channels' skew found, and whether it was undone (:meth:`algid.diagnosis.timing.Timing.to_json`)
+    channel_timing: dict | None = None
     #: unit labels of m, c, k (:func:`algid.recording.parameter_units`: V/V where the data are volts)
     units: dict = field(default_factory=lambda: {"m": "kg", "c": "N s/m", "k": "N/m"})
     recording_notes: tuple = ()  #: what the reader did (columns ignored, units converted)
@@ -255,6 +258,7 @@ class Identification(PackedEstimates):
             "motion": self.motion,
             "noise_model": self.noise.to_json(),
             "mains_hum_removed_hz": list(self.hum_hz),
+            "channel_timing": self.channel_timing,
             "units": dict(self.units),
             "recording_notes": list(self.recording_notes),
             "screened": self.screened.to_json(),
@@ -321,6 +325,7 @@ class Identification(PackedEstimates):
             )
         if self.screened.count:
             lines.append(f"  {self.screened.line()}")
+        lines += timing_lines(self.channel_timing)
         if self.transient is not None:
             lines.append(f"  {self.transient.line()}")
         lines += self.ratio_lines() if self.scale else self.parameter_lines()
