@@ -313,22 +313,38 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
 
 
 def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_hz=None, realign: bool = True) -> Setup:
-    """Windows, band and form (module docstring, steps 1-2), linear fit, noise, model."""
+    """Windows, band and form (module docstring, steps 1-2), linear fit, noise, model; when
+    the linear chain leaves a gap above the noise floor, the channels' timing first
+    (:mod:`.timing`: a record realigned is prepared again)."""
     clock = time.perf_counter()
     rec, hum = without_hum(rec) if notch else (rec, [])
     rec, tr = transient_record(rec, band_hz)
+    st = _setup(rec, tr, hum, boundary, progress, clock)
+    if tr is not None or not realign or not _above_floor(st):
+        return st
+    _progress(progress, f"{rec.n} DOF: the channels' timing")
+    on_time_rec, timing = on_time(rec, boundary)
+    if timing is not None and timing.realigned:
+        st = _setup(on_time_rec, tr, hum, boundary, progress, clock)
+    return replace(st, timing=timing)
+
+
+def _above_floor(st: Setup) -> bool:
+    """Whether the linear chain's withheld gap exceeds the sensor-noise floor."""
+    gap = float(np.sqrt(st.lin.cv.test_sse.sum() / st.denom))
+    return gap > relative_floors(st.P, st.floor_band, st.denom, st.lin.resid)[1]
+
+
+def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float) -> Setup:
+    """:func:`_prepare` on a record notched and, for a transient, band-passed (``tr``)."""
     dt, T = float(rec.dt), rec.u.shape[0]
     skip = lead_in(T, dt)
     if tr is not None:  # the first hit carries the scale: no lead-in past it
         skip = min(skip, tr.hits[0].start)
-    L0 = window_length(dt, 1.0, T - skip)
-    timing = None
-    if tr is None and realign:
-        _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: channel timing")
-        rec, timing = on_time(rec, boundary)
     a, u = accelerations(rec), rec.u
     _progress(progress, f"{rec.n} DOF, {T} samples at {1 / dt:g} Hz: linear fit")
     A = integrals(a, dt)
+    L0 = window_length(dt, 1.0, T - skip)
     lin0 = fit_linear(prepare(a, u, dt, L0, boundary, skip, A=A))
     kind, motion = recording_motion(rec)
     order = {"acceleration": 0, "velocity": 1, "displacement": 2}[kind]
@@ -369,7 +385,6 @@ def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_h
         hum=hum,
         transient=tr,
         noise=levels,
-        timing=timing,
     )
 
 

@@ -34,7 +34,7 @@ from ..diagnosis.report import location_text
 from ..recording.noise import NoiseModel
 from .motion import band_limited_motion
 from .plan import Plan
-from .screen import Signals
+from .screen import Signals, on_time_signals
 from .surrogate import surrogate_band
 from .verdicts import judge
 
@@ -86,8 +86,8 @@ def fit_check(rec, boundary: str, band_hz: tuple | None = None) -> tuple[dict, o
     chain's determined estimates ``model_misfit`` ("" when it explains the record); and the
     diagnosis itself. ``band_hz``: an impact record's band (:mod:`algid.recording.transient`)."""
     d = diagnose(
-        rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False, band_hz=band_hz, realign=False
-    )  # identify notched and realigned it
+        rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False, band_hz=band_hz
+    )  # identify notched it
     out = {"gap": d.gap_before, "noise_floor": float(d.extra["noise_floor"]), "explains_record": d.effect == "none"}
     if d.effect == "none":
         return {**out, "diagnosis": "none", "misfit": ""}, d
@@ -110,11 +110,13 @@ class ModelCheck:
     beyond the recording's when the diagnosis's fit is the answer (the chain with the effects
     asked for; the linear chain of a record it does not explain), None when the estimators are
     to run; ``fit`` the check's ``model_fit`` for them, ``misfit`` its reason ("" when the linear
-    chain explains the record)."""
+    chain explains the record); ``sig`` the signals the later stages read (realigned when the
+    check found a multiplexed converter's channel skew: :func:`.screen.on_time_signals`)."""
 
     result: dict | None
     fit: dict
     misfit: str
+    sig: Signals
 
 
 def model_check(
@@ -130,10 +132,11 @@ def model_check(
         progress("diagnose")
         fitted, note = fit_with_effects(sig.rec, sig.motion, sig.kind, nm, boundary, effects)
         if fitted is not None:
-            return ModelCheck(fitted, {}, "")
+            return ModelCheck(fitted, {}, "", sig)
     progress("withheld-window test")
     band = None if sig.transient is None else sig.transient.band_hz
     check, d = ({"misfit": ""}, None) if skipped else fit_check(sig.raw, boundary, band)
+    sig = on_time_signals(sig, None if d is None else d.extra.get("timing"))
     misfit = check.pop("misfit")
     fit = {**check, **({"source": note} if note else {})}
     if misfit and sig.transient is None:
@@ -141,8 +144,8 @@ def model_check(
             sig.rec, sig.motion, sig.kind, nm, boundary, d, linear_model(d), "the linear chain", misfit
         )
         fields["model_fit"].update(check)
-        return ModelCheck(fields, fit, misfit)
-    return ModelCheck(None, fit, misfit)
+        return ModelCheck(fields, fit, misfit, sig)
+    return ModelCheck(None, fit, misfit, sig)
 
 
 def _specs(d) -> list[tuple[str, dict]]:
@@ -162,9 +165,7 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
     auto = list(effects) == ["auto"]
     if "auto" in effects and not auto:
         raise ValueError("--effect auto takes the diagnosis's effect: give it alone")
-    d = diagnose(
-        rec, boundary, given=None if auto else list(effects), notch=False, realign=False
-    )  # identify notched and realigned it
+    d = diagnose(rec, boundary, given=None if auto else list(effects), notch=False)  # identify notched it
     if d.best is None:
         return None, f"the diagnosis reports {d.effect!r}: no effect to add"
     cm = corrected_model(d)

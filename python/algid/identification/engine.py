@@ -178,11 +178,12 @@ def identify(
             raise ValueError("effects cannot be estimated on a base-excited record (a support motion a0)")
         rec, scale = augment(rec)
     effects = _checked(boundary, replicates, effects)
-    sig = screened_signals(rec, band_hz, boundary, realign=not base)  # 1. screen
+    sig = screened_signals(rec, band_hz)  # 1. screen
     nm = analyse(sig.rec.u, sig.motion, sig.dt, sig.kind)  # 2. noise model
-    common = _recording_fields(sig, boundary, nm)
     skipped = FIT_CHECK_SKIPPED if base else ""
     check = model_check(sig, nm, boundary, effects, skipped, lambda stage: _progress(progress, stage, None))
+    sig = check.sig  # realigned when the check found a converter's channel skew
+    common = _recording_fields(sig, boundary, nm)
     if check.result is not None:  # the diagnosis's fit: with the effects, or of a record the linear chain misfits
         return Identification(**common, **check.result)
     # the support's equation of a base-excited record with a force stays out of the others' (:mod:`.base`)

@@ -25,10 +25,11 @@ what the lost samples cost.
 :func:`screened_signals` is identify's first stage: the screen, then the mains hum notched out
 of every channel alike (:func:`algid.recording.noise.without_hum`), an impact record's hits
 found, its force cleaned and force and motion band-passed alike around the modes the chain is
-to hold (:mod:`algid.recording.transient`), any other record's channels realigned when they
-show a multiplexed converter's skew (:mod:`algid.diagnosis.timing`), and the accelerations
-the estimators read (measured, or the derivatives of the velocities or displacements): the
-record as every later stage sees it (:class:`Signals`).
+to hold (:mod:`algid.recording.transient`), and the accelerations the estimators read
+(measured, or the derivatives of the velocities or displacements): the record as every later
+stage sees it (:class:`Signals`). When the fit check finds a multiplexed converter's channel
+skew (:mod:`algid.diagnosis.timing`), the stages after it read the signals realigned
+(:func:`on_time_signals`).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..diagnosis.timing import on_time
+from ..diagnosis.timing import realign
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations
 from ..recording import motion as recording_motion
 from ..recording.noise import without_hum
@@ -168,10 +169,11 @@ class Signals:
     same before the band-pass (the fit check reads it); a : (T, n) accelerations [m/s^2] the
     estimators read; kind, motion : the recorded motion's kind and (T, n) values; missing : (T,)
     bool, the instants the estimators see as not a number; hum_hz : the mains lines notched out
-    [Hz]; timing : the channels' skew found and whether it was undone
-    (:meth:`algid.diagnosis.timing.Timing.to_json`, None when not looked for); screened : what
-    the screen took out; transient : an impact record's hits, band and modes (None otherwise);
-    dt [s], duration_s [s] (samples times dt); forced : (n,) bool, the DOFs that carry a force.
+    [Hz]; screened : what the screen took out; transient : an impact record's hits, band and
+    modes (None otherwise); dt [s], duration_s [s] (samples times dt); forced : (n,) bool, the
+    DOFs that carry a force; timing : a multiplexed converter's channel skew the fit check found
+    (:meth:`algid.diagnosis.timing.Timing.to_json`; the signals are realigned when its
+    ``realigned``: :func:`on_time_signals`), None when it did not look.
     """
 
     rec: Recording
@@ -181,31 +183,24 @@ class Signals:
     motion: np.ndarray
     missing: np.ndarray
     hum_hz: tuple
-    timing: dict | None
     screened: Screened
     transient: Transient | None
     dt: float
     duration_s: float
     forced: np.ndarray
+    timing: dict | None = None
 
 
-def screened_signals(
-    rec: Recording, band_hz: tuple | None = None, boundary: str = "fixed", realign: bool = True
-) -> Signals:
+def screened_signals(rec: Recording, band_hz: tuple | None = None) -> Signals:
     """Identify's first stage (module docstring); ``band_hz``: an impact record's band
-    (:func:`algid.recording.transient.transient_record`); ``realign``: undo a multiplexed
-    converter's channel skew (:mod:`algid.diagnosis.timing`; ``boundary`` the chain's)."""
+    (:func:`algid.recording.transient.transient_record`)."""
     # a derived acceleration's stencil reaches half its width past a screened sample
     rec, found = screen(rec, reach=0 if rec.a is not None else DEFAULT_DIFF_POINTS // 2)
     missing = found.rows
     rec, hum = without_hum(rec)
     raw, (rec, transient) = rec, transient_record(rec, band_hz)
-    timing = None
     if transient is not None:
         missing = missing | transient.missing
-    elif realign:
-        rec, timing = on_time(rec, boundary)
-        raw = rec
     kind, motion = recording_motion(rec)
     return Signals(
         rec=rec,
@@ -215,10 +210,20 @@ def screened_signals(
         motion=motion,
         missing=missing,
         hum_hz=tuple(hum),
-        timing=None if timing is None else timing.to_json(),
         screened=found,
         transient=transient,
         dt=float(rec.dt),
         duration_s=rec.t.size * rec.dt,
         forced=np.any(rec.u != 0.0, axis=0),
     )
+
+
+def on_time_signals(sig: Signals, timing: dict | None) -> Signals:
+    """``sig`` with the channel skew ``timing`` (:meth:`algid.diagnosis.timing.Timing.to_json`)
+    recorded and, when it was found to be a converter's, undone."""
+    if timing is None or not timing["realigned"]:
+        return replace(sig, timing=timing)
+    late = np.array(list(timing["late_samples"].values()))
+    rec = realign(sig.rec, late)
+    kind, motion = recording_motion(rec)
+    return replace(sig, rec=rec, raw=rec, a=accelerations(rec, DEFAULT_DIFF_POINTS), motion=motion, timing=timing)
