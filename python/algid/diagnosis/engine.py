@@ -6,7 +6,9 @@
    filters.
 2. The signal band of the recording (:func:`.band.signal_band`, from the forces, the
    accelerations and the natural frequencies of the first fit), the linear chain, cross-validated
-   (``gap_before``, in-band; ``gap_before_fullband``), and the states it reconstructs.
+   (``gap_before``, in-band; ``gap_before_fullband``), and the states it reconstructs. When
+   its gap is above the noise floor, a multiplexed converter's channel skew is looked for and,
+   found, undone, and steps 1-2 run again on the realigned record (:mod:`.timing`).
 3. Every candidate effect at every location (:mod:`.candidates`), cross-validated, scored
    by its withheld error reduction and tested against noise (:func:`noise_z`); the
    state-dependent leaders are refitted with the states reconstructed under them.
