@@ -154,6 +154,29 @@ def test_residual_spectrum_draws_the_encoder_noise_in_the_residuals_scaling(axis
     assert np.median(noise[f < 20.0]) < 1e-2 * np.median(noise[top])  # not a flat line
 
 
+@pytest.mark.slow
+def test_residual_spectrum_draws_the_accelerometer_noise_under_dry_friction():
+    """A Table 1 multisine record at 60 dB with 1.5 N of Coulomb friction on DOF 1, measured
+    accelerations: the floor drawn is the sensor noise's own spectrum in the equation errors
+    (the same record's noise alone, ``a_noise - u_noise / m``), not the friction's jumps."""
+    from scipy.signal import welch
+
+    from algid.plotting.diagnosis import noise_spectrum, spectrum_segment
+    from algid.simulator.scenarios import fleet_recording
+
+    effect = {"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": 1.5}}
+    rec = fleet_recording(TABLE1, 20.0, 0, effect, noise_db=60.0)
+    clean = fleet_recording(TABLE1, 20.0, 0, effect, noise_db=None)
+    d = diagnose(rec)
+    assert d.effect == "coulomb_friction" and d.location == {"dof": 1}
+    assert d.P.form == "acceleration" and d.P.forced.all()
+    sensor = (rec.a - clean.a) - (rec.u - clean.u) / TABLE1.mass[None, :]
+    nper = spectrum_segment(d)
+    _, truth = welch(sensor, fs=1 / rec.dt, nperseg=nper, axis=0)
+    ratio = np.median(noise_spectrum(d, nper)[1:] / truth[1:], axis=0)
+    assert np.all((ratio > 0.7) & (ratio < 1.5)), ratio
+
+
 def _overlaps(fig, axis) -> int:
     FigureCanvasAgg(fig).draw()
     renderer = fig.canvas.get_renderer()

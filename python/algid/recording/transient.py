@@ -421,7 +421,7 @@ def add_band_option(p) -> None:
         "--band",
         type=band_option,
         metavar="LO:HI",
-        help="impact records: the band [Hz] whose modes the chain holds (default: around the n lowest modes "
-        "of the response); force and response are band-passed alike and the modes outside are reported as "
-        "residual modes",
+        help="impact records: the band [Hz] whose modes the chain holds (default: around the n adjacent modes "
+        "holding the most kinetic energy in the response); force and response are band-passed alike and the "
+        "modes outside are reported as residual modes",
     )
