@@ -9,12 +9,15 @@ Cases, each on 2,000 lines evenly spaced from 0.1 to 2 times the highest natural
   each line's own magnitude, not to the FRF's RMS), over ``--seeds`` seeds, all columns and
   the force on DOF 1 only: the largest relative error of the masses and springs (target
   1 %), of the dampings, and ``|error| / sigma`` over every parameter and seed (rms and
-  largest: calibrated sigmas give an rms near 1), the fit check's residual / noise ratio;
+  largest: calibrated sigmas give an rms near 1), the fit check's residual / noise ratio, and
+  the calibration (:func:`calibration`: per parameter the estimates' scatter over the seeds
+  against the reported sigma, with its sampling error and z-score; 20 seeds resolve the ratio
+  to about 16 %, so a further one-force case over ``--calibration-seeds`` (200: 5 %) gives it);
 * random 5-DOF chains (``Chain.random``), force on DOF 1 only: noise-free and at 40 dB.
 
-Writes bench/results/frf_fit.json (``--json PATH`` elsewhere); runs in about 25 s here:
+Writes bench/results/frf_fit.json (``--json PATH`` elsewhere); runs in about 2.5 minutes here:
 
-    python bench/frf_fit.py [--seeds 20] [--json bench/results/frf_fit.json]
+    python bench/frf_fit.py [--seeds 20] [--calibration-seeds 200] [--json bench/results/frf_fit.json]
 """
 
 from __future__ import annotations
@@ -60,9 +63,31 @@ def errors(chain: Chain, data: FrfData) -> dict:
     return {
         "mass_spring": float(rel[fam != "c"].max()),
         "damping": float(rel[fam == "c"].max()),
+        "theta": res.theta[est],
+        "sigma": res.sigma[est],
         "z": ((res.theta - truth) / res.sigma)[est],
         "ratio": res.model_fit["ratio"],
         "valid": res.valid,
+    }
+
+
+def calibration(runs: list[dict]) -> dict:
+    """Per parameter, the scatter of the estimates over the seeds against the sigma the fit
+    reports (rms over the seeds): ``std_over_sigma`` is 1 for calibrated sigmas, within its
+    sampling error ``1 / sqrt(2 (seeds - 1))`` (``z`` = its distance from 1 in those errors),
+    and ``bias_z`` the mean error in units of its standard error ``std / sqrt(seeds)``."""
+    theta, sigma, err = (np.array([r[k] for r in runs]) for k in ("theta", "sigma", "z"))
+    N = theta.shape[0]
+    ratio = theta.std(axis=0, ddof=1) / np.sqrt(np.mean(sigma**2, axis=0))
+    se = 1 / np.sqrt(2 * (N - 1))
+    error = err * sigma  # estimate minus truth
+    bias_z = error.mean(axis=0) / (theta.std(axis=0, ddof=1) / np.sqrt(N))
+    return {
+        "std_over_sigma": ratio.tolist(),
+        "sampling_error": se,
+        "z": ((ratio - 1) / se).tolist(),
+        "mean_std_over_sigma": float(ratio.mean()),
+        "bias_z": bias_z.tolist(),
     }
 
 
@@ -71,6 +96,7 @@ def noisy_case(chain: Chain, forces: list[int], seeds: int) -> dict:
     runs = [errors(chain, with_noise(clean, seed)) for seed in range(seeds)]
     z = np.concatenate([r["z"] for r in runs])
     return {
+        "calibration": calibration(runs),
         "forces": forces,
         "seeds": seeds,
         "max_rel_error_mass_spring": max(r["mass_spring"] for r in runs),
@@ -86,6 +112,12 @@ def noisy_case(chain: Chain, forces: list[int], seeds: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seeds", type=int, default=20, help="noise seeds per noisy case")
+    ap.add_argument(
+        "--calibration-seeds",
+        type=int,
+        default=200,
+        help="seeds of the Table 1 one-force case the sigmas' calibration is read from (0: none; 200: about a minute)",
+    )
     ap.add_argument("--json", type=Path, default=Path(__file__).parent / "results" / "frf_fit.json")
     args = ap.parse_args()
     start = time.perf_counter()
@@ -102,6 +134,8 @@ def main() -> None:
         max(errors(c, accelerances(c, [1]))[k] for k in ("mass_spring", "damping")) for c in chains
     ]
     out["random5_40db"] = noisy_case(chains[0], [1], args.seeds)
+    if args.calibration_seeds:
+        out["table1_40db_one_force_calibration"] = noisy_case(TABLE1, [1], args.calibration_seeds)
     out["seconds"] = time.perf_counter() - start
     print(json.dumps(out, indent=2))
     args.json.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")

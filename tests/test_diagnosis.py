@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.signal import welch
 
 from algid.diagnosis import EFFECTS, MAIN_PARAM, diagnose
 from algid.diagnosis.candidates import lowpass
@@ -129,6 +130,29 @@ def test_band_rule_finds_the_excited_band_and_the_noise_floor():
     assert b2.source == "acceleration 2" and 117.0 <= b2.f_exc <= 121.0 and b2.f_hi == pytest.approx(3 * b2.f_exc)
     bw = signal_band(a, np.zeros_like(a), dt)  # white noise: no bin 10x above its floor
     assert bw.full and bw.f_hi == 500.0
+
+
+def test_noise_floor_is_the_sensor_noise_under_friction_jumps():
+    """Equation errors of white noise (sigma known) plus a dry-friction force reversing with a
+    multisine's velocity (steps 1000 sigma high, each over two samples) and a slow misfit: the
+    floor is sigma within 10 %, where the steps' spectrum puts the upper band's level over ten
+    times higher; white noise alone is left as it is."""
+    from types import SimpleNamespace
+
+    from algid.diagnosis.locate import noise_floor, without_jumps
+
+    fs, sig, T = 1000.0, 1e-3, 20_000
+    t = np.arange(T) / fs
+    rng = np.random.default_rng(3)
+    velocity = np.sin(2 * np.pi * 1.3 * t) + 0.6 * np.sin(2 * np.pi * 4.1 * t + 1.0)
+    friction = 0.5 * np.convolve(np.sign(velocity), [0.5, 0.5], mode="same")
+    noise = sig * rng.standard_normal((T, 2))
+    resid = noise + np.column_stack([friction + 0.05 * np.sin(2 * np.pi * 2.0 * t), np.zeros(T)])
+    P = SimpleNamespace(dt=1 / fs, L=250)
+    assert noise_floor(P, resid) == pytest.approx([sig, sig], rel=0.1)
+    f, S = welch(resid[:, 0], fs=fs, nperseg=250)
+    assert np.median(S[f >= fs / 3]) > 10 * 2 * sig**2 / fs  # what the floor would be read on
+    np.testing.assert_allclose(without_jumps(noise), noise, rtol=0, atol=1e-12)
 
 
 def test_band_filter_is_an_orthogonal_projection():

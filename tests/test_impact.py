@@ -120,3 +120,43 @@ def test_transient_plot_draws_the_numbers_it_comes_from(tmp_path):
     gap = np.linalg.norm(d["model"][after] - d["measured"][after]) / np.linalg.norm(d["measured"][after])
     assert gap < 0.3
     assert save_transient(res, rec, tmp_path).exists()
+
+
+def _ringing(order: int, fs=25_600.0, T_s=1.0, seed=0):
+    """A hammer pulse and the decay of three modes whose velocities ring with amplitudes
+    0.4, 1 and 0.35 [m/s] at 810, 900 and 3670 Hz (damping ratio 0.2 %), seen as displacement
+    (``order`` 0), velocity (1) or acceleration (2): in acceleration the 3670 Hz mode is the
+    strongest, in kinetic energy the 900 Hz one."""
+    t = np.arange(int(T_s * fs)) / fs
+    u = np.where((t >= 5e-3) & (t < 5.2e-3), 100.0, 0.0)
+    s = 1j * 2 * np.pi * np.array([810.0, 900.0, 3670.0]) * (1 + 0.002j)  # i omega (1 + i zeta)
+    after = np.clip(t - 5.2e-3, 0, None)
+    y = np.where(t >= 5.2e-3, np.imag(np.exp(np.outer(after, s)) @ (np.array([0.4, 1.0, 0.35]) * s ** (order - 1))), 0)
+    rng = np.random.default_rng(seed)
+    return u + 1e-3 * rng.standard_normal(t.size), y + 1e-4 * np.abs(y).max() * rng.standard_normal(t.size), fs
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_band_holds_the_mode_with_the_most_kinetic_energy(order):
+    """Not the first peak (810 Hz) nor the acceleration's largest (3670 Hz): the band is around
+    900 Hz, its lower edge at the geometric mean with 810 Hz, symmetric in log frequency, whatever
+    the sensor measures."""
+    u, y, fs = _ringing(order)
+    tr = analyse_transient(u[:, None], y[:, None], 1 / fs, 1, order=order)
+    assert tr.in_band_hz == pytest.approx((900.0,), abs=1.5)
+    edge = np.sqrt(810.0 * 900.0)
+    assert tr.band_hz == pytest.approx((edge, 900.0**2 / edge), rel=2e-3)
+    assert set(np.round(tr.residual_hz, -1)) == {810.0, 3670.0}
+
+
+@pytest.mark.skipif(not DATA.exists(), reason="measured impact record absent")
+def test_measured_hit_default_band_holds_the_strong_mode():
+    """The response's first peak (near 810 Hz) is weaker than the one near 900 Hz: the band chosen
+    from the response holds the latter, and the chain finds it."""
+    d = np.load(DATA)
+    fs = float(d["fs_Hz"])
+    rec = Recording(t=np.arange(d["force"].shape[1]) / fs, u=d["force"][0][:, None], a=d["response"][0][:, None])
+    res = identify(rec)
+    assert res.transient.in_band_hz == pytest.approx((900.0,), abs=2.0)
+    modal, _ = res.modes()
+    assert modal.frequencies_hz[0] == pytest.approx(899.9, rel=0.005)

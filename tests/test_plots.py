@@ -108,6 +108,29 @@ def test_damping_and_restoring_force_axes_follow_the_data(axis_friction):
     assert lo <= r.min() and hi >= r.max()
 
 
+def test_restoring_force_draws_the_spring_force_the_equations_leave(axis_friction):
+    """Upper panel: against the spring's deformation (the encoder's positions, in mm), the
+    linear spring's force plus the unexplained force (eq. 1 without the spring's own linear
+    term), and the linear law through zero with the fitted stiffness."""
+    sc, d = axis_friction
+    rec, P = sc.recording, d.P
+    fig = fig_restoring_force(d)
+    top = fig.axes[0]
+    scatter, law = top.get_lines()[:2]
+    deformation = rec.x[np.rint((P.t - rec.t[0]) / rec.dt).astype(int), 0]  # one DOF: the spring stretches by x1
+    x_mm, force = _finite(scatter)
+    assert x_mm.size == P.t.size  # every sample (the record is short)
+    # the states reconstructed per window: the encoder's positions to a few counts (1e-4 of the stroke)
+    np.testing.assert_allclose(x_mm / 1e3, deformation, atol=1e-4 * np.ptp(deformation))
+    k = d.lin.stiffness()[0]
+    np.testing.assert_allclose(force, k * x_mm / 1e3 - d.lin.resid_force[:, 0], rtol=1e-12, atol=1e-12)
+    lx, ly = _finite(law)
+    assert lx == pytest.approx([x_mm.min(), x_mm.max()])
+    np.testing.assert_allclose(ly, k * lx / 1e3, rtol=1e-9)
+    assert f"{k:.4g}" in law.get_label()
+    assert _inside(top, force)
+
+
 def _stencil_gain(f_hz: np.ndarray, dt: float) -> np.ndarray:
     """|gain| of the five-point central second difference (-1, 16, -30, 16, -1) / 12 dt^2."""
     w = 2 * np.pi * f_hz * dt
@@ -129,6 +152,29 @@ def test_residual_spectrum_draws_the_encoder_noise_in_the_residuals_scaling(axis
     assert np.median(noise[top] / expected[top]) == pytest.approx(1.0, rel=0.25)
     assert np.median(linear[top] / noise[top]) == pytest.approx(1.0, rel=0.5)
     assert np.median(noise[f < 20.0]) < 1e-2 * np.median(noise[top])  # not a flat line
+
+
+@pytest.mark.slow
+def test_residual_spectrum_draws_the_accelerometer_noise_under_dry_friction():
+    """A Table 1 multisine record at 60 dB with 1.5 N of Coulomb friction on DOF 1, measured
+    accelerations: the floor drawn is the sensor noise's own spectrum in the equation errors
+    (the same record's noise alone, ``a_noise - u_noise / m``), not the friction's jumps."""
+    from scipy.signal import welch
+
+    from algid.plotting.diagnosis import noise_spectrum, spectrum_segment
+    from algid.simulator.scenarios import fleet_recording
+
+    effect = {"name": "coulomb_friction", "location": {"dof": 1}, "params": {"force": 1.5}}
+    rec = fleet_recording(TABLE1, 20.0, 0, effect, noise_db=60.0)
+    clean = fleet_recording(TABLE1, 20.0, 0, effect, noise_db=None)
+    d = diagnose(rec)
+    assert d.effect == "coulomb_friction" and d.location == {"dof": 1}
+    assert d.P.form == "acceleration" and d.P.forced.all()
+    sensor = (rec.a - clean.a) - (rec.u - clean.u) / TABLE1.mass[None, :]
+    nper = spectrum_segment(d)
+    _, truth = welch(sensor, fs=1 / rec.dt, nperseg=nper, axis=0)
+    ratio = np.median(noise_spectrum(d, nper)[1:] / truth[1:], axis=0)
+    assert np.all((ratio > 0.7) & (ratio < 1.5)), ratio
 
 
 def _overlaps(fig, axis) -> int:

@@ -756,7 +756,18 @@ def frf_fit() -> str:
         f"chains, one column: within {sci(max(d['random5_noise_free']), 1)}. At 40 dB ({d['noise']} on every line), "
         f"{all_cols['seeds']} seeds: all columns, masses and springs / dampings {noisy(all_cols)}; force on DOF 1 "
         f"only, {noisy(one)}; a random 5-DOF chain, one column, {noisy(r5)}. The residual over the FRFs' own noise "
-        f"stays within {span(resid, lambda x: f'{x:.3f}')}, and {'every' if valid else 'not every'} fit is valid.\n"
+        f"stays within {span(resid, lambda x: f'{x:.3f}')}, and {'every' if valid else 'not every'} fit is valid. "
+        f"{calibration(d['table1_40db_one_force_calibration'])}\n"
+    )
+
+
+def calibration(c: dict) -> str:
+    """The one-force case's sigmas against the scatter of its estimates over many seeds."""
+    cal = c["calibration"]
+    return (
+        f"Over {c['seeds']} seeds of the one-force case, the estimates' scatter over the reported sigma is "
+        f"{span(cal['std_over_sigma'], lambda x: f'{x:.2f}')} per parameter, {cal['mean_std_over_sigma']:.2f} on "
+        f"average (sampling error {pct(cal['sampling_error'], 1)} %)."
     )
 
 
@@ -778,9 +789,20 @@ def impact() -> str:
         f"each of the {len(mh)} measured hits of `/work/shared/data/impact_hammer` with `--band {lo:g}:{hi:g}` gives "
         f"{span([h['frequency_hz'] for h in mh], x2)} Hz ({pct(max(abs(h['frequency_error']) for h in mh), 1)} % "
         f"from the decay's Hilbert-envelope value) and a damping ratio "
-        f"{span([h['damping_ratio_over_reference'] for h in mh], x2)} times the envelope's. `diagnose` on the "
+        f"{span([h['damping_ratio_over_reference'] for h in mh], x2)} times the envelope's; in the band chosen "
+        f"from the response, {default_band(meas['default_band'])}. `diagnose` on the "
         f"{len(mh)} hits joined: `{meas['diagnose_five_hits_joined']['verdict']}`, "
         f"{meas['diagnose_five_hits_joined']['force_response']}.\n"
+    )
+
+
+def default_band(hits: list[dict]) -> str:
+    """The measured hits identified in the band chosen from their response."""
+    x2 = lambda v: f"{v:.2f}"  # noqa: E731
+    bands = {f"{h['band_hz'][0]:.1f}-{h['band_hz'][1]:.1f} Hz" for h in hits}
+    return (
+        f"{', '.join(sorted(bands))}, {span([h['frequency_hz'] for h in hits], x2)} Hz and a damping ratio "
+        f"{span([h['damping_ratio_over_reference'] for h in hits], x2)} times the envelope's"
     )
 
 
@@ -1243,7 +1265,7 @@ def silverbox_table() -> str:
         [
             names[k],
             f"**{where(d)}**",
-            f"{d['params']['k3']:.3f} +- {d['params_std']['k3']:.3f}",
+            f"{d['params']['k_cubic']:.3f} +- {d['params_std']['k_cubic']:.3f}",
             f"{d['linear_model']['stiffness'][0]:.3f}",
             f"{d['gap_before']:.4f} -> {d['gap_after']:.4f} ({d['gap_before'] / d['gap_after']:.2f}x)",
             f"{d['analysis']['noise_floor']:.4f}",
@@ -1274,7 +1296,7 @@ def silverbox_text() -> str:
         + ", ".join(
             f"{d['gap_before_force']:.3f} to {d['gap_after_force']:.3f} ({SILVERBOX[k]})" for k, d in parts.items()
         )
-        + f". The cubic coefficient is {span([d['params']['k3'] / LITERATURE_K3 - 1 for d in v], lambda x: pct(x))} % "
+        + f". The cubic coefficient is {span([d['params']['k_cubic'] / LITERATURE_K3 - 1 for d in v], lambda x: pct(x))} % "
         f"above the literature's {LITERATURE_K3}.\n\nWhere: the error lives in the only equation, peaks at "
         f"{span([f['peak_hz'] for f in fr], lambda x: f'{x:.1f}')} Hz (the resonance, "
         f"{span([f['natural_frequencies_hz'][0] for f in fr], lambda x: f'{x:.1f}')} Hz fitted) with 80 % of its "

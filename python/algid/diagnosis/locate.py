@@ -18,15 +18,39 @@ from .windows import Prepared
 
 #: Quantile bins of the amplitude scatter (restoring-force / damping-force curves).
 N_BINS = 24
+#: A first difference of an equation error this many robust sigmas from their median is a
+#: jump, not noise (:func:`without_jumps`)...
+JUMP_SIGMAS = 5.0
+#: ... and so are its neighbours this many samples either side (a jump over a few samples).
+JUMP_REACH = 1
 
 
 def noise_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
     """Per-DOF RMS of the white part of the equation error (its target units), from its
     white PSD floor (:func:`algid.recording.noise.white_floor`: the upper third of the band, above the
     forcing and the modes in a well-sampled record, or below an anti-alias roll-off) times
-    the bandwidth."""
-    f, S = welch(resid, fs=1.0 / P.dt, nperseg=min(P.L, 1024), axis=0)
+    the bandwidth, read on the error :func:`without_jumps`."""
+    f, S = welch(without_jumps(resid), fs=1.0 / P.dt, nperseg=min(P.L, 1024), axis=0)
     return np.sqrt(white_floor(f, S) * f[-1])
+
+
+def without_jumps(resid: np.ndarray) -> np.ndarray:
+    """The equation errors (N, n) with their jumps taken out: first differences further than
+    :data:`JUMP_SIGMAS` robust sigmas (1.4826 times their median absolute deviation) from their
+    median, and their neighbours within :data:`JUMP_REACH` samples, set to that median and
+    summed back. A jump (a friction force reversing, an impact) spreads a ``1/f^2`` spectrum
+    over the upper band where the white floor is read, far above a quiet sensor's noise; white
+    noise has a difference that far out once in about two million samples. A column whose
+    differences are all equal (no noise) is left as it is."""
+    from scipy.ndimage import binary_dilation
+
+    d = np.diff(resid, axis=0)
+    mid = np.median(d, axis=0)
+    spread = 1.4826 * np.median(np.abs(d - mid), axis=0)
+    jump = (np.abs(d - mid) > JUMP_SIGMAS * spread) & (spread > 0)
+    jump = binary_dilation(jump, structure=np.ones((2 * JUMP_REACH + 1, 1), bool))
+    d = np.where(jump, mid, d)
+    return np.concatenate([resid[:1], resid[:1] + np.cumsum(d, axis=0)])
 
 
 def binned_r2(z: np.ndarray, r: np.ndarray, bins: int = N_BINS) -> float:

@@ -20,9 +20,9 @@ differences of :data:`STEP` samples. The record is realigned only when
 * every lateness lies within :data:`MAX_SPREAD` samples of the others (a scan lasts at most
   one sample period), and
 * the realigned linear chain leaves a withheld gap at most :data:`GAIN` times the record's,
-  and at most :data:`GAIN` times what realigning the latest channel alone leaves (one late
-  channel, however many others its bias moves a little, is an input delay or a sensor's
-  low-pass: the candidates' business).
+  and at most :data:`GAIN` times what the best lateness of the channel farthest from the
+  median alone leaves (one late channel, however many others its bias moves a little, is an
+  input delay or a sensor's low-pass: the candidates' business).
 
 A record with one force and one response channel has a single relative lateness: a late
 force there *is* an input delay in every respect the record can show, and it is left to the
@@ -178,12 +178,28 @@ def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing |
     _, gap_after = _fit(rec, late, boundary, L, skip)
     late = late - np.median(late)
     apart = np.abs(late) > Z_DELAY * np.maximum(std, np.max(std[free]))
-    one = np.where(np.arange(C) == np.argmax(np.abs(late)), late, 0.0)  # the latest channel alone
-    _, gap_one = _fit(rec, one, boundary, L, skip)
+    gap_one = _one_channel_gap(rec, late, boundary, L, skip)
     pattern = int(np.sum(apart)) >= MIN_CHANNELS and float(np.ptp(late)) <= MAX_SPREAD
     gain = gap_after <= GAIN * gap_before and gap_after <= GAIN * gap_one
     names = [f"{w}{i + 1}" for w, i in chans]
     return Timing(names, late, std, gap_before, gap_after, pattern and gain)
+
+
+def _one_channel_gap(rec: Recording, late: np.ndarray, boundary: str, L: int, skip: int) -> float:
+    """The withheld gap left by the best lateness of the channel farthest from the median
+    alone (Gauss-Newton in that one lateness, from its value in ``late``): what an input delay
+    or a sensor's low-pass, which make one channel late, would explain."""
+    c = int(np.argmax(np.abs(late)))
+    one = np.zeros_like(late)
+    one[c] = late[c]
+    for _ in range(PASSES):
+        r = _fit(rec, one, boundary, L, skip)[0]
+        dr = (_fit(rec, one + STEP * np.eye(late.size)[c], boundary, L, skip)[0] - r) / STEP
+        step = -float(dr @ r) / max(float(dr @ dr), 1e-300)
+        one[c] += float(np.clip(step, -MAX_STEP, MAX_STEP))
+        if abs(step) < TOLERANCE:
+            break
+    return _fit(rec, one, boundary, L, skip)[1]
 
 
 def on_time(rec: Recording, boundary: str) -> tuple[Recording, Timing | None]:

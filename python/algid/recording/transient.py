@@ -24,10 +24,16 @@ the force's "signal" at a few hertz. So, decided once from the record (:func:`an
   their surroundings and :data:`PEAK_FLOOR` times above the spectrum's median, between
   :data:`MIN_CYCLES` cycles of the longest segment and :data:`TOP_SHARE` of the sampling rate
   (a hit soon followed by another still leaves the slow modes to the long decays).
-* **Band**: given (``--band LO:HI``), or around the ``n`` lowest modes for a chain of ``n`` DOF,
-  its edges at the geometric means of neighbouring modes (below the first, as far under it as the
-  upper edge is above the last). The modes outside are *residual modes*: they are filtered out,
-  not blamed on the chain.
+* **Band**: given (``--band LO:HI``), or chosen from the modes' *kinetic energy* in the decays
+  (:func:`mode_energies`: the velocity's power spectrum, whatever the sensor measures, summed
+  over each mode's own band), not from their order: the modes holding at least
+  :data:`SHOWN_SHARE` of the strongest one's energy are the ones the response shows; of them, the
+  ``n`` adjacent ones (a chain of ``n`` DOF) holding the most energy are held, in a band
+  symmetric in log frequency around them and as wide as the modes allow: its edges stay at the
+  geometric mean with the nearest shown mode on either side (whichever is closer); with no shown
+  mode outside, with the nearest peak; with no peak outside, an octave. A weak first mode next to
+  a strong one thus neither takes the chain nor pulls the band's edge onto the strong one. The modes
+  outside are *residual modes*: they are filtered out, not blamed on the chain.
 * **Filter** (:func:`band_pass`): a Butterworth band-pass of order :data:`FILTER_ORDER`, zero phase,
   the same on the force and on every motion channel over the whole record: a linear
   time-invariant filter applied alike to both sides leaves eq. 1 unchanged. The record's end,
@@ -74,6 +80,10 @@ PRETRIGGER_S = 0.1
 PEAK_PROMINENCE = 10.0
 #: ... and above the median of the response's power spectrum.
 PEAK_FLOOR = 30.0
+#: A peak holding less than this share of the strongest mode's kinetic energy is not one of the
+#: modes the band is chosen from: neither held nor keeping the band's edges off (it stays a
+#: residual mode).
+SHOWN_SHARE = 0.01
 #: Modes below this many cycles per segment are not resolved.
 MIN_CYCLES = 10
 #: Highest mode searched, as a share of the sampling rate (an anti-alias filter's band).
@@ -228,10 +238,10 @@ def segments(hits: list[Hit], T: int, dt: float) -> tuple[list[tuple[int, int]],
     return list(zip(firsts, stops)), pres
 
 
-def response_modes(y: np.ndarray, dt: float, hits: list[Hit], segs: list[tuple[int, int]]) -> tuple[float, ...]:
-    """Spectral peaks [Hz] of the response ``y`` (T,) over the decays (module docstring)."""
-    from scipy.signal import find_peaks
-
+def decay_spectrum(y: np.ndarray, dt: float, hits: list[Hit], segs: list[tuple[int, int]]):
+    """Frequencies [Hz] and power spectrum of the response ``y`` (T,) summed over the decays (one
+    FFT per segment from its hit on, all of the longest segment's length), and the mask of the
+    frequencies searched for modes (module docstring)."""
     N = max(stop - h.start for h, (_, stop) in zip(hits, segs))
     P = np.zeros(N // 2 + 1)
     for h, (_, stop) in zip(hits, segs):
@@ -239,16 +249,36 @@ def response_modes(y: np.ndarray, dt: float, hits: list[Hit], segs: list[tuple[i
         P += np.abs(np.fft.rfft(z, N)) ** 2
     f = np.fft.rfftfreq(N, dt)
     keep = (f >= MIN_CYCLES / (N * dt)) & (f <= TOP_SHARE / dt)  # resolved in the longest decay
+    return f, P, keep
+
+
+def response_modes(f: np.ndarray, P: np.ndarray, keep: np.ndarray) -> tuple[float, ...]:
+    """Spectral peaks [Hz] of the decays' power spectrum ``P`` over ``f[keep]`` (module docstring)."""
+    from scipy.signal import find_peaks
+
     if np.count_nonzero(keep) < 3:
         return ()
     idx = np.nonzero(keep)[0]
-    logP = np.log(P[idx] + 1e-300)
-    peaks, _ = find_peaks(logP, prominence=np.log(PEAK_PROMINENCE))
+    peaks, _ = find_peaks(np.log(P[idx] + 1e-300), prominence=np.log(PEAK_PROMINENCE))
     floor = np.median(P[idx])
     return tuple(float(f[idx[i]]) for i in peaks if P[idx[i]] >= PEAK_FLOOR * floor)
 
 
-def choose_band(modes: tuple, n: int, dt: float, given: tuple | None) -> tuple[tuple[float, float], str]:
+def mode_energies(f: np.ndarray, P: np.ndarray, modes: tuple, order: int) -> np.ndarray:
+    """Kinetic energy of each mode in the decays (arbitrary unit): the velocity's power spectrum
+    (``P`` of a motion of derivative ``order``, 0 displacement, 1 velocity, 2 acceleration, times
+    ``(2 pi f)^(2 - 2 order)``) summed over the mode's own band, between the geometric means with
+    its neighbouring modes (the first's and the last's mirrored in log frequency; an octave
+    either side of a lone mode)."""
+    m = np.asarray(modes, float)
+    Pv = P * (2 * np.pi * np.maximum(f, f[1])) ** (2.0 - 2.0 * order)
+    mid = np.sqrt(m[:-1] * m[1:])
+    lo = np.concatenate([[m[0] ** 2 / mid[0] if mid.size else m[0] / 2], mid])
+    hi = np.concatenate([mid, [m[-1] ** 2 / mid[-1] if mid.size else m[-1] * 2]])
+    return np.array([np.sum(Pv[(f >= a) & (f < b)]) for a, b in zip(lo, hi)])
+
+
+def choose_band(modes: tuple, energies, n: int, dt: float, given: tuple | None) -> tuple[tuple[float, float], str]:
     """Band-pass edges [Hz] and what set them (module docstring)."""
     if given is not None:
         lo, hi = float(given[0]), float(given[1])
@@ -257,12 +287,25 @@ def choose_band(modes: tuple, n: int, dt: float, given: tuple | None) -> tuple[t
         return (lo, hi), "given"
     if not modes:
         raise ValueError("impact record: no mode stands out of the response's spectrum; give the band (--band LO:HI)")
-    m = np.sort(np.asarray(modes, float))
+    every, e = np.asarray(modes, float), np.asarray(energies, float)
+    shown = e >= SHOWN_SHARE * e.max()
+    m, e = every[shown], e[shown]
     k = min(n, m.size)
-    hi = float(np.sqrt(m[k - 1] * m[k])) if m.size > k else min(m[k - 1] * 2.0, TOP_SHARE / dt)
-    lo = float(m[0] * m[k - 1] / hi)  # as far below the first mode as hi is above the last
-    what = "the lowest mode" if k == 1 else f"the {k} lowest modes"
-    return (lo, hi), f"around {what} of the response"
+    i = int(np.argmax(np.convolve(e, np.ones(k), "valid")))  # the k adjacent modes holding the most energy
+    first, last = m[i], m[i + k - 1]
+    r = min(_edge_ratio(first, last, m) or _edge_ratio(first, last, every) or 2.0, 0.99 * 0.5 / dt / last)
+    what = "the strongest mode" if k == 1 else f"the {k} adjacent modes holding the most energy"
+    return (float(first / r), float(last * r)), f"around {what} of the response"
+
+
+def _edge_ratio(first: float, last: float, modes: np.ndarray) -> float | None:
+    """How far [ratio] a band symmetric in log frequency may reach beyond ``first`` and ``last``
+    [Hz] before the geometric mean with the nearest of ``modes`` outside it; None if none is."""
+    below, above = modes[modes < first], modes[modes > last]
+    ratios = ([np.sqrt(first / below.max())] if below.size else []) + (
+        [np.sqrt(above.min() / last)] if above.size else []
+    )
+    return min(ratios, default=None)
 
 
 def _sos(dt: float, band_hz: tuple):
@@ -290,9 +333,10 @@ def settling(dt: float, band_hz: tuple) -> int:
     return int(np.nonzero(h > SETTLE * h.max())[0][-1]) + 1
 
 
-def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: tuple | None = None):
-    """The :class:`Transient` of a record with forces ``u`` (T, q) and response ``y`` (T, c),
-    or None when the record is not a hammer test (module docstring)."""
+def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: tuple | None = None, order: int = 2):
+    """The :class:`Transient` of a record with forces ``u`` (T, q) and response ``y`` (T, c) of
+    derivative ``order`` (0 displacement, 1 velocity, 2 acceleration), or None when the record is
+    not a hammer test (module docstring)."""
     from .noise import channel
 
     drive = int(np.argmax(np.max(np.abs(u - np.median(u, axis=0)), axis=0)))
@@ -303,8 +347,9 @@ def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: 
         return None
     segs, pres = segments(hits, T, dt)
     resp = y[:, drive] if y.shape[1] > drive else y[:, 0]
-    modes = response_modes(resp, dt, hits, segs)
-    band, source = choose_band(modes, n, dt, band_hz)
+    f, P, keep = decay_spectrum(resp, dt, hits, segs)
+    modes = response_modes(f, P, keep)
+    band, source = choose_band(modes, mode_energies(f, P, modes, order) if modes else (), n, dt, band_hz)
     yb = band_pass(resp[:, None], dt, band)[:, 0]
     settle = settling(dt, band)
     # each pre-trigger band-passed alone (the whole record's zero-phase filter smears the hit
@@ -334,8 +379,8 @@ def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: 
 def transient_record(rec, band_hz: tuple | None = None):
     """``(record, transient)``: a hammer test made ready for eq. 1 (its forces cleaned, forces and
     motions band-passed alike, :func:`analyse_transient`), or the record unchanged and None."""
-    motion = next(m for m in (rec.a, rec.v, rec.x) if m is not None)
-    tr = analyse_transient(rec.u, motion, float(rec.dt), rec.n, band_hz)
+    order, motion = next((o, m) for o, m in ((2, rec.a), (1, rec.v), (0, rec.x)) if m is not None)
+    tr = analyse_transient(rec.u, motion, float(rec.dt), rec.n, band_hz, order)
     if tr is None:
         if band_hz is not None:
             raise ValueError("--band applies to impact records, and no hit was found in the force")
@@ -376,7 +421,7 @@ def add_band_option(p) -> None:
         "--band",
         type=band_option,
         metavar="LO:HI",
-        help="impact records: the band [Hz] whose modes the chain holds (default: around the n lowest modes "
-        "of the response); force and response are band-passed alike and the modes outside are reported as "
-        "residual modes",
+        help="impact records: the band [Hz] whose modes the chain holds (default: around the n adjacent modes "
+        "holding the most kinetic energy in the response); force and response are band-passed alike and the "
+        "modes outside are reported as residual modes",
     )
