@@ -1296,7 +1296,7 @@ def silverbox_text() -> str:
         + ", ".join(
             f"{d['gap_before_force']:.3f} to {d['gap_after_force']:.3f} ({SILVERBOX[k]})" for k, d in parts.items()
         )
-        + f". The cubic coefficient is {span([d['params']['k_cubic'] / LITERATURE_K3 - 1 for d in v], lambda x: pct(x))} % "
+        + f". The cubic coefficient is {span([d['params']['k_cubic'] / LITERATURE_K3 - 1 for d in v], pct)} % "
         f"above the literature's {LITERATURE_K3}.\n\nWhere: the error lives in the only equation, peaks at "
         f"{span([f['peak_hz'] for f in fr], lambda x: f'{x:.1f}')} Hz (the resonance, "
         f"{span([f['natural_frequencies_hz'][0] for f in fr], lambda x: f'{x:.1f}')} Hz fitted) with 80 % of its "
