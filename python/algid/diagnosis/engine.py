@@ -699,10 +699,8 @@ def diagnose(
         Forces and accelerations (or velocities, or displacements) of every DOF, in SI or in
         the units ``rec.units`` declares (the result's ``units`` are built from them); a path
         or a DataFrame is read by :func:`algid.load_recording`.
-    boundary : {"fixed", "free"}
-        Right end of the chain.
-    progress : callable or None
-        Called with a short message at every stage.
+    boundary : {"fixed", "free"}, the right end of the chain.
+    progress : callable or None, called with a short message at every stage.
     effects : candidate effects to try (default: all of :data:`EFFECTS`).
     given : list of ``NAME[:LOCATION]`` or None
         Fit these effects (together when several) instead of searching: the result reports
@@ -716,8 +714,7 @@ def diagnose(
     band_hz : (low, high) [Hz] or None
         Impact records: the band of the modes the chain holds (:mod:`algid.recording.transient`).
     realign : bool
-        Find a multiplexed converter's channel skew and undo it first (:mod:`.timing`; False:
-        the caller has, as :func:`algid.identify` does).
+        Undo a multiplexed converter's channel skew when the record shows one (:mod:`.timing`).
     **reading
         How to read a path or a DataFrame, as ``algid diagnose``'s options say (``force``,
         ``accel``, ``units``, ``rate``...: :func:`algid.recording.options.reading_options`).
