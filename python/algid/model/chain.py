@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .network import BOUNDARIES, Network
+from .network import BOUNDARIES, Network, set_parameters
 
 
 def _walls(n: int) -> Network:
@@ -114,11 +114,7 @@ class Chain:
             k = k.copy()
             if k[-1] != 0.0:
                 raise ValueError("a free right end needs stiffness[n] == 0")
-        if np.any(m <= 0) or np.any(c < 0) or np.any(k < 0):
-            raise ValueError("masses must be > 0, dampings and stiffnesses >= 0")
-        object.__setattr__(self, "mass", m)
-        object.__setattr__(self, "damping", c)
-        object.__setattr__(self, "stiffness", k)
+        set_parameters(self, m, c, k)
 
     @property
     def n(self) -> int:

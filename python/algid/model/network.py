@@ -225,6 +225,15 @@ def _end(i: int) -> str:
     return "ground" if i == 0 else f"DOF {i}"
 
 
+def set_parameters(model, m: np.ndarray, c: np.ndarray, k: np.ndarray) -> None:
+    """Check the signs of a model's masses, dampings and springs and set them (frozen dataclass)."""
+    if np.any(m <= 0) or np.any(c < 0) or np.any(k < 0):
+        raise ValueError("masses must be > 0, dampings and stiffnesses >= 0")
+    object.__setattr__(model, "mass", m)
+    object.__setattr__(model, "damping", c)
+    object.__setattr__(model, "stiffness", k)
+
+
 @dataclass(frozen=True)
 class NetworkModel:
     """Physical parameters of a spring network.
@@ -251,11 +260,7 @@ class NetworkModel:
             raise ValueError(f"mass and damping need n = {n} entries, got {m.size} and {c.size}")
         if k.size != S:
             raise ValueError(f"stiffness has {k.size} entries, the network has {S} springs")
-        if np.any(m <= 0) or np.any(c < 0) or np.any(k < 0):
-            raise ValueError("masses must be > 0, dampings and stiffnesses >= 0")
-        object.__setattr__(self, "mass", m)
-        object.__setattr__(self, "damping", c)
-        object.__setattr__(self, "stiffness", k)
+        set_parameters(self, m, c, k)
 
     @property
     def n(self) -> int:
