@@ -1244,6 +1244,26 @@ def fresh_misses() -> str:
     )
 
 
+def fresh_held_out() -> str:
+    """The channel-timing step on fresh seeds it was not developed on, against the code before it."""
+    after = result("realistic_blind_fresh60k")["summary"]
+    before = result("realistic_blind_fresh60k_before")["summary"]
+
+    def skew(s: dict) -> str:
+        k = s["per_nuisance"]["skew"]
+        return f"{pct(k['top1_accuracy'], 3)} % of its {k['cases']} skew cases"
+
+    return (
+        f"On {after['cases']} fresh cases it was not developed on (`--seeds 60000:60100 --fresh`), top-1 is "
+        f"{pct(after['top1_accuracy'], 3)} % ({skew(after)}), against {pct(before['top1_accuracy'], 3)} % "
+        f"({skew(before)}) for the same cases diagnosed by the previous release's code (before this step and the "
+        f"noise floor without friction jumps); `none` on an effect "
+        f"{pct(after['false_none_on_effect'], 2)} % against {pct(before['false_none_on_effect'], 2)} %, false "
+        f"alarms on `none` {pct(after['false_alarm_rate_none'], 3)} % against "
+        f"{pct(before['false_alarm_rate_none'], 3)} %.\n"
+    )
+
+
 # -- docs/real_data.md --------------------------------------------------------------------
 
 LITERATURE_K3 = 3.5  # [V/V^3] the Silverbox's cubic coefficient that PROVENANCE.md quotes
@@ -1605,6 +1625,7 @@ BLOCKS = {
     "realistic-fresh": realistic_fresh,
     "realistic-fresh-split": realistic_fresh_split,
     "fresh-misses": fresh_misses,
+    "fresh-held-out": fresh_held_out,
     "silverbox": silverbox_table,
     "silverbox-text": silverbox_text,
     "f16-chain": f16_chain,
