@@ -112,6 +112,7 @@ def test_output_error_of_the_true_mode_is_the_noise():
     assert fit["ratio"] > 10 * fit["ratio_limit"] and "output error" in fit["misfit"]
 
 
+@pytest.mark.slow  # 3 s: a wide band's many windows
 def test_a_band_of_two_modes_is_no_one_dof_chain():
     """The band given holds the beam's first two modes (driven at mid-length, where both show): a
     1-DOF chain cannot predict the decay, and every estimate it gives is model_misfit."""
@@ -198,4 +199,30 @@ def test_measured_hit_default_band_holds_the_strong_mode():
     assert modal.frequencies_hz[0] == pytest.approx(899.9, rel=0.005)
     # the chain found does not predict the measured decay (docs/identify.md): model_misfit
     assert res.model_fit["ratio"] > res.model_fit["ratio_limit"]
+    assert res.verdicts[0].status == "model_misfit" and "output error" in res.verdicts[0].reason
+
+
+def _duffing_hit(k_cubic: float, fs=10_000.0, T_s=1.0, seed=0) -> Recording:
+    """A 1-DOF oscillator (1 kg, 50 Hz, damping ratio 0.5 %, free end) with a cubic spring
+    ``k_cubic`` [N/m^3], hit by a 1 ms half-sine of 100 N after 0.15 s of quiet, 40 dB noise."""
+    from algid.model.chain import Chain
+    from algid.simulator import simulate
+    from algid.simulator.beam import half_sine
+
+    t = np.arange(int(T_s * fs)) / fs
+    u = half_sine(t, 0.15, 1e-3, 100.0)[:, None]
+    chain = Chain(mass=[1.0], damping=[3.14], stiffness=[(2 * np.pi * 50) ** 2, 0.0], boundary="free")
+    cubic = [{"name": "cubic_stiffness", "location": {"spring": 1}, "params": {"k_cubic": k_cubic}}]
+    a = simulate(chain, u, T_s, fs, effects=cubic, force_interp="linear").a
+    rng = np.random.default_rng(seed)
+    return Recording(
+        t=t, **{k: s + rng.normal(0, 0.01 * np.sqrt(np.mean(s**2)), s.shape) for k, s in (("u", u), ("a", a))}
+    )
+
+
+def test_a_cubic_spring_hit_is_model_misfit():
+    """Its frequency falls as the decay dies out (k_cubic x^2 is 4 % of k at the first peak): no
+    linear chain predicts the decay to the noise."""
+    res = identify(_duffing_hit(1e11), boundary="free")
+    assert res.model_fit["ratio"] > 10 * res.model_fit["ratio_limit"]
     assert res.verdicts[0].status == "model_misfit" and "output error" in res.verdicts[0].reason

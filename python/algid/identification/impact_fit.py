@@ -35,12 +35,22 @@ from ..recording.transient import band_pass, clean_force, quiet_part
 OUTPUT_ERROR_RATIO = 5.0
 
 
-def predicted_motion(theta: np.ndarray, n: int, boundary: str, kind: str, u: np.ndarray, dt: float) -> np.ndarray:
-    """Motion ``kind`` (T, n) of the chain ``theta`` (packed ``m, c, k``) driven from rest by the
-    forces ``u`` (T, n) [N] sampled every ``dt`` [s] (first-order hold between the samples)."""
+def chain_of(theta: np.ndarray, n: int, boundary: str) -> Chain | None:
+    """The chain of the packed estimate ``theta``, None when it has none (a mass, damping or
+    stiffness missing or below zero: the verdicts say why)."""
+    if not np.all(np.isfinite(theta[: 2 * n])):
+        return None
+    try:
+        return Chain.from_packed(np.nan_to_num(theta), n, boundary)
+    except ValueError:
+        return None
+
+
+def predicted_motion(chain: Chain, kind: str, u: np.ndarray, dt: float) -> np.ndarray:
+    """Motion ``kind`` (T, n) of ``chain`` driven from rest by the forces ``u`` (T, n) [N]
+    sampled every ``dt`` [s] (first-order hold between the samples)."""
     from scipy.signal import lsim
 
-    chain = Chain.from_packed(np.nan_to_num(theta), n, boundary)
     _, y, _ = lsim(chain.state_space(kind), u, np.arange(u.shape[0]) * dt)
     return np.asarray(y, float).reshape(u.shape[0], -1)
 
@@ -61,10 +71,11 @@ def impact_fit(sig, theta: np.ndarray, boundary: str) -> dict:
     the estimates are ``model_misfit`` ("" when the chain explains every hit)."""
     tr, raw = sig.transient, sig.raw
     y = {"acceleration": raw.a, "velocity": raw.v, "displacement": raw.x}[sig.kind]
-    if not np.all(np.isfinite(theta[: 2 * raw.n])):
-        return {"check": "output error", "explains_record": False, "misfit": ""}  # no chain to simulate
+    chain = chain_of(theta, raw.n, boundary)
+    if chain is None:
+        return {"check": "output error", "explains_record": False, "misfit": ""}  # the verdicts say why
     u = clean_force(raw.u, list(tr.hits), tr.dt)
-    error = band_pass(predicted_motion(theta, raw.n, boundary, sig.kind, u, tr.dt) - y, tr.dt, tr.band_hz)
+    error = band_pass(predicted_motion(chain, sig.kind, u, tr.dt) - y, tr.dt, tr.band_hz)
     quiet = np.concatenate([quiet_part(y[:, c], tr) for c in range(y.shape[1])])
     noise = float(np.sqrt(np.mean(quiet**2)))
     hits = [float(np.sqrt(np.mean(error[d] ** 2))) if d.size else math.nan for d in _decays(tr)]
@@ -93,7 +104,7 @@ def impact_fit(sig, theta: np.ndarray, boundary: str) -> dict:
 def fit_line(fit: dict) -> str:
     """The summary's line of :func:`impact_fit`'s ``model_fit``."""
     if "ratio" not in fit:
-        return "fit check (output error): no chain to simulate"
+        return "fit check (output error): no admissible chain to simulate"
     hits = ", ".join(f"{r:.3g}" for r in fit["hit_ratios"])
     say = "explains the hits" if fit["explains_record"] else "does not explain the hits"
     return (
