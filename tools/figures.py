@@ -812,7 +812,7 @@ def impact_fit_check(sim: dict, meas: dict) -> str:
     limit = sim["one_hit"][0]["fit_check"]["ratio_limit"]
     return (
         "The fit check (the chain identified, driven by the cleaned force, against the response over the decay; "
-        f"at most {limit:g}x the quiet part's noise in the band explains a hit): " + "; ".join(say) + "."
+        f"at most {limit:g}x the quiet part's noise in the band explains the hits): " + "; ".join(say) + "."
     )
 
 

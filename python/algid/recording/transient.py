@@ -371,12 +371,12 @@ def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: 
         missing=np.arange(T) >= T - settle,
         noise_rms=(channel("y", resp, dt).sigma, channel("u", u[:, drive], dt).sigma),
     )
-    quiet = quiet_part(resp, tr)
+    quiet = np.concatenate(quiet_parts(resp, tr))
     return replace(tr, quiet_rms=float(np.sqrt(np.mean(quiet**2))) if quiet.size else float("nan"))
 
 
-def quiet_part(y: np.ndarray, tr: Transient) -> np.ndarray:
-    """The response ``y`` (T,) in the band over the quiet parts of the record (module docstring):
+def quiet_parts(y: np.ndarray, tr: Transient) -> list[np.ndarray]:
+    """The response ``y`` (T,) in the band over each quiet part of the record (module docstring):
     each pre-trigger band-passed alone (the whole record's zero-phase filter smears the hit back
     into it); without one of :data:`QUIET_PERIODS` of the band's lower edge, the last tenth of
     each segment before the filter's unsettled end."""
@@ -384,11 +384,9 @@ def quiet_part(y: np.ndarray, tr: Transient) -> np.ndarray:
     segs = zip(tr.segments, tr.pretrigger)
     pre = [band_pass(y[f : f + p, None], tr.dt, tr.band_hz)[:, 0] for (f, _), p in segs if p >= least]
     if pre:
-        return np.concatenate(pre)
+        return pre
     yb, settle = band_pass(y[:, None], tr.dt, tr.band_hz)[:, 0], int(np.count_nonzero(tr.missing))
-    return np.concatenate(
-        [yb[max(f, stop - settle - (stop - f) // 10) : max(f, stop - settle)] for f, stop in tr.segments]
-    )
+    return [yb[max(f, stop - settle - (stop - f) // 10) : max(f, stop - settle)] for f, stop in tr.segments]
 
 
 def transient_record(rec, band_hz: tuple | None = None):
