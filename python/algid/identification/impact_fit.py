@@ -76,7 +76,7 @@ def impact_fit(sig, theta: np.ndarray, boundary: str) -> dict:
     (:class:`.screen.Signals` with its ``transient``): the ``model_fit`` fields ``check``,
     ``output_error`` and ``noise`` (RMS over the decays and over the quiet part, the motion's
     unit), ``ratio``, ``hit_ratios``, ``ratio_limit``, ``explains_record``, and ``misfit``: why
-    the estimates are ``model_misfit`` ("" when the chain explains every hit)."""
+    the estimates are ``model_misfit`` ("" when the chain explains the hits)."""
     tr, raw = sig.transient, sig.raw
     y = {"acceleration": raw.a, "velocity": raw.v, "displacement": raw.x}[sig.kind]
     chain = chain_of(theta, raw.n, boundary)
