@@ -12,6 +12,9 @@ diagnosis's verdict, on the simulated beam and on the measured five-hit record.
   80 % of the record when it never falls that far) and the phase slope.
 * Targets (reported, not asserted): frequency within 0.5 %, damping ratio within a factor 1.5 of
   the reference, the mode in ``identify``'s modal table, ``diagnose`` not ``no_force_response``.
+* The fit check per hit (``fit_check``, :mod:`algid.identification.impact_fit`): the output error of
+  the chain identified, driven by the cleaned force, over the decay, its ratio to the quiet part's
+  noise in the band, whether the chain explains the hit and whether the estimates are valid.
 
 ``python bench/impact.py`` (about a minute) writes ``bench/results/impact.json``.
 """
@@ -76,6 +79,18 @@ def judged(found: dict, f_ref: float, z_ref: float) -> dict:
     }
 
 
+def fit_check(res) -> dict:
+    """The fit check's numbers of one identification and its verdicts."""
+    fit = res.model_fit
+    keys = ("output_error", "noise", "ratio", "ratio_limit", "explains_record")
+    return {
+        **{k: fit.get(k) for k in keys},
+        "valid": bool(res.valid),
+        "statuses": [v.status for v in res.verdicts],
+        "reason": next((v.reason for v in res.verdicts if v.status == "model_misfit"), None),
+    }
+
+
 def verdict(d) -> dict:
     m = d.extra["model"]
     return {"verdict": m.verdict, "reasons": m.reasons, "force_response": m.evidence["force_response"].get("what")}
@@ -98,6 +113,7 @@ def simulated(seeds: int) -> dict:
         )
         found["seconds"] = time.perf_counter() - clock
         found["residual_modes_hz"] = list(res.transient.residual_hz)
+        found["fit_check"] = fit_check(res)
         runs.append(found)
     hits3 = hammer_test(beam, double_hit=(0.003, 0.3), hits=3)
     return {
@@ -118,6 +134,7 @@ def measured_hit(u: np.ndarray, y: np.ndarray, fs: float, band: tuple | None) ->
         "band_hz": list(used),
         "band_source": res.transient.band_source,
         **judged(first_mode(res, 900.0), f_ref, z_ref),
+        "fit_check": fit_check(res),
     }
 
 

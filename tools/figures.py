@@ -792,7 +792,27 @@ def impact() -> str:
         f"{span([h['damping_ratio_over_reference'] for h in mh], x2)} times the envelope's; in the band chosen "
         f"from the response, {default_band(meas['default_band'])}. `diagnose` on the "
         f"{len(mh)} hits joined: `{meas['diagnose_five_hits_joined']['verdict']}`, "
-        f"{meas['diagnose_five_hits_joined']['force_response']}.\n"
+        f"{meas['diagnose_five_hits_joined']['force_response']}. {impact_fit_check(sim, meas)}\n"
+    )
+
+
+def impact_fit_check(sim: dict, meas: dict) -> str:
+    """The fit check's output error over the decays, in units of the quiet part's noise."""
+    x3 = lambda v: f"{v:.3g}"  # noqa: E731
+    runs = {
+        "simulated": sim["one_hit"],
+        "measured (`--band`)": meas["one_hit"],
+        "measured (default band)": meas["default_band"],
+    }
+    say = []
+    for what, hits in runs.items():
+        checks = [h["fit_check"] for h in hits]
+        valid = sum(c["valid"] for c in checks)
+        say.append(f"{what} {span([c['ratio'] for c in checks], x3)}x ({valid} of {len(checks)} valid)")
+    limit = sim["one_hit"][0]["fit_check"]["ratio_limit"]
+    return (
+        "The fit check (the chain identified, driven by the cleaned force, against the response over the decay; "
+        f"at most {limit:g}x the quiet part's noise in the band explains the hits): " + "; ".join(say) + "."
     )
 
 

@@ -2,7 +2,9 @@
 identify's model check (:func:`model_check`), before the plan.
 
 0. The fit check of every linear identification (:func:`fit_check`): the diagnosis's
-   verdict on the record. Unless it is ``none``, a biased linear fit is not called valid.
+   verdict on the record. Unless it is ``none``, a biased linear fit is not called valid. (An
+   impact record's check is the output error of the chain identify estimates,
+   :mod:`.impact_fit`, after the estimate: the diagnosis's windows do not fit a decay.)
 
 1. The effects: ``NAME[:LOCATION]`` in the diagnosis's vocabulary (``coulomb_friction:1``,
    ``cubic_stiffness:2``), or ``auto``: the effect :func:`algid.diagnose` reports as
@@ -77,17 +79,15 @@ def _effect_verdicts(effects: list[dict], misfit: str, units: dict) -> list[dict
 CHECKED_EFFECTS = tuple(e for e in EFFECTS if e != "stribeck_friction")
 
 
-def fit_check(rec, boundary: str, band_hz: tuple | None = None) -> tuple[dict, object]:
+def fit_check(rec, boundary: str) -> tuple[dict, object]:
     """Does the linear chain explain the record to its noise? The diagnosis's verdict
     (:func:`algid.diagnose` over :data:`CHECKED_EFFECTS`, on its quick grids): ``none`` (no candidate beyond
     noise, the withheld gap within :data:`FIT_FLOOR_RATIO` of the noise floor) or not.
     Returns ``gap``, ``noise_floor``, ``explains_record``, ``diagnosis`` (the effect and
     location it finds, or ``unknown``) and ``misfit``: the reason that makes the linear
     chain's determined estimates ``model_misfit`` ("" when it explains the record); and the
-    diagnosis itself. ``band_hz``: an impact record's band (:mod:`algid.recording.transient`)."""
-    d = diagnose(
-        rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False, band_hz=band_hz
-    )  # identify notched it
+    diagnosis itself."""
+    d = diagnose(rec, boundary, effects=CHECKED_EFFECTS, quick=True, notch=False)  # identify notched it
     out = {"gap": d.gap_before, "noise_floor": float(d.extra["noise_floor"]), "explains_record": d.effect == "none"}
     if d.effect == "none":
         return {**out, "diagnosis": "none", "misfit": ""}, d
@@ -123,9 +123,9 @@ def model_check(
     sig: Signals, nm: NoiseModel, boundary: str, effects: list, skipped: str, progress: Callable[[str], None]
 ) -> ModelCheck:
     """Identify's model check (module docstring), before any estimator runs: the fit with the
-    ``effects``, else the fit check (``skipped``: why not, "" to run it) whose misfit, but on
-    an impact record (the diagnosis's windows do not fit a decay), makes the diagnosis's linear
-    fit the answer: one linear fit per record, whichever command prints it.
+    ``effects``, else the fit check (``skipped``: why not, "" to run it) whose misfit makes the
+    diagnosis's linear fit the answer: one linear fit per record, whichever command prints it.
+    Not on an impact record: its check judges the chain identify estimates (:mod:`.impact_fit`).
     ``progress(stage)`` before each diagnosis."""
     note = ""
     if effects:
@@ -133,13 +133,14 @@ def model_check(
         fitted, note = fit_with_effects(sig.rec, sig.motion, sig.kind, nm, boundary, effects)
         if fitted is not None:
             return ModelCheck(fitted, {}, "", sig)
+    if sig.transient is not None:
+        return ModelCheck(None, {"source": note} if note else {}, "", sig)
     progress("withheld-window test")
-    band = None if sig.transient is None else sig.transient.band_hz
-    check, d = ({"misfit": ""}, None) if skipped else fit_check(sig.raw, boundary, band)
+    check, d = ({"misfit": ""}, None) if skipped else fit_check(sig.raw, boundary)
     sig = on_time_signals(sig, None if d is None else d.extra.get("timing"))
     misfit = check.pop("misfit")
     fit = {**check, **({"source": note} if note else {})}
-    if misfit and sig.transient is None:
+    if misfit:
         fields = diagnosis_fields(
             sig.rec, sig.motion, sig.kind, nm, boundary, d, linear_model(d), "the linear chain", misfit
         )

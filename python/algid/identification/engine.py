@@ -15,9 +15,10 @@ the results pass as small dataclasses:
    otherwise the fit check, the diagnosis's verdict on the record. Unless it is ``none``, the
    linear chain reported is the diagnosis's fit of it, the one linear fit of the record
    whichever command prints it (:func:`algid.diagnosis.corrected.linear_model`), its
-   determined estimates ``model_misfit``, and stages 3-6 are skipped. (Not on an impact
-   record: the diagnosis's windows do not yet fit a decay, so its own estimate is reported,
-   ``model_misfit``.)
+   determined estimates ``model_misfit``, and stages 3-6 are skipped. Not on an impact
+   record (the diagnosis's windows do not fit a decay): its fit check is the output error of
+   the chain stage 5 gives, driven by the measured force over the hits (:mod:`.impact_fit`),
+   before the verdicts.
 3. Plan (:func:`.plan.plan_record` -> :class:`.plan.Plan`): which estimator and its settings,
    from the recording's time scales and a first look at the chain, whose lowest natural
    frequency sets the window length; for an impact record, from the response's modes in the band.
@@ -45,6 +46,7 @@ from .augmented import model_check
 from .base import FIT_CHECK_SKIPPED, augment, reduce
 from .estimate import Estimate, estimate
 from .frf_fit import identify_frf
+from .impact_fit import impact_fit
 from .plan import plan_record
 from .result import Identification
 from .screen import Signals, screened_signals
@@ -190,6 +192,10 @@ def identify(
     plan = plan_record(sig, nm, boundary, estimator, joint=not (base and not scale))  # 3. plan
     est = estimate(sig, nm, plan, boundary, seed, _at(progress, "estimate"))  # 4. estimate
     unc = estimate_uncertainty(est, sig, nm, boundary, replicates, seed, _at(progress, "uncertainty"))  # 5. uncertainty
-    judged = judge_estimate(unc, sig, nm, boundary, check.misfit)  # 6. verdicts
-    result = _identification(common, est, unc, judged, check.fit)
+    fit, misfit = check.fit, check.misfit
+    if sig.transient is not None:  # an impact record's fit check judges the chain estimated
+        fit = {**fit, **impact_fit(sig, unc.theta, boundary)}
+        misfit = fit.pop("misfit")
+    judged = judge_estimate(unc, sig, nm, boundary, misfit)  # 6. verdicts
+    result = _identification(common, est, unc, judged, fit)
     return reduce(result, scale, judged.verdicts, skipped) if base else result

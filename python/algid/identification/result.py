@@ -14,6 +14,7 @@ from ..estimator.continuous import PackedParameters, unpack
 from ..messages.display import Displayed, number, parameter_rows
 from ..model.chain import parameter_names
 from ..recording.noise import NoiseModel
+from .impact_fit import fit_line
 from .plan import Plan
 from .screen import Screened
 from .verdicts import Verdict, dof_validity
@@ -328,6 +329,8 @@ class Identification(PackedEstimates):
         lines += timing_lines(self.channel_timing)
         if self.transient is not None:
             lines.append(f"  {self.transient.line()}")
+            if self.model_fit.get("check") == "output error":
+                lines.append(f"  {fit_line(self.model_fit)}")
         lines += self.ratio_lines() if self.scale else self.parameter_lines()
         lines += effect_lines(self.effects, self.model_fit.get("source", ""))
         lines.append(f"valid: {self.valid} (DOF: {', '.join(str(bool(x)) for x in self.valid_dof)})")

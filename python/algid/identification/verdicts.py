@@ -25,7 +25,8 @@ joins). Statuses, in the order they are tested:
 * ``inadmissible``: a mass below zero by three sigma, or a damping or spring below zero by
   three sigma, that is not negligible: eq. 1 does not fit the record.
 * ``model_misfit``: the fitted model does not explain the record to its noise (``misfit``,
-  the diagnosis's withheld-window test, :func:`.augmented.fit_check`): the estimate is
+  the diagnosis's withheld-window test, :func:`.augmented.fit_check`, or on an impact record
+  the chain's output error over the decays, :mod:`.impact_fit`): the estimate is
   biased by what the model leaves out; this verdict takes precedence over every other but
   ``known`` and ``not_separable`` wherever the fit gives a value. (The window results' scatter beyond the noise
   scales the standard deviations up, :mod:`.uncertainty`; it is no verdict of its own:

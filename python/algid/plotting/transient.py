@@ -2,8 +2,9 @@
 
 Top: the hit(s), the force as the identification used it (baseline drift removed, band-passed).
 Bottom: the measured response over the decay, band-passed alike, and the identified chain's
-response to that force (the chain's state space, :func:`algid.model.frf.state_space`, simulated with
-the measured force). The numbers drawn are those of :func:`transient_lines`.
+response to that force (the chain driven from rest by the cleaned force and band-passed alike, as
+identify's fit check computes it: :mod:`algid.identification.impact_fit`). The numbers drawn are
+those of :func:`transient_lines`.
 """
 
 from __future__ import annotations
@@ -18,22 +19,19 @@ from . import subplots
 def transient_lines(res, rec) -> dict:
     """``t_s``, ``force``, ``measured`` and ``model`` (T,) at the hammer's DOF of the record ``rec``
     as :func:`algid.identify` saw it (:func:`algid.recording.transient.transient_record` with the
-    result's band); ``model`` is NaN when the chain has no estimate."""
-    from scipy.signal import lsim
+    result's band); ``model`` is NaN when there is no admissible chain."""
+    from ..identification.impact_fit import chain_of, predicted_motion
+    from ..recording.transient import band_pass, clean_force, transient_record
 
-    from ..model.chain import Chain
-    from ..model.frf import state_space
-    from ..recording.transient import transient_record
-
-    filtered, _ = transient_record(rec, res.transient.band_hz)
+    filtered, tr = transient_record(rec, res.transient.band_hz)
     kind = "acceleration" if filtered.a is not None else ("velocity" if filtered.v is not None else "displacement")
     y = {"acceleration": filtered.a, "velocity": filtered.v, "displacement": filtered.x}[kind]
     drive = int(np.argmax(np.max(np.abs(filtered.u), axis=0)))
     model = np.full(filtered.t.size, np.nan)
-    if np.all(np.isfinite(res.theta[: 2 * res.n])) and np.isfinite(res.theta[2 * res.n]):
-        chain = Chain.from_packed(np.nan_to_num(res.theta), res.n, res.boundary)
-        _, out, _ = lsim(state_space(chain, kind), filtered.u, filtered.t - filtered.t[0])
-        model = np.asarray(out).reshape(filtered.t.size, -1)[:, drive]
+    chain = chain_of(res.theta, res.n, res.boundary)
+    if chain is not None:  # driven by the cleaned force from rest, then band-passed as the record
+        out = predicted_motion(chain, kind, clean_force(rec.u, list(tr.hits), tr.dt), tr.dt)
+        model = band_pass(out, tr.dt, tr.band_hz)[:, drive]
     return {"t_s": filtered.t, "force": filtered.u[:, drive], "measured": y[:, drive], "model": model, "kind": kind}
 
 

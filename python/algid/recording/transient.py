@@ -15,8 +15,9 @@ the force's "signal" at a few hertz. So, decided once from the record (:func:`an
   :data:`SPAN_SHARE` of the record, and its baseline swings by at most :data:`BASELINE_SWING`
   of the highest hit (not the steps of a bang-bang drive).
 * **Force** (:func:`clean_force`): inside every hit (widened by :data:`HIT_MARGIN_S`) the force
-  less its baseline, drawn straight from the level just before the hit to the level just after;
-  zero outside.
+  less its baseline, which goes from the level just before the hit to the level just after as
+  the hit's charge passes (an AC-coupled amplifier's undershoot follows the force's running
+  integral); zero outside.
 * **Segments**: each hit with what follows it up to the next hit's pre-trigger; its pre-trigger
   is the quiet before the hit (at most :data:`PRETRIGGER_S`).
 * **Modes** (:func:`response_modes`): peaks of the response's power spectrum averaged over the
@@ -212,14 +213,19 @@ def is_transient(hits: list[Hit], share: float, T: int, swing: float = 0.0) -> b
 
 
 def clean_force(u: np.ndarray, hits: list[Hit], dt: float) -> np.ndarray:
-    """The force (T, q) inside the hits less its baseline (a line from the level before a hit to
-    the level after it, each the median over :data:`HIT_MARGIN_S`), zero outside."""
+    """The force (T, q) inside the hits less its baseline, zero outside: the baseline goes from
+    the level before a hit to the level after it (each the median over :data:`HIT_MARGIN_S`) as
+    the hit's charge passes (its running share of the hit's ``|force - level before|`` beyond the
+    two levels' difference): an AC-coupled amplifier's undershoot grows with the force's running
+    integral."""
     out = np.zeros_like(u)
     w = max(1, int(round(HIT_MARGIN_S / dt)))
     for h in hits:
         before = np.median(u[max(0, h.start - w) : h.start + 1], axis=0)
         after = np.median(u[h.stop - 1 : h.stop + w], axis=0)
-        s = np.linspace(0.0, 1.0, h.stop - h.start)[:, None]
+        swing = np.abs(after - before)  # the baseline's own share, left out of the charge
+        charge = np.cumsum(np.maximum(np.abs(u[h.start : h.stop] - before) - swing, 0.0), axis=0)
+        s = charge / np.where(charge[-1] > 0, charge[-1], 1.0)
         out[h.start : h.stop] = u[h.start : h.stop] - (before + s * (after - before))
     return out
 
@@ -352,16 +358,8 @@ def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: 
     band, source = choose_band(modes, mode_energies(f, P, modes, order) if modes else (), n, dt, band_hz)
     yb = band_pass(resp[:, None], dt, band)[:, 0]
     settle = settling(dt, band)
-    # each pre-trigger band-passed alone (the whole record's zero-phase filter smears the hit
-    # back into it); without one of QUIET_PERIODS of the lower edge, the tenth of each segment
-    # before the unsettled end
-    least = QUIET_PERIODS / band[0] / dt
-    quiet = np.concatenate(
-        [band_pass(resp[f : f + p, None], dt, band)[:, 0] for (f, _), p in zip(segs, pres) if p >= least]
-        or [yb[max(f, stop - settle - (stop - f) // 10) : max(f, stop - settle)] for f, stop in segs]
-    )
     decay = np.concatenate([yb[h.stop : stop] for h, (_, stop) in zip(hits, segs)])
-    return Transient(
+    tr = Transient(
         dt=float(dt),
         hits=tuple(hits),
         segments=tuple(segs),
@@ -369,11 +367,26 @@ def analyse_transient(u: np.ndarray, y: np.ndarray, dt: float, n: int, band_hz: 
         modes_hz=modes,
         band_hz=band,
         band_source=source,
-        quiet_rms=float(np.sqrt(np.mean(quiet**2))) if quiet.size else float("nan"),
         decay_rms=float(np.sqrt(np.mean(decay**2))) if decay.size else float("nan"),
         missing=np.arange(T) >= T - settle,
         noise_rms=(channel("y", resp, dt).sigma, channel("u", u[:, drive], dt).sigma),
     )
+    quiet = np.concatenate(quiet_parts(resp, tr))
+    return replace(tr, quiet_rms=float(np.sqrt(np.mean(quiet**2))) if quiet.size else float("nan"))
+
+
+def quiet_parts(y: np.ndarray, tr: Transient) -> list[np.ndarray]:
+    """The response ``y`` (T,) in the band over each quiet part of the record (module docstring):
+    each pre-trigger band-passed alone (the whole record's zero-phase filter smears the hit back
+    into it); without one of :data:`QUIET_PERIODS` of the band's lower edge, the last tenth of
+    each segment before the filter's unsettled end."""
+    least = QUIET_PERIODS / tr.band_hz[0] / tr.dt
+    segs = zip(tr.segments, tr.pretrigger)
+    pre = [band_pass(y[f : f + p, None], tr.dt, tr.band_hz)[:, 0] for (f, _), p in segs if p >= least]
+    if pre:
+        return pre
+    yb, settle = band_pass(y[:, None], tr.dt, tr.band_hz)[:, 0], int(np.count_nonzero(tr.missing))
+    return [yb[max(f, stop - settle - (stop - f) // 10) : max(f, stop - settle)] for f, stop in tr.segments]
 
 
 def transient_record(rec, band_hz: tuple | None = None):

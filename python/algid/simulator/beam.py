@@ -23,9 +23,11 @@ The hammer: half-sine pulses of ``pulse_s`` [s] (0.5-2 ms), optionally a double 
 smaller pulse shortly after the first, the hammer bouncing); every hit has ``pretrigger_s`` of
 quiet before it and ``record_s`` in all, and ``hits`` of them follow one another in one record.
 The force *sensor* reads the force plus a baseline drift after each hit (the undershoot of an
-AC-coupled charge amplifier: ``-drift * peak * exp(-t / drift_tau_s)``), which the beam does not
-feel. White noise of RMS ``rms(channel) * 10**(-noise_db / 20)`` (over the whole record) is added
-to every channel.
+AC-coupled charge amplifier, which the beam does not feel): the force's running integral
+forgotten with ``drift_tau_s``, ``-drift * peak * (e^(-t / drift_tau_s) * F)(t) / I`` (``I`` one
+hit's impulse), so it grows with the charge passed during a hit and is
+``-drift * peak * exp(-t / drift_tau_s)`` after it. White noise of RMS
+``rms(channel) * 10**(-noise_db / 20)`` (over the whole record) is added to every channel.
 """
 
 from __future__ import annotations
@@ -148,7 +150,7 @@ def hammer_test(
     the accelerometer's place as a share of the length; ``noise_db`` the SNR of every channel
     (``inf``: none); ``motion`` ``"acceleration"``, ``"velocity"`` or ``"both"``.
     """
-    from scipy.signal import filtfilt, firwin
+    from scipy.signal import filtfilt, firwin, lfilter
 
     beam = Beam() if beam is None else beam
     if motion not in ("acceleration", "velocity", "both"):
@@ -161,9 +163,9 @@ def hammer_test(
     starts = pretrigger_s + record_s * np.arange(hits)
     F = hammer_force(t_fine, starts, pulse_s, peak_N, double_hit)
     a, v = modal_response(beam, driving_point * beam.length_m, F, h)
-    # the sensor's undershoot after every hit (not felt by the beam)
-    since = t_fine[:, None] - starts[None, :]
-    measured_F = F - drift * peak_N * np.sum(np.where(since > 0, np.exp(-np.clip(since, 0, None) / drift_tau_s), 0), 1)
+    # the sensor's undershoot (not felt by the beam): the running impulse, forgotten with drift_tau_s
+    impulse = lfilter([h], [1.0, -np.exp(-h / drift_tau_s)], F)
+    measured_F = F - drift * peak_N * impulse / (np.sum(F) * h / hits)
     aa = firwin(16 * oversample + 1, 0.4 / oversample * 2)  # anti-alias at 0.4 fs, the same on every channel
     chans = {k: filtfilt(aa, [1.0], s)[::oversample] for k, s in (("u", measured_F), ("a", a), ("v", v))}
     rng = np.random.default_rng(seed)
