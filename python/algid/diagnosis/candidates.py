@@ -59,7 +59,6 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.signal import lfilter, lfilter_zi
 
-from ..model.chain import spring_columns, spring_deformation, spring_sides, springs
 from .equations import base_design, effect_column, linear_design, target, to_physical
 from .gram import CVResult, EqSpec, cross_validate, jackknife_std, score_walk, walk_grid, window_stats
 from .integrals import integrals
@@ -195,7 +194,7 @@ class CandidateFit:
 def coupled(P: Prepared, i: int) -> list[tuple[int, int]]:
     """Equations (other than i) whose spring columns involve x_i: (equation, spring)."""
     out = []
-    for e, cols in enumerate(spring_columns(P.n, P.boundary)):
+    for e, cols in enumerate(P.columns):
         for j, other in cols:
             if other == i and e != i:
                 out.append((e, j))
@@ -359,19 +358,17 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
 def fit_amplitude_damping(ctx: Context, j: int) -> CandidateFit:
     """Amplitude-dependent (micro-slip) damping in the joint of spring j (1-based)."""
     P = ctx.P
-    d = spring_deformation(ctx.x, j, P.n)
-    dd = spring_deformation(ctx.v, j, P.n)
+    d = P.deformation(ctx.x, j)
+    dd = P.deformation(ctx.v, j)
     g = np.abs(d) * dd
-    return _fit_linear_effect(
-        ctx, "amplitude_damping", {"spring": j}, [(e, s * g) for e, s in spring_sides(P.n, j)], ["c_amp"]
-    )
+    return _fit_linear_effect(ctx, "amplitude_damping", {"spring": j}, [(e, s * g) for e, s in P.sides(j)], ["c_amp"])
 
 
 def spring_k(P: Prepared, thetas: list[np.ndarray], eqs: list[int], j: int) -> float:
     """Mean stiffness of spring j over the equations that estimate it (physical thetas)."""
     vals = []
     for th, e in zip(thetas, eqs):
-        for (jj, _), k in zip(spring_columns(P.n, P.boundary)[e], th[2:]):
+        for (jj, _), k in zip(P.columns[e], th[2:]):
             if jj == j:
                 vals.append(k)
     return float(np.mean(vals)) if vals else float("nan")
@@ -380,19 +377,19 @@ def spring_k(P: Prepared, thetas: list[np.ndarray], eqs: list[int], j: int) -> f
 def fit_spring_linear(ctx: Context, effect: str, j: int) -> CandidateFit:
     """Cubic stiffness or parameter drift on spring j (1-based)."""
     P = ctx.P
-    d = spring_deformation(ctx.x, j, P.n)
+    d = P.deformation(ctx.x, j)
     if effect == "cubic_stiffness":
         f = d**3
         transform = None
     else:  # parameter_drift: coefficient k_j * rel_change
         f = (P.t / P.duration) * d
-        sides = [e for e, _ in spring_sides(P.n, j)]
+        sides = [e for e, _ in P.sides(j)]
 
         def transform(gam, thetas):
             return np.atleast_1d(gam) / spring_k(P, thetas, sides, j)
 
     return _fit_linear_effect(
-        ctx, effect, {"spring": j}, [(e, s * f) for e, s in spring_sides(P.n, j)], [MAIN_PARAM[effect]], transform
+        ctx, effect, {"spring": j}, [(e, s * f) for e, s in P.sides(j)], [MAIN_PARAM[effect]], transform
     )
 
 
@@ -460,11 +457,11 @@ def _fit_grid(
 def fit_clearance(ctx: Context, j: int) -> CandidateFit:
     """Symmetric clearance (dead zone of half-width ``gap``) on spring j."""
     P = ctx.P
-    d = spring_deformation(ctx.x, j, P.n)
+    d = P.deformation(ctx.x, j)
     ad = np.abs(d)
     grid = np.quantile(ad, np.linspace(0.05, 0.95, ctx.grid))
     grid = np.unique(grid[grid > 0])
-    sides = spring_sides(P.n, j)
+    sides = P.sides(j)
     base = {e: linear_design(P, e) for e, _ in sides}
 
     def build(g):
@@ -518,7 +515,7 @@ def fit_bias(ctx: Context, i: int, iterations: int = 4) -> CandidateFit:
         m_i = thetas[i][0]
         forces = [(i, -float(np.sum(thetas[i][2:])) * 0.5 * t**2 / (1.0 if P.forced[i] else m_i))]
         for e, j in coupled(P, i):
-            kk = [k for (jj, _), k in zip(spring_columns(P.n, P.boundary)[e], thetas[e][2:]) if jj == j][0]
+            kk = [k for (jj, _), k in zip(P.columns[e], thetas[e][2:]) if jj == j][0]
             forces.append((e, kk * 0.5 * t**2 / (1.0 if P.forced[e] else thetas[e][0])))
         fit = _fit_linear_effect(ctx, "sensor_bias", {"dof": i + 1}, forces, ["bias"], signals=(a, A1, A2))
         step = fit.params["bias"]
@@ -541,7 +538,7 @@ def fit_lowpass(ctx: Context, i: int) -> CandidateFit:
     lo = max(3.0 / (2 * np.pi * max(P.skip, 1) * P.dt), 1e-3 * nyq)
     grid = np.log(np.geomspace(lo, nyq, ctx.grid))
     others = coupled(P, i)
-    cols_i = spring_columns(P.n, P.boundary)[i]
+    cols_i = P.columns[i]
 
     def build(lg):
         fc = np.exp(lg)
@@ -600,7 +597,7 @@ def all_candidates(P: Prepared) -> list[tuple[str, int]]:
     out = []
     for eff in EFFECTS:
         if eff in ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping"):
-            out += [(eff, j) for j in springs(P.n, P.boundary)]
+            out += [(eff, j) for j in P.network.identifiable_springs()]
         elif eff == "input_delay":  # a force delay needs a force
             out += [(eff, i) for i in range(P.n) if P.forced[i]]
         else:

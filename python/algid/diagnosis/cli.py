@@ -15,6 +15,7 @@ from pathlib import Path
 
 from ..messages import STREAMS, example, one_line, quote_path
 from ..messages.progress import Progress
+from ..model.network import Network
 from ..recording import RecordingError, load_recording
 from ..recording.options import RECORDING_HELP, add_recording_options, print_notes, recording_options
 from ..recording.transient import add_band_option
@@ -44,6 +45,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         help="write the chain refitted with the reported effect to OUT (JSON that algid.Chain.from_json reads)",
     )
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
+    p.add_argument(
+        "--topology",
+        metavar="NET.json",
+        help='a spring network {"n": N, "springs": [[a, b], ...]} (0 = ground) instead of the chain',
+    )
     p.add_argument("--quiet", action="store_true", help="no progress and no report on the terminal")
     add_band_option(p)
     add_recording_options(p)
@@ -74,7 +80,12 @@ def run(args: argparse.Namespace) -> int:
         return _err(err)
     print_notes(rec, "diagnose", quiet)
     try:
-        d = diagnose(rec, boundary=args.boundary, progress=progress.message, band_hz=args.band)
+        boundary = args.boundary
+        if getattr(args, "topology", None):
+            if args.boundary != "fixed":
+                return _err("--topology describes every spring: no --boundary with it")
+            boundary = Network.from_json(args.topology)
+        d = diagnose(rec, boundary=boundary, progress=progress.message, band_hz=args.band)
     except ValueError as err:
         return _err(f"{Path(args.recording).name}: {err}")
     finally:

@@ -32,7 +32,7 @@ def _packed(P, names: list[list[str]], thetas: dict[int, np.ndarray], var: dict[
     spring the mean of its equations' estimates weighted by ``1 / var`` (NaN where no forced
     equation holds the parameter; free end ``k{n+1} = 0``)."""
     n = P.n
-    out = np.full(3 * n + 1, np.nan)
+    out = np.full(2 * n + P.n_springs, np.nan)
     springs: dict[int, list[tuple[float, float]]] = {}
     for e, th in thetas.items():
         if not P.forced[e]:
@@ -43,7 +43,7 @@ def _packed(P, names: list[list[str]], thetas: dict[int, np.ndarray], var: dict[
     for j, pairs in springs.items():
         values, weights = np.array(pairs).T
         out[2 * n + j - 1] = float(np.sum(values * weights) / np.sum(weights))
-    if P.boundary == "free" and n > 1:
+    if P.chain and P.boundary == "free" and n > 1:
         out[3 * n] = 0.0
     return out
 
@@ -80,7 +80,7 @@ def chain_model(d, fit=None) -> dict:
 
     return {
         "n": n,
-        "boundary": P.boundary,
+        **({"boundary": P.boundary} if P.chain else {"springs": [list(p) for p in P.network.springs]}),
         "mass": listed(theta[:n]),
         "damping": listed(theta[n : 2 * n]),
         "stiffness": listed(theta[2 * n :]),

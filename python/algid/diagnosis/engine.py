@@ -27,7 +27,8 @@ from typing import Callable
 import numpy as np
 
 from ..messages.display import Displayed, number
-from ..model.chain import Chain, springs
+from ..model.chain import Chain
+from ..model.network import Network, NetworkModel, topology
 from ..parallel import parallel_map
 from ..recording import Recording, RecordingError, accelerations, as_recording, derivative
 from ..recording import motion as recording_motion
@@ -548,7 +549,7 @@ def parse_effect(spec: str, n: int, boundary: str) -> tuple[str, int]:
         hint = f"did you mean {' or '.join(near)}?" if near else f"effects: {', '.join(EFFECTS)}"
         raise ValueError(f"unknown effect {name!r}: {hint}")
     spring = name in SPRING_EFFECTS
-    places = list(springs(n, boundary)) if spring else list(range(1, n + 1))
+    places = topology(n, boundary).identifiable_springs() if spring else list(range(1, n + 1))
     what = "spring" if spring else "DOF"
     if not where:
         if len(places) != 1:
@@ -699,7 +700,8 @@ def diagnose(
         Forces and accelerations (or velocities, or displacements) of every DOF, in SI or in
         the units ``rec.units`` declares (the result's ``units`` are built from them); a path
         or a DataFrame is read by :func:`algid.load_recording`.
-    boundary : {"fixed", "free"}, the right end of the chain.
+    boundary : {"fixed", "free"}, the right end of the chain, or a
+        :class:`~algid.model.network.Network`: the record's spring network.
     progress : callable or None, called with a short message at every stage.
     effects : candidate effects to try (default: all of :data:`EFFECTS`).
     given : list of ``NAME[:LOCATION]`` or None
@@ -729,8 +731,9 @@ def diagnose(
             "a base-excited record (support motion a0): the diagnosis's equations have the wall at rest; "
             "run `algid identify`, which takes the support's motion"
         )
-    if boundary not in ("fixed", "free"):
-        raise ValueError(f"boundary must be 'fixed' or 'free', got {boundary!r}")
+    if not isinstance(boundary, Network) and boundary not in ("fixed", "free"):
+        raise ValueError(f"boundary must be 'fixed', 'free' or a Network, got {boundary!r}")
+    topology(rec.n, boundary)  # a network of the record's DOFs
     clock = time.perf_counter()
     named = None if given is None else [parse_effect(g, rec.n, boundary) for g in given]
     st = _prepare(rec, boundary, progress, notch, band_hz, realign)
@@ -876,10 +879,16 @@ def _explained(gap_before: float, gap_after: float, floor_rel: float) -> float:
     return float((gap_before**2 - gap_after**2) / excess) if excess > 0 else 1.0
 
 
-def fitted_chain(lin: LinearFit, boundary: str) -> Chain | None:
-    """The chain of the linear fit's magnitudes (None if unphysical)."""
+def fitted_chain(lin: LinearFit, boundary) -> Chain | NetworkModel | None:
+    """The chain (or the network, ``boundary`` a Network) of the linear fit's magnitudes
+    (None if unphysical)."""
     n = len(lin.theta)
     k = np.nan_to_num(lin.stiffness().copy())
+    if isinstance(boundary, Network):
+        try:
+            return NetworkModel(boundary, np.abs(lin.mass), np.abs(lin.damping()), np.abs(k))
+        except ValueError:
+            return None
     if n == 1:
         k = np.array([k[0], 0.0])
     try:

@@ -7,8 +7,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..model.chain import spring_columns
-
 if TYPE_CHECKING:
     from .windows import Prepared
 
@@ -53,7 +51,7 @@ def base_design(
         cols = [P.u[:, e] if u is None else u] if P.forced[e] else []
         cols.append(-v[:, e])
         sign = -1.0
-    for _j, other in spring_columns(P.n, P.boundary)[e]:
+    for _j, other in P.columns[e]:
         cols.append(sign * (x[:, e] - (x[:, other] if other >= 0 else 0.0)))
     return np.stack(cols, axis=1)
 

@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.chain import equation_parameter_names, spring_columns
 from .equations import force_form, linear_design, target, to_physical
 from .gram import CVResult, EqSpec, cross_validate, solve_gram, window_stats
 from .windows import Prepared, detrend, window_lines
@@ -40,6 +39,8 @@ class LinearFit:
     v: np.ndarray
     resid: np.ndarray
     resid_force: np.ndarray = None
+    n_springs: int | None = None  # springs in the packed vector (n + 1 for the chain)
+    chain: bool = True
 
     @property
     def mass(self) -> np.ndarray:
@@ -51,17 +52,18 @@ class LinearFit:
         return np.array([th[1] for th in self.theta])
 
     def stiffness(self) -> np.ndarray:
-        """(n+1,) spring stiffnesses [N/m]; interior springs fused (mean of the two
-        equations); n = 1: the identified sum in k1, NaN in k2; free end: k_{n+1} = 0."""
+        """(n+1,) spring stiffnesses [N/m] (a network's (S,), in its spring order); springs
+        in two equations fused (their mean); n = 1: the identified sum in k1, NaN in k2; free
+        end: k_{n+1} = 0; the second of springs in parallel NaN."""
         n = len(self.theta)
         vals: dict[int, list[float]] = {}
         for th, nm in zip(self.theta, self.names):
             for value, name in zip(th[2:], nm[2:]):
                 vals.setdefault(int(name[1:]), []).append(float(value))
-        out = np.full(n + 1, np.nan)
+        out = np.full(self.n_springs or n + 1, np.nan)
         for j, vs in vals.items():
             out[j - 1] = float(np.mean(vs))
-        if n > 1 and (n + 1) not in vals:
+        if self.chain and n > 1 and (n + 1) not in vals:
             out[n] = 0.0
         return out
 
@@ -81,7 +83,7 @@ def stiffness_rows(P: Prepared, theta_a: list[np.ndarray]) -> tuple[np.ndarray, 
     for e, th in enumerate(theta_a):
         off = 1 if P.forced[e] else 0
         C[e, e] = th[off]
-        for (_j, other), k in zip(spring_columns(n, P.boundary)[e], th[off + 1 :]):
+        for (_j, other), k in zip(P.columns[e], th[off + 1 :]):
             K[e, e] += k
             if other >= 0:
                 K[e, other] -= k
@@ -127,7 +129,7 @@ def fit_linear(P: Prepared) -> LinearFit:
     x, v = reconstruct_states(P, theta_a, raw)
     theta = [to_physical(P, e, th) for e, th in enumerate(theta_a)]
     resid = detrend(P, raw).reshape(raw.shape)
-    names = [equation_parameter_names(P.n, P.boundary, e) for e in range(P.n)]
+    names = [["m", "c"] + [f"k{s}" for s, _ in P.columns[e]] for e in range(P.n)]
     return LinearFit(
         theta_a=theta_a,
         theta=theta,
@@ -138,6 +140,8 @@ def fit_linear(P: Prepared) -> LinearFit:
         v=v,
         resid=resid,
         resid_force=resid * force_scale(P, theta)[None, :],
+        n_springs=P.n_springs,
+        chain=P.chain,
     )
 
 

@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import welch
 
-from ..model.chain import spring_deformation, spring_sides, springs
 from ..recording.noise import white_floor
 from .linear import LinearFit, per_window_fits
 from .windows import Prepared
@@ -122,10 +121,10 @@ def locate(P: Prepared, lin: LinearFit, natural_hz: np.ndarray, floor: np.ndarra
     # Amplitude: restoring-force curves per spring, damping-force curves per mass.
     force_resid = lin.resid_force
     amp_springs = []
-    for j in springs(n, P.boundary):
-        d = spring_deformation(lin.x, j, P.n)
-        z = np.concatenate([d for _ in spring_sides(P.n, j)])
-        r = np.concatenate([s * force_resid[:, e] for e, s in spring_sides(P.n, j)])
+    for j in P.network.identifiable_springs():
+        d = P.deformation(lin.x, j)
+        z = np.concatenate([d for _ in P.sides(j)])
+        r = np.concatenate([s * force_resid[:, e] for e, s in P.sides(j)])
         amp_springs.append({"spring": j, "explained": binned_r2(z, r)})
     amp_masses = []
     for i in range(n):
@@ -148,6 +147,8 @@ def window_parameters(P: Prepared, lin: LinearFit) -> dict:
         "t_mid_s": t_mid,
         "least_squares": [{"dof": e + 1, "names": lin.names[e], "values": fits[e].tolist()} for e in range(P.n)],
     }
+    if not P.chain:  # the on-line estimator is the chain's
+        return out
     try:
         from ..estimator import ChainEstimator
     except ImportError:

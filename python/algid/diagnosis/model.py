@@ -43,7 +43,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model.chain import spring_columns
 from .equations import linear_design, target, to_physical
 from .gram import EqSpec, cross_validate, jackknife_std, window_stats
 from .linear import LinearFit
@@ -284,7 +283,7 @@ def admissibility(
             if name == "c":
                 reg = v_rms[e]
             else:
-                j, other = spring_columns(P.n, P.boundary)[e][q - 1]
+                j, other = P.columns[e][q - 1]
                 d = x[:, e] - (x[:, other] if other >= 0 else 0.0)
                 reg = band_rms(d[:, None], P.dt, f_hi)[0]
             if np.isfinite(force) and abs(val) * reg < NEGLIGIBLE * force:

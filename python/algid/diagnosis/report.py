@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ..model.network import Network
 from .candidates import MAIN_PARAM
 from .core import METRIC, METRIC_FORCE
 from .corrected import corrected_model, linear_model
@@ -126,10 +127,10 @@ def _chain_lines(cm: dict | None, units: dict, title: str, indent: str = "  ") -
         return "n/a" if x is None else f"{x:.5g}" + ("" if s is None else f" +- {s:.2g}")
 
     out = [f"{title} (m [{units['m']}], c [{units['c']}], springs [{units['k']}]):"]
+    net = Network(n, cm["springs"]) if "springs" in cm else None
     for i in range(n):
-        springs = "  ".join(
-            f"k{j + 1}={val(cm['stiffness'][j], cm['sigma_stiffness'][j])}" for j in (i, i + 1) if j < n or i == n - 1
-        )
+        on = [s - 1 for s, _, _ in net.incident(i + 1)] if net else [j for j in (i, i + 1) if j < n or i == n - 1]
+        springs = "  ".join(f"k{j + 1}={val(cm['stiffness'][j], cm['sigma_stiffness'][j])}" for j in on)
         m, c = val(cm["mass"][i], cm["sigma_mass"][i]), val(cm["damping"][i], cm["sigma_damping"][i])
         out.append(f"{indent}DOF {i + 1}: m={m}  c={c}  {springs}")
     return out
@@ -173,9 +174,10 @@ def to_text(d, source: str = "") -> str:
     P, lin = d.P, d.lin
     L = []
     L.append(f"algid diagnose{': ' + source if source else ''}")
+    ends = f"{P.boundary} right end" if P.chain else f"a network of {P.network.size} springs"
     L.append(
         f"  {P.n} DOF, {P.a_full.shape[0]} samples at {1 / P.dt:g} Hz ({P.duration:.3g} s), "
-        f"{P.boundary} right end; {P.nw} windows of {P.L * P.dt:.3g} s in {P.nfolds} folds"
+        f"{ends}; {P.nw} windows of {P.L * P.dt:.3g} s in {P.nfolds} folds"
     )
     L.append("")
     L.extend(_units_lines(d))

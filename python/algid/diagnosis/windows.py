@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model.network import topology
 from .equations import target
 from .integrals import integrals
 
@@ -69,7 +70,12 @@ class Prepared:
     skip : index of the first analysed sample in the full record.
     dt : sampling interval [s]; duration : length of the whole record, T dt [s].
     L, nw : window length [samples] and number of windows.
-    boundary : "fixed" or "free".
+    boundary : "fixed" or "free" (the chain), or a :class:`~algid.model.network.Network`.
+    network : the topology (:func:`~algid.model.network.topology`); ``chain`` whether it is
+        the chain of eq. 1, whose packed vector holds ``n_springs = n + 1`` springs (a free
+        end's 0), a network's its ``S`` springs in order.
+    columns : per equation e (0-based), ``(spring s (1-based), other DOF (0-based, -1 ground))``
+        of its spring columns ``x_e - x_other`` (:meth:`~algid.model.network.Network.columns`).
     folds : (nw,) fold index of every window.
     band_hz : upper edge of the signal band [Hz] (None: the whole band); the withheld
         errors are scored on the DFT bins of every window at or below it
@@ -90,7 +96,7 @@ class Prepared:
     dt: float
     L: int
     nw: int
-    boundary: str
+    boundary: object  # "fixed", "free" or a Network
     folds: np.ndarray
     band_hz: float | None = None
     form: str = "acceleration"
@@ -108,6 +114,10 @@ class Prepared:
         self.t = self.dt * np.arange(sl.start, sl.stop)
         self.duration = self.dt * self.a_full.shape[0]
         self.forced = np.any(self.u_full != 0.0, axis=0)
+        self.network = topology(self.n, self.boundary)
+        self.chain = isinstance(self.boundary, str)
+        self.n_springs = self.n + 1 if self.chain else self.network.size
+        self.columns = [[(s, o - 1) for s, o in self.network.columns(e + 1)] for e in range(self.n)]
         if self.form not in FORMS:
             raise ValueError(f"form must be one of {FORMS}, got {self.form!r}")
         self.y = np.stack([target(self, e) for e in range(self.n)], axis=1)
@@ -130,6 +140,14 @@ class Prepared:
     def nfolds(self) -> int:
         return int(self.folds.max()) + 1
 
+    def sides(self, s: int) -> list[tuple[int, float]]:
+        """``(equation (0-based), sign)`` where spring ``s`` (1-based) pushes (ground left out)."""
+        return [(i - 1, sign) for i, sign in self.network.sides(s)]
+
+    def deformation(self, x: np.ndarray, s: int) -> np.ndarray:
+        """Deformation (N,) [m] of spring ``s`` (1-based) from positions ``x`` (N, n)."""
+        return self.network.deformation(x, s)
+
     def windows(self, x: np.ndarray) -> np.ndarray:
         """Reshape a (N, ...) array to (nw, L, ...)."""
         return x.reshape(self.nw, self.L, *x.shape[1:])
@@ -150,7 +168,7 @@ def prepare(
     u: np.ndarray,
     dt: float,
     L: int,
-    boundary: str = "fixed",
+    boundary="fixed",
     skip: int = 0,
     nfolds: int = N_FOLDS,
     A: tuple[np.ndarray, np.ndarray] | None = None,

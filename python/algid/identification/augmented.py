@@ -190,6 +190,19 @@ def fit_with_effects(rec, motion, kind, nm, boundary: str, effects) -> tuple[dic
     return fields, source
 
 
+def diagnosis_plan(d, model: str, effects: bool) -> Plan:
+    """The :class:`~.plan.Plan` that names the diagnosis ``d``'s fit of ``model`` (with effects or not)."""
+    return Plan(
+        estimator="augmented" if effects else "integral_equations",
+        reason=f"{model}: the diagnosis's integral equations, {int(d.lin.cv.theta_folds.shape[0])} folds",
+        window_s=d.P.L * d.P.dt,
+        prefilter_hz=math.nan,
+        stagger=1,
+        window_basis=f"{d.P.form} form, band {d.band.f_hi:.4g} Hz",
+        method="integral_equations",
+    )
+
+
 def diagnosis_fields(rec, motion, kind, nm, boundary: str, d, cm: dict, model: str, misfit: str) -> dict:
     """The fields of an :class:`~.result.Identification` beyond the recording's for the chain
     model ``cm`` the diagnosis ``d`` fitted (:mod:`algid.diagnosis.corrected`: the linear
@@ -203,17 +216,8 @@ def diagnosis_fields(rec, motion, kind, nm, boundary: str, d, cm: dict, model: s
         for v in judge(theta, sigma, n, boundary, mo, rec.u, forced, nm, misfit=misfit)
     ]
     folds = int(d.lin.cv.theta_folds.shape[0])
-    plan = Plan(
-        estimator="augmented" if cm["effects"] else "integral_equations",
-        reason=f"{model}: the diagnosis's integral equations, {folds} folds",
-        window_s=d.P.L * d.P.dt,
-        prefilter_hz=math.nan,
-        stagger=1,
-        window_basis=f"{d.P.form} form, band {d.band.f_hi:.4g} Hz",
-        method="integral_equations",
-    )
     return {
-        "plan": plan,
+        "plan": diagnosis_plan(d, model, bool(cm["effects"])),
         "theta": theta,
         "sigma": sigma,
         "raw": theta,

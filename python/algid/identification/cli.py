@@ -100,6 +100,13 @@ def add_parser(sub) -> None:
         "`algid diagnose`: coulomb_friction:1 is dry friction at DOF 1, cubic_stiffness:2 a cubic spring "
         "2); 'auto' takes the effect the diagnosis reports",
     )
+    p.add_argument(
+        "--topology",
+        type=Path,
+        metavar="NET.json",
+        help='a spring network {"n": N, "springs": [[a, b], ...]} (0 = ground) instead of the chain: '
+        "identified by the windowed equation-error fit",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress and no summary")
     add_band_option(p)
     add_recording_options(p)
@@ -140,6 +147,7 @@ def run(args) -> int:
                     progress=progress,
                     effects=args.effect,
                     band_hz=args.band,
+                    **({"topology": args.topology} if args.topology is not None else {}),
                 )
             except ValueError as err:  # e.g. a configuration the estimator rejects
                 raise IdentifyError(str(err)) from err
@@ -202,7 +210,9 @@ def _write_figures(result, rec, folder: Path, progress: Progress, resolution: fl
     try:
         save_figures(result, folder)
         modal, _ = result.modes()
-        chain = Chain.from_packed(result.theta, result.n, result.boundary) if modal is not None else None
+        chain = None
+        if modal is not None:  # a network's modes come with the table; its FRF plot shows the record's H1
+            chain = None if result.network else Chain.from_packed(result.theta, result.n, result.boundary)
         if resolution is None and chain is not None:
             resolution = resolution_hz(chain)
         save_frf(recording_h1(rec, resolution=resolution), folder, chain)

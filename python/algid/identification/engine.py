@@ -39,6 +39,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Callable, Optional
 
+from ..model.network import Network
+from ..model.network import topology as network_of
 from ..recording import Recording, as_recording, parameter_units
 from ..recording.frf_file import is_frf_source
 from ..recording.noise import analyse
@@ -47,6 +49,7 @@ from .base import FIT_CHECK_SKIPPED, augment, reduce
 from .estimate import Estimate, estimate
 from .frf_fit import identify_frf
 from .impact_fit import impact_fit
+from .network import identify_network
 from .plan import plan_record
 from .result import Identification
 from .screen import Signals, screened_signals
@@ -117,6 +120,18 @@ def _identification(common: dict, est: Estimate, unc: Uncertainty, judged: Judge
     )
 
 
+def _identify_network(rec: Recording, topology, boundary: str, estimator: str, effects, progress) -> Identification:
+    """:func:`identify` of a record on a spring network (:mod:`.network`)."""
+    if effects or estimator != "auto" or boundary != "fixed":
+        raise ValueError(
+            "a network (--topology) is identified by the windowed fit alone: no effects, estimator or boundary"
+        )
+    net = network_of(rec.n, topology if isinstance(topology, Network) else Network.from_json(topology))
+    fields = identify_network(rec, net, lambda stage: _progress(progress, stage, None))
+    sig, nm = fields.pop("sig"), fields.pop("noise")
+    return Identification(**_recording_fields(sig, net, nm), **fields)
+
+
 def identify(
     rec: Recording,
     boundary: str = "fixed",
@@ -126,6 +141,7 @@ def identify(
     progress: ProgressFn = None,
     effects: Sequence[str] = (),
     band_hz: tuple[float, float] | None = None,
+    topology: Network | str | None = None,
     **reading,
 ) -> Identification:
     """Identify the chain of a whole recording, with one standard deviation per parameter
@@ -174,6 +190,8 @@ def identify(
             raise ValueError("--effect and --estimator apply to time recordings, not to FRFs")
         return identify_frf(rec, boundary)
     rec = as_recording(rec, **reading)
+    if topology is not None:
+        return _identify_network(rec, topology, boundary, estimator, effects, progress)
     scale, base = "", rec.base is not None
     if base:  # the support is DOF 0 of the chain estimated, dropped at the end (:mod:`.base`)
         if effects:

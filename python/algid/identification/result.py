@@ -13,6 +13,7 @@ from ..diagnosis.timing import timing_lines
 from ..estimator.continuous import PackedParameters, unpack
 from ..messages.display import Displayed, number, parameter_rows
 from ..model.chain import parameter_names
+from ..model.network import Network
 from ..recording.noise import NoiseModel
 from .impact_fit import fit_line
 from .plan import Plan
@@ -30,9 +31,14 @@ class PackedEstimates(PackedParameters):
     ``sigma`` (3n+1,) and ``verdicts`` are the subclass's fields."""
 
     @property
+    def network(self) -> Network | None:
+        """The spring network identified (``boundary`` a Network), None for the chain."""
+        return self.boundary if isinstance(self.boundary, Network) else None
+
+    @property
     def names(self) -> list[str]:
-        """``m1..mn, c1..cn, k1..k{n+1}``."""
-        return parameter_names(self.n)
+        """``m1..mn, c1..cn, k1..k{n+1}`` (a network's ``k1..kS``)."""
+        return self.network.parameter_names() if self.network else parameter_names(self.n)
 
     @property
     def estimate(self) -> np.ndarray:
@@ -57,7 +63,7 @@ class PackedEstimates(PackedParameters):
     @property
     def valid_dof(self) -> np.ndarray:
         """(n,) DOF whose mass, damping and springs are all valid."""
-        return dof_validity(self.verdicts, self.n)
+        return dof_validity(self.verdicts, self.n, self.network)
 
     def modes(self):
         """``(ModalAnalysis, "")`` of the estimated chain with uncertainties from ``sigma``
@@ -98,9 +104,10 @@ class PackedEstimates(PackedParameters):
     def parameters_json(self) -> dict:
         """The JSON keys of the estimates: ``n``, ``boundary``, ``mass`` ... ``sigma_stiffness``,
         ``valid``, ``valid_dof``, ``reasons`` (what :meth:`algid.Chain.from_json` reads)."""
+        where = {"springs": [list(p) for p in self.network.springs]} if self.network else {"boundary": self.boundary}
         return {
             "n": self.n,
-            "boundary": self.boundary,
+            **where,
             "mass": [_num(v) for v in self.mass],
             "damping": [_num(v) for v in self.damping],
             "stiffness": [_num(v) for v in self.stiffness],

@@ -317,7 +317,14 @@ def _one(name, fam, th, sg, ratio, dofs, dofs_f, mo, nm, joint) -> Verdict:
     return Verdict(name, "ok", "", share, ss)
 
 
-def dof_validity(verdicts: list[Verdict], n: int) -> np.ndarray:
-    """(n,) a DOF is valid when its m, c and both springs are valid (module docstring)."""
+def dof_validity(verdicts: list[Verdict], n: int, network=None) -> np.ndarray:
+    """(n,) a DOF is valid when its m, c and both springs (a ``network``'s: every spring on
+    it) are valid (module docstring)."""
     by = {v.name: v for v in verdicts}
-    return np.array([all(by[k].valid for k in dof_parameter_names(i)) for i in range(n)])
+
+    def names(i: int) -> list[str]:
+        if network is None:
+            return dof_parameter_names(i)
+        return [f"m{i + 1}", f"c{i + 1}"] + [f"k{s}" for s, _, _ in network.incident(i + 1)]
+
+    return np.array([all(by[k].valid for k in names(i)) for i in range(n)])

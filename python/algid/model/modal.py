@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from .chain import Chain
-from .network import NetworkModel
+from .network import Network, NetworkModel
 
 KINDS = ("underdamped", "overdamped", "rigid")
 #: Eigenvalues closer than this (relative) are repeated: no first-order uncertainty there.
@@ -333,6 +333,8 @@ def _chain_and_sigma(source) -> tuple[Chain, np.ndarray | None]:
             [np.nan if v is None else v for v in doc["sigma_mass"] + doc["sigma_damping"] + doc["sigma_stiffness"]],
             dtype=float,
         )
+    elif hasattr(source, "theta") and isinstance(getattr(source, "boundary", None), Network):
+        return _network_and_sigma(source.boundary, source.theta, source.sigma)
     elif hasattr(source, "theta") and hasattr(source, "sigma"):
         chain = Chain.from_packed(source.theta, source.n, source.boundary)
         sigma = np.array(source.sigma, dtype=float)
@@ -343,6 +345,22 @@ def _chain_and_sigma(source) -> tuple[Chain, np.ndarray | None]:
     known = known_parameters(chain.n, chain.boundary)
     sigma[known] = np.where(np.isfinite(sigma[known]), sigma[known], 0.0)
     return chain, sigma
+
+
+def _network_and_sigma(net: Network, theta, sigma) -> tuple[NetworkModel, np.ndarray]:
+    """The network model of packed estimates ``m1..mn, c1..cn, k1..kS``: the second of springs in
+    parallel (NaN, their sum in the first) 0 and known; raises a one-line ``ValueError`` naming
+    every other parameter without an admissible estimate."""
+    theta, sigma = np.array(theta, dtype=float), np.array(sigma, dtype=float)
+    n = net.n
+    for group in net.parallel_groups():
+        for s in group[1:]:
+            theta[2 * n + s - 1], sigma[2 * n + s - 1] = 0.0, 0.0
+    names = net.parameter_names()
+    bad = [nm for nm, v in zip(names, theta) if not np.isfinite(v) or v < 0 or (nm[0] == "m" and v == 0)]
+    if bad:
+        raise ValueError(f"no admissible estimate of {', '.join(bad)}: the network's modes need every parameter")
+    return NetworkModel(net, theta[:n], theta[n : 2 * n], theta[2 * n :]), sigma
 
 
 def known_parameters(n: int, boundary: str) -> np.ndarray:

@@ -221,6 +221,16 @@ class Network:
         return list(groups.values())
 
 
+def topology(n: int, boundary) -> Network:
+    """The network of a record of ``n`` DOFs: ``boundary`` itself when it is a
+    :class:`Network` (of ``n`` masses), else the chain :meth:`Network.chain` ``(n, boundary)``."""
+    if not isinstance(boundary, Network):
+        return Network.chain(n, boundary)
+    if boundary.n != n:
+        raise ValueError(f"the topology has {boundary.n} masses, the record {n} DOFs")
+    return boundary
+
+
 def _end(i: int) -> str:
     return "ground" if i == 0 else f"DOF {i}"
 

@@ -35,7 +35,6 @@ from scipy.signal import welch
 from ..diagnosis.equations import force_form
 from ..diagnosis.locate import window_parameters
 from ..diagnosis.windows import detrend
-from ..model.chain import spring_deformation, spring_sides, springs
 from . import subplots
 
 DPI = 90
@@ -234,11 +233,11 @@ def fig_restoring_force(d):
     expl = {s["spring"]: s["explained"] for s in d.where["amplitude"]["springs"]}
     kfit = lin.stiffness()
     items = []
-    for j in springs(P.n, P.boundary):
-        dj = spring_deformation(x, j, P.n)
+    for j in P.network.identifiable_springs():
+        dj = P.deformation(x, j)
         k = kfit[0] if P.n == 1 else kfit[j - 1]
         # Unexplained force attributed to the spring: + in eq. j, - in eq. j-1 (mean of sides).
-        r = np.mean([-s * force_resid[:, e] for e, s in spring_sides(P.n, j)], axis=0)
+        r = np.mean([-s * force_resid[:, e] for e, s in P.sides(j)], axis=0)
         name = f"spring {j}" + (" (k1+k2)" if P.n == 1 else "")
         items.append(
             (f"{name}: binned law explains {expl.get(j, 0):.0%}", dj, k * dj, r, f"linear k = {k:.4g} {d.units['k']}")
