@@ -1,0 +1,112 @@
+"""``algid.identify(rec, topology=net)`` and ``--topology``: a spring network identified by the
+diagnosis's windowed equation-error fit (:mod:`algid.identification.network`); the chain as
+a network gives the chain's fit bit for bit."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import algid
+from algid.cli import main
+from algid.diagnosis.integrals import integrals
+from algid.diagnosis.linear import fit_linear
+from algid.diagnosis.windows import prepare
+from algid.identification.network import judge_network
+from algid.model.chain import TABLE1
+from algid.model.network import Network, NetworkModel
+from algid.recording import Recording, save_recording
+from algid.simulator import simulate
+from algid.simulator.exact import multisine
+from algid.simulator.scenarios import network_model, network_recording
+
+
+@pytest.fixture(scope="module")
+def half_car():
+    """The half-car at 40 dB, 4 s, and its identification."""
+    sc = network_recording("half_car", duration_s=4.0, noise_db=40.0, seed=3)
+    return sc, algid.identify(sc.recording, topology=network_model("half_car").network)
+
+
+def test_network_record_identified_within_its_sigmas(half_car):
+    _, r = half_car
+    truth = network_model("half_car").packed()
+    z = (r.theta - truth) / r.sigma
+    assert r.valid and r.plan.estimator == "integral_equations"
+    assert np.all(np.isfinite(z)) and np.max(np.abs(z)) < 5.0, z
+    mk = np.r_[0:4, 8:13]  # masses and springs: within 1 %
+    assert np.max(np.abs(r.theta[mk] / truth[mk] - 1)) < 0.01
+    assert len(r.modes()[0].modes) == 4  # the modal table of the NetworkModel
+
+
+def test_json_names_the_springs_in_the_networks_order(half_car):
+    _, r = half_car
+    doc = r.to_json()
+    net = network_model("half_car").network
+    assert doc["springs"] == [list(p) for p in net.springs] and "boundary" not in doc
+    assert len(doc["stiffness"]) == net.size == len(doc["sigma_stiffness"])
+    assert [p["name"] for p in doc["parameters"]] == net.parameter_names()
+
+
+def test_chain_as_a_network_is_the_chains_fit_bit_for_bit():
+    sim = simulate(TABLE1, multisine(3, 5), 2.0, 1000.0, noise_db=40.0, seed=5)
+    a, u, dt = sim.a, sim.u, float(sim.t[1] - sim.t[0])
+    A = integrals(a, dt)
+    for boundary in ("fixed", "free"):
+        chain = fit_linear(prepare(a, u, dt, 100, boundary, A=A))
+        net = fit_linear(prepare(a, u, dt, 100, Network.chain(3, boundary), A=A))
+        assert chain.names == net.names
+        for x, y in zip(chain.theta, net.theta):
+            np.testing.assert_array_equal(x, y)
+        np.testing.assert_array_equal(chain.stiffness()[: 3 + (boundary == "fixed")], net.stiffness())
+
+
+def test_parallel_springs_get_their_reason_not_a_number():
+    net = Network(2, [(0, 1), (1, 0), (1, 2)])
+    theta = np.array([1.0, 2.0, 1.0, 1.0, 3000.0, math.nan, 1000.0])
+    sigma = np.full(7, 0.01)
+    by = {v.name: v for v in judge_network(theta, sigma, net, [1, 2], "")}
+    assert by["k1"].status == by["k2"].status == "not_separable"
+    assert "k1 + k2 in parallel between ground and DOF 1" in by["k2"].reason
+    assert "reported as k1" in by["k1"].reason
+    assert by["k3"].status == "ok" and by["m2"].status == "ok"
+    unforced = {v.name: v for v in judge_network(theta, sigma, net, [1], "")}
+    assert unforced["m2"].status == "not_identifiable" and "DOF 2 carries no force" in unforced["m2"].reason
+
+
+@pytest.mark.slow
+def test_topology_json_round_trip_on_the_command_line(tmp_path):
+    model = NetworkModel(
+        Network(3, [(0, 1), (1, 2), (2, 3), (1, 3)]), [1.0, 2.0, 1.5], [2.0, 3.0, 2.5], [2e3, 1e3, 1.5e3, 8e2]
+    )
+    sim = simulate(model, multisine(3, 7), 4.0, 1000.0, noise_db=40.0, noise_on=("accel", "force"), seed=7)
+    rec = save_recording(tmp_path / "rec.npz", Recording(t=sim.t, u=sim.u, a=sim.a))
+    model.network.to_json(tmp_path / "net.json")
+    assert Network.from_json(tmp_path / "net.json") == model.network
+    code = main(
+        [
+            "identify",
+            str(rec),
+            "--topology",
+            str(tmp_path / "net.json"),
+            "--json",
+            str(tmp_path / "out.json"),
+            "--quiet",
+        ]
+    )
+    doc = json.loads((tmp_path / "out.json").read_text())
+    assert code == 0 and doc["springs"] == [[0, 1], [1, 2], [2, 3], [1, 3]]
+    assert np.allclose(doc["stiffness"], model.stiffness, rtol=0.05)
+    assert main(["diagnose", str(rec), "--topology", str(tmp_path / "net.json"), "--quiet"]) == 0
+
+
+@pytest.mark.slow
+def test_a_chain_record_without_topology_is_identified_as_today():
+    """The chain record's result does not pass through the network path: no springs key, the
+    chain's boundary and estimator."""
+    sim = simulate(TABLE1, multisine(3, 2), 10.0, 1000.0, noise_db=40.0, noise_on=("accel", "force"), seed=2)
+    doc = algid.identify(Recording(t=sim.t, u=sim.u, a=sim.a)).to_json()
+    assert doc["boundary"] == "fixed" and "springs" not in doc and len(doc["stiffness"]) == 4
