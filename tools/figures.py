@@ -649,6 +649,36 @@ def identify_one_force() -> str:
     )
 
 
+def network_identify() -> str:
+    """Networks: RMS error per family against the Cramer-Rao bound, the sigmas' calibration."""
+    d = result("network_identify")
+    rows = []
+    for name, v in d["networks"].items():
+        fam = v["families"]
+        rows.append(
+            [
+                f"{name} ({v['n']} DOF, {v['springs']} springs)",
+                " / ".join(num(100 * fam[f]["rms_rel_error"]) for f in ("mass", "damping", "stiffness")),
+                " / ".join(num(100 * fam[f]["rms_rel_crlb"]) for f in ("mass", "damping", "stiffness")),
+                " / ".join(f"{fam[f]['ratio']:.1f}" for f in ("mass", "damping", "stiffness")),
+                " / ".join(f"{fam[f]['rms_z']:.2f}" for f in ("mass", "damping", "stiffness")),
+                sci(v["noise_free_max_rel_error"]),
+            ]
+        )
+    head = [
+        "network",
+        "RMS error m / c / k [%]",
+        "Cramer-Rao bound m / c / k [%]",
+        "x bound",
+        "RMS z m / c / k",
+        "noise-free, largest error",
+    ]
+    return (
+        table(head, rows) + f"\n{d['seconds']:g} s records, {d['snr_db']:g} dB on the accelerations, force on "
+        f"{d['forces']}, {d['seeds']} seeds per network.\n"
+    )
+
+
 def identify_fit_check() -> str:
     """The fit check on the blind cases and on a linear chain."""
     d = result("identify")
@@ -1635,6 +1665,7 @@ BLOCKS = {
     "identify-calibration": identify_calibration,
     "identify-one-force": identify_one_force,
     "identify-fit-check": identify_fit_check,
+    "network-identify": network_identify,
     "identify-suites": identify_suites,
     "identify-friction": identify_friction,
     "base-excitation": base_excitation,
