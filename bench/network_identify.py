@@ -110,7 +110,7 @@ def draw(name: str, folder: Path) -> Path:
             q = p + 0.6 * out / np.linalg.norm(out)
             ax.plot([q[0] - 0.15, q[0] + 0.15], [q[1], q[1]], color="0.3", lw=3)
         ax.plot([p[0], q[0]], [p[1], q[1]], color="tab:blue", lw=1.2, zorder=1)
-        mid = 0.55 * p + 0.45 * q
+        mid = 0.7 * p + 0.3 * q  # crossing diagonals get their labels apart
         ax.annotate(f"k{s}", mid, fontsize=7, color="tab:blue", xytext=(2, 2), textcoords="offset points")
     for i, (x, y) in pos.items():
         ax.scatter([x], [y], s=260, color="tab:orange", zorder=2)
