@@ -315,7 +315,7 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
 
 
-def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_hz=None, realign: bool = True) -> Setup:
+def _prepare(rec: Recording, boundary: str | Network, progress, notch: bool = True, band_hz=None) -> Setup:
     """Windows, band and form (module docstring, steps 1-2), linear fit, noise, model; when
     the linear chain leaves a gap above the noise floor, the channels' timing first
     (:mod:`.timing`: a record realigned is prepared again)."""
@@ -323,7 +323,7 @@ def _prepare(rec: Recording, boundary: str, progress, notch: bool = True, band_h
     rec, hum = without_hum(rec) if notch else (rec, [])
     rec, tr = transient_record(rec, band_hz)
     st = _setup(rec, tr, hum, boundary, progress, clock)
-    if tr is not None or not realign or not _above_floor(st):
+    if tr is not None or not _above_floor(st):
         return st
     _progress(progress, f"{rec.n} DOF: the channels' timing")
     on_time_rec, timing = on_time(rec, boundary)
@@ -689,7 +689,6 @@ def diagnose(
     quick: bool = False,
     notch: bool = True,
     band_hz: tuple[float, float] | None = None,
-    realign: bool = True,
     **reading,
 ) -> Diagnosis:
     """Locate and explain the gap between a recording and the linear chain.
@@ -715,8 +714,6 @@ def diagnose(
         Notch the mains hum out first (False: the caller has, as :func:`algid.identify` does).
     band_hz : (low, high) [Hz] or None
         Impact records: the band of the modes the chain holds (:mod:`algid.recording.transient`).
-    realign : bool
-        Undo a multiplexed converter's channel skew when the record shows one (:mod:`.timing`).
     **reading
         How to read a path or a DataFrame, as ``algid diagnose``'s options say (``force``,
         ``accel``, ``units``, ``rate``...: :func:`algid.recording.options.reading_options`).
@@ -736,7 +733,7 @@ def diagnose(
     topology(rec.n, boundary)  # a network of the record's DOFs
     clock = time.perf_counter()
     named = None if given is None else [parse_effect(g, rec.n, boundary) for g in given]
-    st = _prepare(rec, boundary, progress, notch, band_hz, realign)
+    st = _prepare(rec, boundary, progress, notch, band_hz)
     P, lin, denom = st.P, st.lin, st.denom
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
     gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))
