@@ -20,9 +20,9 @@ differences of :data:`STEP` samples. The record is realigned only when
 * every lateness lies within :data:`MAX_SPREAD` samples of the others (a scan lasts at most
   one sample period), and
 * the realigned linear chain leaves a withheld gap at most :data:`GAIN` times the record's,
-  and at most :data:`GAIN` times what the best lateness of the channel farthest from the
-  median alone leaves (one late channel, however many others its bias moves a little, is an
-  input delay or a sensor's low-pass: the candidates' business).
+  and at most :data:`GAIN` times what the best lateness of one channel alone leaves (the
+  channel whose lateness alone buys most to first order; one late channel, however many
+  others its bias moves, is an input delay or a sensor's low-pass: the candidates' business).
 
 A record with one force and one response channel has a single relative lateness: a late
 force there *is* an input delay in every respect the record can show, and it is left to the
@@ -160,9 +160,10 @@ def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing |
     late = np.zeros(C)
     free = np.arange(1, C)  # the first channel is the reference: only differences are seen
     r0, gap_before = _fit(rec, late, boundary, L, skip)
-    r, J = r0, None
+    r, J, J0 = r0, None, None
     for _ in range(PASSES):
         J = np.stack([(_fit(rec, late + STEP * np.eye(C)[c], boundary, L, skip)[0] - r) / STEP for c in free], 1)
+        J0 = J if J0 is None else J0
         step = np.linalg.lstsq(J, -r, rcond=None)[0]
         step *= min(1.0, MAX_STEP / max(float(np.max(np.abs(step))), 1e-300))
         late[free] += step
@@ -178,23 +179,27 @@ def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing |
     _, gap_after = _fit(rec, late, boundary, L, skip)
     late = late - np.median(late)
     apart = np.abs(late) > Z_DELAY * np.maximum(std, np.max(std[free]))
-    gap_one = _one_channel_gap(rec, late, boundary, L, skip)
+    # the reference channel late by d is every other channel early by d
+    gap_one = _one_channel_gap(rec, np.column_stack([-J0.sum(axis=1), J0]), r0, boundary, L, skip)
     pattern = int(np.sum(apart)) >= MIN_CHANNELS and float(np.ptp(late)) <= MAX_SPREAD
     gain = gap_after <= GAIN * gap_before and gap_after <= GAIN * gap_one
     names = [f"{w}{i + 1}" for w, i in chans]
     return Timing(names, late, std, gap_before, gap_after, pattern and gain)
 
 
-def _one_channel_gap(rec: Recording, late: np.ndarray, boundary: str, L: int, skip: int) -> float:
-    """The withheld gap left by the best lateness of the channel farthest from the median
-    alone (Gauss-Newton in that one lateness, from its value in ``late``): what an input delay
-    or a sensor's low-pass, which make one channel late, would explain."""
-    c = int(np.argmax(np.abs(late)))
-    one = np.zeros_like(late)
-    one[c] = late[c]
+def _one_channel_gap(rec: Recording, J0: np.ndarray, r0: np.ndarray, boundary: str, L: int, skip: int) -> float:
+    """The withheld gap left by the best lateness of one channel alone (Gauss-Newton in that
+    one lateness): what an input delay or a sensor's low-pass, which make one channel late,
+    would explain. The channel is the one whose lateness alone, to first order (``J0``: the
+    errors' Jacobian at no lateness, a column per channel; ``r0``: the errors there), buys
+    the most."""
+    g = J0.T @ r0
+    c = int(np.argmax(g**2 / np.maximum(np.sum(J0**2, axis=0), 1e-300)))
+    one = np.zeros(J0.shape[1])
+    one[c] = float(np.clip(-g[c] / max(float(J0[:, c] @ J0[:, c]), 1e-300), -MAX_STEP, MAX_STEP))
     for _ in range(PASSES):
         r = _fit(rec, one, boundary, L, skip)[0]
-        dr = (_fit(rec, one + STEP * np.eye(late.size)[c], boundary, L, skip)[0] - r) / STEP
+        dr = (_fit(rec, one + STEP * np.eye(one.size)[c], boundary, L, skip)[0] - r) / STEP
         step = -float(dr @ r) / max(float(dr @ dr), 1e-300)
         one[c] += float(np.clip(step, -MAX_STEP, MAX_STEP))
         if abs(step) < TOLERANCE:
