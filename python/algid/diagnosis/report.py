@@ -183,9 +183,10 @@ def to_text(d, source: str = "") -> str:
     L.extend(_units_lines(d))
     L.extend(timing_lines(d.extra.get("timing")))
     L.append("")
-    L.extend(_chain_lines(linear_model(d), d.units, "Linear chain, the windowed equation-error fit", "  "))
+    kind = "chain" if P.chain else "network"
+    L.extend(_chain_lines(linear_model(d), d.units, f"Linear {kind}, the windowed equation-error fit", "  "))
     if d.effect != "none":
-        L.append("  (`algid identify` reports this fit, every value model_misfit: the record is not a linear chain)")
+        L.append(f"  (`algid identify` reports this fit, every value model_misfit: the record is not a linear {kind})")
     if not lin.forced.all():
         L.append("  a DOF without force: no scale in this fit (n/a); `algid identify` carries it along the springs")
     nat = d.extra.get("natural_hz", [])
@@ -195,7 +196,7 @@ def to_text(d, source: str = "") -> str:
     if model is not None:
         L.append(
             f"  model: {model.verdict}"
-            + (" (the linear chain is a model of the record)" if model.verdict == "chain" else "")
+            + (f" (the linear {kind} is a model of the record)" if model.verdict == "chain" else "")
         )
         for r in model.reasons:
             L.append(f"    {r}")
