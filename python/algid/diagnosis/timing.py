@@ -38,6 +38,7 @@ from scipy.interpolate import CubicSpline
 
 from ..recording import Recording, accelerations
 from ..recording import motion as recording_motion
+from ..recording.derivatives import MOTION_FIELDS
 from .candidates import lead_in
 from .integrals import integrals
 from .linear import fit_linear
@@ -70,7 +71,8 @@ class Timing:
     channels : names of the channels, ``u<i>`` (forces) and ``y<i>`` (the recorded motion).
     late : (C,) lateness of each channel relative to the median one [samples].
     late_std : (C,) standard deviation of each [samples].
-    gap_before, gap_after : withheld gaps of the linear chain on the record and realigned.
+    gap_before, gap_after : withheld gaps of the linear chain on the record's first windows
+        (:data:`WINDOWS`), as recorded and realigned.
     realigned : whether the record was realigned (the pattern and the gain held).
     """
 
@@ -108,24 +110,26 @@ def shifted(x: np.ndarray, late: float) -> np.ndarray:
     return CubicSpline(k, x, extrapolate=True)(k - late)
 
 
-def _channels(rec: Recording) -> tuple[list[tuple[str, int]], np.ndarray]:
+def _channels(rec: Recording) -> list[tuple[str, int]]:
     """The channels a converter sampled (every forced DOF's force, every motion column)."""
-    _, y = recording_motion(rec)
     forced = np.nonzero(np.any(np.asarray(rec.u) != 0.0, axis=0))[0]
-    return [("u", int(i)) for i in forced] + [("y", i) for i in range(y.shape[1])], y
+    return [("u", int(i)) for i in forced] + [("y", i) for i in range(recording_motion(rec)[1].shape[1])]
+
+
+def channel_names(rec: Recording) -> list[str]:
+    """``u<i>`` (forces) and ``y<i>`` (the recorded motion) of :func:`_channels`, in its order."""
+    return [f"{w}{i + 1}" for w, i in _channels(rec)]
 
 
 def realign(rec: Recording, late: np.ndarray) -> Recording:
     """The record with every channel moved ``late[c]`` samples earlier (:func:`_channels` order)."""
     kind, y = recording_motion(rec)
-    chans, _ = _channels(rec)
     u, y = np.array(rec.u, dtype=float), np.array(y, dtype=float)
-    for (which, i), d in zip(chans, late):
+    for (which, i), d in zip(_channels(rec), late):
         if d != 0.0:
             x = u if which == "u" else y
             x[:, i] = shifted(x[:, i], float(d))
-    field = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
-    return replace(rec, u=u, **{field: y})
+    return replace(rec, u=u, **{MOTION_FIELDS[kind]: y})
 
 
 def _fit(rec: Recording, late: np.ndarray, boundary: str, L: int, skip: int):
@@ -147,33 +151,39 @@ def _head(rec: Recording, samples: int) -> Recording:
     return replace(rec, dt=float(rec.dt), **cut)
 
 
+def _gauss_newton(rec, late, which, r, boundary, L, skip, stop_above=np.inf):
+    """Gauss-Newton in the latenesses of the channels ``which`` (the others held) from ``late``,
+    whose errors are ``r``: steps of at most :data:`MAX_STEP`, until one is below
+    :data:`TOLERANCE` or leaves more than ``stop_above`` of the starting squared errors. Returns
+    the latenesses, their errors and the Jacobians of the first and the last pass."""
+    late, start, first, J = late.copy(), float(r @ r), None, None
+    for _ in range(PASSES):
+        nudged = [late + STEP * np.eye(late.size)[c] for c in which]
+        J = np.stack([(_fit(rec, x, boundary, L, skip)[0] - r) / STEP for x in nudged], 1)
+        first = J if first is None else first
+        step = np.linalg.lstsq(J, -r, rcond=None)[0]
+        step *= min(1.0, MAX_STEP / max(float(np.max(np.abs(step))), 1e-300))
+        late[which] += step
+        r = _fit(rec, late, boundary, L, skip)[0]
+        if float(r @ r) > stop_above * start or np.max(np.abs(step)) < TOLERANCE:
+            break
+    return late, r, first, J
+
+
 def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing | None:
     """The latenesses of ``rec``'s channels (module docstring), estimated on its first
     :data:`WINDOWS` windows of ``L`` samples after ``skip`` (the latenesses are the
     converter's, the same all along); None with fewer than three channels (one relative
     lateness is an input delay or a sensor's, not a pattern)."""
-    chans, _ = _channels(rec)
-    C = len(chans)
+    C = len(_channels(rec))
     if C < 3:
         return None
     rec = _head(rec, skip + WINDOWS * L)
-    late = np.zeros(C)
     free = np.arange(1, C)  # the first channel is the reference: only differences are seen
-    r0, gap_before = _fit(rec, late, boundary, L, skip)
-    r, J, J0 = r0, None, None
-    for _ in range(PASSES):
-        J = np.stack([(_fit(rec, late + STEP * np.eye(C)[c], boundary, L, skip)[0] - r) / STEP for c in free], 1)
-        J0 = J if J0 is None else J0
-        step = np.linalg.lstsq(J, -r, rcond=None)[0]
-        step *= min(1.0, MAX_STEP / max(float(np.max(np.abs(step))), 1e-300))
-        late[free] += step
-        r, _ = _fit(rec, late, boundary, L, skip)
-        if float(r @ r) > FIRST_GAIN * float(r0 @ r0):
-            break  # the shifts do not buy what a converter's skew would: no pattern to look for
-        if np.max(np.abs(step)) < TOLERANCE:
-            break
-    dof = max(r.size - free.size, 1)
-    cov = np.linalg.pinv(J.T @ J) * float(r @ r) / dof
+    r0, gap_before = _fit(rec, np.zeros(C), boundary, L, skip)
+    # a pass that does not buy what a converter's skew would ends the search: no pattern to look for
+    late, r, J0, J = _gauss_newton(rec, np.zeros(C), free, r0, boundary, L, skip, stop_above=FIRST_GAIN)
+    cov = np.linalg.pinv(J.T @ J) * float(r @ r) / max(r.size - free.size, 1)
     std = np.zeros(C)
     std[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
     _, gap_after = _fit(rec, late, boundary, L, skip)
@@ -183,27 +193,20 @@ def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing |
     gap_one = _one_channel_gap(rec, np.column_stack([-J0.sum(axis=1), J0]), r0, boundary, L, skip)
     pattern = int(np.sum(apart)) >= MIN_CHANNELS and float(np.ptp(late)) <= MAX_SPREAD
     gain = gap_after <= GAIN * gap_before and gap_after <= GAIN * gap_one
-    names = [f"{w}{i + 1}" for w, i in chans]
-    return Timing(names, late, std, gap_before, gap_after, pattern and gain)
+    return Timing(channel_names(rec), late, std, gap_before, gap_after, pattern and gain)
 
 
 def _one_channel_gap(rec: Recording, J0: np.ndarray, r0: np.ndarray, boundary: str, L: int, skip: int) -> float:
-    """The withheld gap left by the best lateness of one channel alone (Gauss-Newton in that
-    one lateness): what an input delay or a sensor's low-pass, which make one channel late,
-    would explain. The channel is the one whose lateness alone, to first order (``J0``: the
-    errors' Jacobian at no lateness, a column per channel; ``r0``: the errors there), buys
+    """The withheld gap left by the best lateness of one channel alone (:func:`_gauss_newton`
+    in that one lateness): what an input delay or a sensor's low-pass, which make one channel
+    late, would explain. The channel is the one whose lateness alone, to first order (``J0``:
+    the errors' Jacobian at no lateness, a column per channel; ``r0``: the errors there), buys
     the most."""
     g = J0.T @ r0
     c = int(np.argmax(g**2 / np.maximum(np.sum(J0**2, axis=0), 1e-300)))
     one = np.zeros(J0.shape[1])
     one[c] = float(np.clip(-g[c] / max(float(J0[:, c] @ J0[:, c]), 1e-300), -MAX_STEP, MAX_STEP))
-    for _ in range(PASSES):
-        r = _fit(rec, one, boundary, L, skip)[0]
-        dr = (_fit(rec, one + STEP * np.eye(one.size)[c], boundary, L, skip)[0] - r) / STEP
-        step = -float(dr @ r) / max(float(dr @ dr), 1e-300)
-        one[c] += float(np.clip(step, -MAX_STEP, MAX_STEP))
-        if abs(step) < TOLERANCE:
-            break
+    one = _gauss_newton(rec, one, [c], _fit(rec, one, boundary, L, skip)[0], boundary, L, skip)[0]
     return _fit(rec, one, boundary, L, skip)[1]
 
 

@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from ..model.chain import Chain
+from ..recording import motion
 from ..recording.transient import band_pass, clean_force, quiet_parts
 
 #: The chain explains the hits when its output error over their decays is at most this many times
@@ -78,7 +79,7 @@ def impact_fit(sig, theta: np.ndarray, boundary: str) -> dict:
     unit), ``ratio``, ``hit_ratios``, ``ratio_limit``, ``explains_record``, and ``misfit``: why
     the estimates are ``model_misfit`` ("" when the chain explains the hits)."""
     tr, raw = sig.transient, sig.raw
-    y = {"acceleration": raw.a, "velocity": raw.v, "displacement": raw.x}[sig.kind]
+    y = motion(raw)[1]
     chain = chain_of(theta, raw.n, boundary)
     if chain is None:
         return {"check": "output error", "explains_record": False, "misfit": ""}  # the verdicts say why

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..diagnosis.timing import realign
+from ..diagnosis.timing import channel_names, realign
 from ..recording import DEFAULT_DIFF_POINTS, Recording, accelerations
 from ..recording import motion as recording_motion
 from ..recording.noise import without_hum
@@ -223,7 +223,6 @@ def on_time_signals(sig: Signals, timing: dict | None) -> Signals:
     recorded and, when it was found to be a converter's, undone."""
     if timing is None or not timing["realigned"]:
         return replace(sig, timing=timing)
-    late = np.array(list(timing["late_samples"].values()))
-    rec = realign(sig.rec, late)
-    kind, motion = recording_motion(rec)
+    rec = realign(sig.rec, np.array([timing["late_samples"][c] for c in channel_names(sig.rec)]))
+    _, motion = recording_motion(rec)
     return replace(sig, rec=rec, raw=rec, a=accelerations(rec, DEFAULT_DIFF_POINTS), motion=motion, timing=timing)

@@ -21,11 +21,11 @@ def transient_lines(res, rec) -> dict:
     as :func:`algid.identify` saw it (:func:`algid.recording.transient.transient_record` with the
     result's band); ``model`` is NaN when there is no admissible chain."""
     from ..identification.impact_fit import chain_of, predicted_motion
+    from ..recording import motion
     from ..recording.transient import band_pass, clean_force, transient_record
 
     filtered, tr = transient_record(rec, res.transient.band_hz)
-    kind = "acceleration" if filtered.a is not None else ("velocity" if filtered.v is not None else "displacement")
-    y = {"acceleration": filtered.a, "velocity": filtered.v, "displacement": filtered.x}[kind]
+    kind, y = motion(filtered)
     drive = int(np.argmax(np.max(np.abs(filtered.u), axis=0)))
     model = np.full(filtered.t.size, np.nan)
     chain = chain_of(res.theta, res.n, res.boundary)

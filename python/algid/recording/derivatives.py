@@ -108,6 +108,10 @@ def base_acceleration(rec: Recording, points: int = DEFAULT_DIFF_POINTS) -> np.n
     return rec.base if order == 0 else derivative(rec.base, rec.dt, order, points)
 
 
+#: The :class:`Recording` field of each kind of motion :func:`motion` returns.
+MOTION_FIELDS = {"acceleration": "a", "velocity": "v", "displacement": "x"}
+
+
 def motion(rec: Recording) -> tuple[str, np.ndarray]:
     """The measured motion the estimator's accelerations come from: ``("acceleration", a)``,
     ``("velocity", v)`` or ``("displacement", x)``, in that order of preference."""

@@ -38,6 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .derivatives import MOTION_FIELDS
+
 #: A PSD bin carries signal above this multiple of the channel's noise floor.
 DETECT = 10.0
 #: ``f_hi`` holds this share of a channel's above-floor power.
@@ -257,7 +259,7 @@ def analyse(u: np.ndarray, motion: np.ndarray, dt: float, kind: str = "accelerat
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     u = np.asarray(u, dtype=float).reshape(u.shape[0], -1)
     motion = np.asarray(motion, dtype=float).reshape(motion.shape[0], -1)
-    sym = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
+    sym = MOTION_FIELDS[kind]
     forces = [channel(f"u{i + 1}", u[:, i], dt) for i in range(u.shape[1])]
     motions = [
         channel(f"{sym}{i + 1}", motion[:, i], dt, quantised=kind == "displacement") for i in range(motion.shape[1])
@@ -365,6 +367,6 @@ def without_hum(rec):
     lines = mains_lines(np.column_stack([rec.u, y]), rec.dt)
     if not lines:
         return rec, []
-    key = {"acceleration": "a", "velocity": "v", "displacement": "x"}[kind]
+    key = MOTION_FIELDS[kind]
     clean = {"t": rec.t, "u": notch(rec.u, rec.dt, lines), key: notch(y, rec.dt, lines)}
     return Recording(**clean, path=rec.path, units=rec.units, notes=rec.notes, missing=rec.missing), lines
