@@ -125,6 +125,10 @@ STRIBECK_Z = 4.0
 #: Velocity scale of the Stribeck candidate's sign, a share of its Stribeck velocity, when
 #: no Coulomb candidate was fitted at the same DOF first.
 STRIBECK_SIGN = 0.05
+#: Smallest Stribeck velocity searched, in shares of the velocity scale over which the
+#: Coulomb fit's sign fades in (the velocity noise around rest): a peak narrower than that
+#: fade-in is not told apart from it by the record.
+STRIBECK_RESOLVED = 3.0
 #: Longest input delay searched [samples]; the analysis skips at least this many samples.
 MAX_DELAY_SAMPLES = 100
 
@@ -326,9 +330,10 @@ def fit_stribeck(ctx: Context, i: int) -> CandidateFit:
     P = ctx.P
     v = ctx.v[:, i]
     rms = np.sqrt(np.mean(v**2))
-    grid = np.log(rms * np.geomspace(1e-3, 1.0, ctx.grid))
-
     v_sign = ctx.shared.get(("v_scale", i))  # the Coulomb fit's: the velocity noise around rest
+    lowest = 1e-3 * rms if v_sign is None else max(1e-3 * rms, STRIBECK_RESOLVED * v_sign)
+    grid = np.log(np.geomspace(min(lowest, rms), rms, ctx.grid))
+
     # the friction's sign fades in as the Coulomb candidate found, or well inside the zone
     found = None if v_sign is None else np.tanh(v / v_sign)
     v2 = v**2

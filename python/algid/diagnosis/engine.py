@@ -307,12 +307,14 @@ class Setup:
 
 def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     """The force form when some forced DOF is quasi-static: a first force-form fit puts its
-    inertia force below :data:`QUASI_STATIC` of the force in the band (its acceleration-form
-    equation, solved for an acceleration that carries no information, would be noise)."""
+    inertia force below :data:`QUASI_STATIC` of the force in the band, or does not find its
+    mass above zero by three sigma (its acceleration-form equation, solved for an
+    acceleration that carries no information, would be noise)."""
     P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form="force", fit_band=True)
     lin = fit_linear(P)
-    shares = [d["inertia_share"] for d in inertia(P, lin, physical_uncertainty(P, lin), band.f_hi).values()]
-    return "force" if shares and min(shares) < QUASI_STATIC else "acceleration"
+    dofs = inertia(P, lin, physical_uncertainty(P, lin), band.f_hi).values()
+    quasi_static = [d["inertia_share"] < QUASI_STATIC or not d["mass"] > 3 * d["mass_sigma"] for d in dofs]
+    return "force" if any(quasi_static) else "acceleration"
 
 
 def _prepare(rec: Recording, boundary: str | Network, progress, notch: bool = True, band_hz=None) -> Setup:

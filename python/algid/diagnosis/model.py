@@ -152,9 +152,10 @@ def cross_spectra(X: np.ndarray, dt: float, nper: int, chunk: int = 64) -> tuple
 
 def force_response(P: Prepared, f_hi: float) -> dict:
     """Question 0: the band-mean multiple coherence of every forced DOF's acceleration with
-    all the forces (the share of its power the forces explain linearly, per bin)."""
+    all the forces (the share of its power the forces explain linearly, per bin), over the
+    samples the windows analyse."""
     forced = np.nonzero(P.forced)[0]
-    u, a = P.u_full[:, forced], P.a_full
+    u, a = P.u[:, forced], P.a  # the analysed samples: not a filter's start-up before them
     if forced.size == 0 or not np.any(band_rms(u, P.dt, f_hi) > 0) or not np.any(band_rms(a, P.dt, f_hi) > 0):
         return {"related": False, "coherence": {}, "reason": "no force or no motion in the signal band"}
     q, T = forced.size, u.shape[0]
