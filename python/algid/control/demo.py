@@ -56,6 +56,9 @@ The measured figures of the demo are in ``docs/demo.md``, built from
 largest relative error of each at 0.1, 0.5, 1 and 5 s: how far the single window drifts
 under noise against the continuous running estimate.
 
+``--topology NET.json`` runs a spring network instead, open loop (the closed loop above is the
+chain's): :mod:`.network_demo`.
+
 For ``--n`` other than 3 the chain repeats Table 1's values (masses 2.0, 2.5, 3.0 kg,
 dampings 5.5, 5.0, 4.5 N s/m, stiffnesses 1000, 900, 900, 700 N/m, each list cycled to
 length ``n`` or ``n + 1``) and the targets repeat ``(+5, +5, -5) mm``. For ``n = 1`` with
