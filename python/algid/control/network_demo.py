@@ -68,8 +68,14 @@ def default_values(net: Network) -> NetworkModel:
 
 
 def read_network(path) -> tuple[NetworkModel, str]:
-    """The network model of a ``--topology`` file and where its values come from."""
-    doc = json.loads(Path(path).read_text(encoding="utf-8")) if not isinstance(path, dict) else path
+    """The network model of a ``--topology`` file (or its dict) and where its values come from:
+    the file's own, or :func:`default_values` for a topology without values."""
+    doc = path
+    if not isinstance(path, dict):
+        try:
+            doc = json.loads(Path(path).read_text(encoding="utf-8"))
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{path}: not JSON ({err.msg}, line {err.lineno})") from None
     if isinstance(doc, dict) and {"mass", "damping", "stiffness"} & set(doc):
         return NetworkModel.from_json(path), "values from the file"
     return default_values(Network.from_json(path)), "no values in the file: Table 1's cycled over masses and springs"
