@@ -56,6 +56,9 @@ The measured figures of the demo are in ``docs/demo.md``, built from
 largest relative error of each at 0.1, 0.5, 1 and 5 s: how far the single window drifts
 under noise against the continuous running estimate.
 
+``--topology NET.json`` runs a spring network instead, open loop (the closed loop above is the
+chain's): :mod:`.network_demo`.
+
 For ``--n`` other than 3 the chain repeats Table 1's values (masses 2.0, 2.5, 3.0 kg,
 dampings 5.5, 5.0, 4.5 N s/m, stiffnesses 1000, 900, 900, 700 N/m, each list cycled to
 length ``n`` or ``n + 1``) and the targets repeat ``(+5, +5, -5) mm``. For ``n = 1`` with
@@ -610,12 +613,23 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, metavar="S", default=5.0, help="record length [s]")
     p.add_argument("--out", metavar="DIR", default="./algid-demo/", help="output folder")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    p.add_argument(
+        "--topology",
+        type=Path,
+        metavar="NET.json",
+        help="a spring network instead of the chain, run open loop (the closed loop is the chain's): the force "
+        "that tracks the demo's references on it plus the probe, identified with algid identify --topology; "
+        'NET.json is a model (NetworkModel.from_json) or a topology {"n": N, "springs": [[a, b], ...]} given '
+        "Table 1's values cycled; takes --noise-db, --excitation (default 0.5 N), --seed, --duration, --out",
+    )
     p.set_defaults(func=run)
     return p
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``algid demo``; returns the exit code (0 ok, 2 bad arguments)."""
+    if args.topology is not None:
+        return run_network_demo(args)
     if args.n < 1:
         print(f"algid demo: --n must be >= 1, got {args.n}", file=sys.stderr)
         return 2
@@ -659,6 +673,41 @@ def run(args: argparse.Namespace) -> int:
         progress("writing figures")
         written += write_figures(res, summary, out)
         progress.close()
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0
+
+
+def run_network_demo(args: argparse.Namespace) -> int:
+    """``algid demo --topology``: :mod:`.network_demo`; returns the exit code."""
+    from . import network_demo
+
+    given = network_demo.chain_options_given(args)
+    if given:
+        print(f"algid demo: error: {', '.join(given)}: the chain's closed loop, not with --topology", file=sys.stderr)
+        return 2
+    if not args.duration > 0.5:
+        print("algid demo: --duration must be > 0.5 s", file=sys.stderr)
+        return 2
+    progress = Progress("demo")
+    try:
+        model, source = network_demo.read_network(args.topology)
+        res, result, summary = network_demo.run_network(
+            model, args.duration, args.noise_db, args.seed, args.excitation, progress
+        )
+    except (ValueError, OSError) as exc:
+        print(one_line(f"algid demo: error: {exc}"), file=sys.stderr)
+        return 2
+    finally:
+        progress.close()
+    print(network_demo.format_summary(summary, source))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "summary.json").write_text(json.dumps(jsonable(summary), indent=2) + "\n", encoding="utf-8")
+    written = [out / "summary.json"]
+    if not args.no_plots:
+        from ..plotting.demo import write_network_figures
+
+        written += write_network_figures(res, summary, out)
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
 

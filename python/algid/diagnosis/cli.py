@@ -42,7 +42,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument(
         "--model",
         metavar="OUT",
-        help="write the chain refitted with the reported effect to OUT (JSON that algid.Chain.from_json reads)",
+        help="write the chain refitted with the reported effect to OUT (JSON that algid.Chain.from_json reads; "
+        "with --topology the network, read by algid.NetworkModel.from_json)",
     )
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
     p.add_argument(
@@ -101,7 +102,8 @@ def run(args: argparse.Namespace) -> int:
 
         model = corrected_model(d)
         if model is None:
-            print("algid diagnose: --model: no effect reported, the linear chain is the model", file=sys.stderr)
+            kind = "network" if getattr(args, "topology", None) else "chain"
+            print(f"algid diagnose: --model: no effect reported, the linear {kind} is the model", file=sys.stderr)
         else:
             try:
                 Path(args.model).write_text(json.dumps(json_safe(model), indent=1))

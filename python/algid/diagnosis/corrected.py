@@ -62,7 +62,8 @@ def effect_parts(effect: str, location: dict, params: dict, params_std: dict) ->
 def chain_model(d, fit=None) -> dict:
     """The chain of the diagnosis's linear fit, with ``fit``'s equations (a candidate's,
     cross-validated) in place of the linear ones it refits, as a dict that
-    :meth:`algid.Chain.from_json` reads: ``n, boundary, mass, damping, stiffness`` (``None``
+    :meth:`algid.Chain.from_json` reads (a network's: :meth:`algid.NetworkModel.from_json`, with
+    ``springs`` in place of ``boundary``): ``n, boundary, mass, damping, stiffness`` (``None``
     where the record gives no scale) and their ``sigma_*`` (module docstring)."""
     P, lin = d.P, d.lin
     per_eq = _physical(P, list(range(P.n)), lin.cv)

@@ -1,11 +1,14 @@
-"""``algid batch INPUTS... --out DIR [--diagnose] [--workers N] [reading options] [--layouts FILE]``.
+"""``algid batch INPUTS... --out DIR [--diagnose] [--workers N] [--topology NET.json] [reading options]
+[--layouts FILE]``.
 
 Every recording the inputs name (files, folders, glob patterns) read with the options of
 ``algid identify`` (``--force``, ``--accel``, ``--units``, ``--rate``...; per glob pattern from
 ``--layouts``), identified, and with ``--diagnose`` diagnosed, on Dask: an embedded
 ``LocalCluster`` of ``--workers`` processes, or the cluster of ``--scheduler tcp://host:port``.
 Writes ``DIR/results/part-*.parquet`` (one row per recording, resumable), ``DIR/summary.csv`` (one row per machine) and
-``DIR/histories.png``, ``DIR/verdicts.png``. A progress bar on a terminal; the failed
+``DIR/histories.png``, ``DIR/verdicts.png``. With ``--topology`` every recording is identified (and
+diagnosed) on that spring network, as ``algid identify --topology``; ``--boundary`` and
+``--estimator`` are the chain's and refused with it. A progress bar on a terminal; the failed
 recordings (at most :data:`SHOWN_FAILURES`) and the count ok / failed / skipped on stderr.
 Exit codes: 0 when the batch ran (failed recordings are rows with their error), 3 when no
 recording could be used, 2 on bad input.
@@ -52,6 +55,13 @@ def add_parser(sub) -> None:
     p.add_argument("--boundary", choices=("fixed", "free"), default="fixed", help="right end of the chain")
     p.add_argument("--estimator", choices=ESTIMATORS, default="auto", help="as algid identify --estimator")
     p.add_argument("--replicates", type=int, default=REPLICATES, metavar="N", help="bootstrap replicates")
+    p.add_argument(
+        "--topology",
+        type=Path,
+        metavar="NET.json",
+        help='a spring network {"n": N, "springs": [[a, b], ...]} (0 = ground) every recording is identified (and '
+        "diagnosed) on, as algid identify --topology; not with --boundary or --estimator",
+    )
     p.add_argument("--part-rows", type=int, default=PART_ROWS, metavar="N", help="rows per Parquet part")
     p.add_argument("--quiet", action="store_true", help="no progress, no summary")
     add_recording_options(p)
@@ -86,6 +96,24 @@ def _report(table, out: Path, quiet: bool) -> None:
         print(per_machine.to_string(index=False))
 
 
+def _topology(args):
+    """The network of ``--topology`` (None without it); a one-line ``ValueError`` with a chain's option."""
+    if args.topology is None:
+        return None
+    from ..model.network import Network
+
+    chain_only = [
+        flag
+        for flag, given in (("--boundary", args.boundary != "fixed"), ("--estimator", args.estimator != "auto"))
+        if given
+    ]
+    if chain_only:
+        raise ValueError(
+            f"{', '.join(chain_only)}: the chain's, not with --topology (a network is fitted by the windowed fit)"
+        )
+    return Network.from_json(args.topology)
+
+
 def run(args) -> int:
     """Entry point of ``algid batch``; returns the exit code."""
     from ..messages import error_line
@@ -102,8 +130,9 @@ def run(args) -> int:
         if "columns" in reading:
             reading["columns"] = mapping_file(reading["columns"])
         reading_options(**reading)  # bad options fail here, before a worker starts
+        topology = _topology(args)
         layouts = read_layouts(args.layouts) if args.layouts is not None else None
-    except ValueError as err:
+    except (ValueError, OSError) as err:
         print(error_line("batch", err), file=sys.stderr)
         return 2
     require()
@@ -115,7 +144,7 @@ def run(args) -> int:
         bar.update(1)
         bar.set_postfix(counts, refresh=False)
 
-    options = {"diagnose": args.diagnose, "boundary": args.boundary, "estimator": args.estimator}
+    options = {"diagnose": args.diagnose, "boundary": args.boundary, "estimator": args.estimator, "topology": topology}
     options.update(replicates=args.replicates, part_rows=args.part_rows, progress=progress if bar is not None else None)
     options.update(reading=reading, layouts=layouts)
     try:

@@ -53,6 +53,16 @@ WORKER_CONFIG = {
 ProgressFn = Optional[Callable[[dict, int], None]]
 
 
+def _topology_json(topology) -> str:
+    """:attr:`.task.Options.topology` of a network, the path of its JSON, or None (``""``)."""
+    if topology is None:
+        return ""
+    from ..model.network import Network
+
+    net = topology if isinstance(topology, Network) else Network.from_json(topology)
+    return json.dumps(net.to_json(), sort_keys=True)
+
+
 def local_cluster(workers: int | None = None):
     """A ``LocalCluster`` of ``workers`` single-threaded processes (default: the machine's cores)."""
     import dask
@@ -165,6 +175,7 @@ def batch(
     progress: ProgressFn = None,
     reading: dict | None = None,
     layouts: str | Path | list | None = None,
+    topology=None,
 ):
     """Identify (and with ``diagnose`` diagnose) every recording ``paths`` name, on Dask.
 
@@ -179,6 +190,8 @@ def batch(
     reading : how to read every file, as ``algid identify``'s options say (``{"force": "F1",
         "accel": "acc1", "units": "acceleration=g", "rate": 2048}``,
         :func:`algid.recording.options.reading_options`).
+    topology : a spring network (:class:`algid.Network`, or the path of its JSON) to identify
+        (and diagnose) every recording on, as ``algid identify --topology``; None: the chain.
     layouts : for folders of mixed layouts, glob pattern -> reading options over ``reading``: a
         JSON or TOML file (:func:`.inputs.read_layouts`) or its ``[[pattern, reading], ...]``.
     part_rows, part_seconds : a part file is written every ``part_rows`` rows or
@@ -205,6 +218,7 @@ def batch(
         bool(diagnose),
         json.dumps(reading or {}, sort_keys=True),
         json.dumps(layouts or []),
+        _topology_json(topology),
     )
     store = ResultStore(out)
     writer = _Writer(store, part_rows, part_seconds)

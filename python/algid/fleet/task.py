@@ -7,9 +7,10 @@ file (the same functions make both), flattened to columns:
 * ``key`` sha256 of the file's bytes, the algid version and the :class:`Options`; ``path``,
   ``name``, ``machine`` (the folder's name), ``recorded_at`` (the file's modification time);
 * ``status`` ``ok`` or ``failed``, ``error`` the one line of a failure;
-* ``n``, ``boundary``, ``estimator``, ``samples``, ``duration_s``, ``fs_hz``, ``valid``,
-  ``valid_parameters``, ``reasons``; per parameter ``m1..``, ``c1..``, ``k1..`` [kg, N s/m, N/m]
-  and ``sigma_m1..``; the undamped natural frequencies ``f1_hz..`` of the estimates;
+* ``n``, ``boundary`` (None on a network), on a network ``springs`` (JSON), ``estimator``,
+  ``samples``, ``duration_s``, ``fs_hz``, ``valid``, ``valid_parameters``, ``reasons``; per
+  parameter ``m1..``, ``c1..``, ``k1..`` [kg, N s/m, N/m] and ``sigma_m1..``; the undamped
+  natural frequencies ``f1_hz..`` of the estimates;
 * with ``diagnose``: ``effect``, ``location`` and ``params`` (JSON), ``gap_before``, ``gap_after``;
 * ``load_s``, ``identify_s``, ``diagnose_s``, ``task_s`` [s], ``cpu_s`` (the worker process's CPU
   time over the task [s]: below ``task_s`` when the worker waited for a core), ``finished_at``
@@ -27,6 +28,8 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path, PurePath
 
+import numpy as np
+
 from ..identification.surrogate import REPLICATES
 from ..parallel import threads
 
@@ -39,6 +42,9 @@ class Options:
     """The settings that change a recording's result (they enter its key).
 
     boundary : right end of the chain, ``fixed`` or ``free``.
+    topology : JSON of a spring network (:meth:`algid.Network.to_json`) every recording is
+        identified (and diagnosed) on instead of the chain, ``""`` for the chain; with it the
+        boundary stays ``fixed`` and the estimator ``auto`` (a network's fit has neither).
     estimator : ``auto``, ``window`` or ``continuous`` (:func:`algid.identify`).
     replicates : bootstrap replicates of the uncertainties.
     diagnose : also run :func:`algid.diagnosis.diagnose`.
@@ -55,6 +61,7 @@ class Options:
     diagnose: bool = False
     reading: str = "{}"
     layouts: str = "[]"
+    topology: str = ""
 
     def __post_init__(self) -> None:
         from ..identification.plan import ESTIMATORS
@@ -66,6 +73,19 @@ class Options:
         if self.replicates < 2:
             raise ValueError(f"replicates must be >= 2, got {self.replicates}")
         self.reading_for("")  # the options are known keywords with readable values
+        if self.topology:
+            self.network()
+            if self.boundary != "fixed" or self.estimator != "auto":
+                raise ValueError(
+                    "a network (topology) is identified by the windowed fit alone: no boundary or estimator"
+                )
+
+    def network(self):
+        """The :class:`algid.Network` of ``topology``, or the chain's boundary (``fixed``, ``free``)
+        without one: what :func:`algid.identify` and :func:`algid.diagnosis.diagnose` take."""
+        from ..model.network import Network
+
+        return Network.from_json(json.loads(self.topology)) if self.topology else self.boundary
 
     def reading_for(self, path) -> dict:
         """The keyword arguments of :func:`algid.recording.load_recording` for the file at ``path``."""
@@ -82,10 +102,12 @@ class Options:
             raise ValueError(f"reading options: {err}") from None
 
     def fingerprint(self) -> bytes:
-        """The options and the algid version, canonically serialised."""
+        """The options and the algid version, canonically serialised (``topology`` only when
+        given: a chain's key is the one it had before networks)."""
         from .. import __version__
 
-        return json.dumps({**asdict(self), "algid": __version__}, sort_keys=True).encode()
+        options = {k: v for k, v in asdict(self).items() if k != "topology" or v}
+        return json.dumps({**options, "algid": __version__}, sort_keys=True).encode()
 
 
 def content_key(path: Path, options: Options) -> str:
@@ -107,7 +129,10 @@ def _rss_mb() -> float:
 
 def _identification_columns(doc: dict) -> dict:
     """Columns of an ``algid identify`` JSON document."""
-    row = {key: doc[key] for key in ("n", "boundary", "estimator", "samples", "duration_s", "valid")}
+    row = {"n": doc["n"], "boundary": doc.get("boundary")}
+    if "springs" in doc:
+        row["springs"] = json.dumps(doc["springs"])
+    row.update({key: doc[key] for key in ("estimator", "samples", "duration_s", "valid")})
     row["fs_hz"] = 1.0 / doc["dt_s"]
     row["valid_parameters"] = sum(p["valid"] for p in doc["parameters"])
     row["reasons"] = "; ".join(doc["reasons"])
@@ -132,26 +157,41 @@ def _float(v) -> float:
     return float("nan") if v is None else float(v)
 
 
+def _frequencies_hz(result) -> np.ndarray:
+    """Undamped natural frequencies [Hz] of the estimates; empty when they are not a physical
+    chain or network (a parameter without an estimate, a mass not positive, a spring negative)."""
+    from ..identification.plan import natural_frequencies_hz
+    from ..model.network import NetworkModel
+
+    if not result.network:
+        return natural_frequencies_hz(result.theta, result.n, result.boundary)
+    try:
+        return NetworkModel.from_packed(result.theta, result.network).natural_frequencies_hz()
+    except ValueError:
+        return np.array([])
+
+
 def _analyse(path: Path, options: Options) -> dict:
     """The result columns of one recording (raises on a bad one)."""
     from ..diagnosis import diagnose
     from ..diagnosis.report import to_json as diagnosis_json
     from ..identification import identify
-    from ..identification.plan import natural_frequencies_hz
     from ..recording import load_recording
 
     clock = time.perf_counter()
     rec = load_recording(path, **options.reading_for(path))
     row = {"load_s": time.perf_counter() - clock}
     clock = time.perf_counter()
-    result = identify(rec, options.boundary, options.estimator, replicates=options.replicates)
+    where = options.network()
+    topology = {"topology": where} if options.topology else {}
+    result = identify(rec, options.boundary, options.estimator, replicates=options.replicates, **topology)
     row["identify_s"] = time.perf_counter() - clock
     row.update(_identification_columns(result.to_json()))
-    for i, f in enumerate(natural_frequencies_hz(result.theta, result.n, result.boundary)):
+    for i, f in enumerate(_frequencies_hz(result)):
         row[f"f{i + 1}_hz"] = float(f)
     if options.diagnose:
         clock = time.perf_counter()
-        row.update(_diagnosis_columns(diagnosis_json(diagnose(rec, boundary=options.boundary))))
+        row.update(_diagnosis_columns(diagnosis_json(diagnose(rec, boundary=where))))
         row["diagnose_s"] = time.perf_counter() - clock
     return row
 

@@ -103,7 +103,8 @@ class PackedEstimates(PackedParameters):
 
     def parameters_json(self) -> dict:
         """The JSON keys of the estimates: ``n``, ``boundary``, ``mass`` ... ``sigma_stiffness``,
-        ``valid``, ``valid_dof``, ``reasons`` (what :meth:`algid.Chain.from_json` reads)."""
+        ``valid``, ``valid_dof``, ``reasons`` (what :meth:`algid.Chain.from_json` reads; a network's
+        ``springs`` in place of ``boundary``, what :meth:`algid.NetworkModel.from_json` reads)."""
         where = {"springs": [list(p) for p in self.network.springs]} if self.network else {"boundary": self.boundary}
         return {
             "n": self.n,

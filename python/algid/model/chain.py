@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .network import BOUNDARIES, Network, set_parameters
+from .network import BOUNDARIES, Network, NetworkModel, read_model_json, set_parameters
 
 
 def _walls(n: int) -> Network:
@@ -171,19 +171,9 @@ class Chain:
 
     @staticmethod
     def read_json(source) -> dict:
-        """An ``algid identify`` JSON document from a dict or a path."""
-        if isinstance(source, dict):
-            return source
-        import json
-        from pathlib import Path
-
-        try:
-            doc = json.loads(Path(source).read_text(encoding="utf-8"))
-        except json.JSONDecodeError as err:
-            raise ValueError(f"{source}: not JSON ({err.msg}, line {err.lineno})") from None
-        if not isinstance(doc, dict) or not {"n", "mass", "damping", "stiffness"} <= set(doc):
-            raise ValueError(f"{source}: not an algid identify result (needs n, mass, damping, stiffness)")
-        return doc
+        """An ``algid identify`` JSON document from a dict or a path
+        (:func:`algid.model.network.read_model_json`)."""
+        return read_model_json(source)
 
     @classmethod
     def from_json(cls, source) -> Chain:
@@ -191,10 +181,23 @@ class Chain:
 
         The JSON's lists ``mass``, ``damping``, ``stiffness`` hold ``m1..mn``, ``c1..cn``,
         ``k1..k{n+1}`` (spring ``j`` is ``stiffness[j-1]``); see :meth:`from_packed` for n = 1
-        and free ends."""
+        and free ends. A network's document (``springs``) is read only when its springs are
+        those of :meth:`Network.chain` (fixed, or free); any other network raises a one-line
+        ``ValueError`` pointing to :meth:`algid.NetworkModel.from_json`."""
         doc = cls.read_json(source)
+        boundary = doc.get("boundary", "fixed")
+        if "springs" in doc:
+            boundary = _chain_boundary(doc, "model" if isinstance(source, dict) else str(source))
         packed = [np.nan if v is None else v for v in doc["mass"] + doc["damping"] + doc["stiffness"]]
-        return cls.from_packed(packed, int(doc["n"]), doc.get("boundary", "fixed"))
+        if boundary == "free" and "springs" in doc:
+            packed.append(0.0)  # the network of a free chain has no spring n+1
+        return cls.from_packed(packed, int(doc["n"]), boundary)
+
+    def to_network(self) -> NetworkModel:
+        """The chain as the :class:`NetworkModel` of :meth:`Network.chain` (a free end's
+        ``k_{n+1} = 0`` is no spring of that network)."""
+        net = self.network
+        return NetworkModel(net, self.mass, self.damping, self.stiffness[: net.size])
 
     def modes(self, sigma=None, covariance=None):
         """Damped modes (:func:`algid.model.modal.modal_analysis`), with uncertainties from the
@@ -231,6 +234,18 @@ class Chain:
         if boundary == "free":
             k[-1] = 0.0
         return Chain(m, c, k, boundary)
+
+
+def _chain_boundary(doc: dict, name: str) -> str:
+    """The boundary of a network document whose springs are a chain's, else a one-line ``ValueError``."""
+    springs = [tuple(p) for p in doc["springs"]]
+    for boundary in BOUNDARIES:
+        if springs == list(Network.chain(int(doc["n"]), boundary).springs):
+            return boundary
+    raise ValueError(
+        f"{name}: a network of {doc['n']} masses and {len(springs)} springs is not a chain: "
+        "read it with algid.NetworkModel.from_json"
+    )
 
 
 #: The paper's Table 1 system (3 DOF, walls at both ends).

@@ -328,11 +328,14 @@ def _chain_and_sigma(source) -> tuple[Chain, np.ndarray | None]:
         return source, None
     if isinstance(source, (dict, str, Path)):
         doc = Chain.read_json(source)
-        chain = Chain.from_json(doc)
         sigma = np.array(
             [np.nan if v is None else v for v in doc["sigma_mass"] + doc["sigma_damping"] + doc["sigma_stiffness"]],
             dtype=float,
         )
+        if "springs" in doc:
+            theta = [np.nan if v is None else v for v in doc["mass"] + doc["damping"] + doc["stiffness"]]
+            return _network_and_sigma(Network.from_json(doc), theta, sigma)
+        chain = Chain.from_json(doc)
     elif hasattr(source, "theta") and isinstance(getattr(source, "boundary", None), Network):
         return _network_and_sigma(source.boundary, source.theta, source.sigma)
     elif hasattr(source, "theta") and hasattr(source, "sigma"):
@@ -348,19 +351,15 @@ def _chain_and_sigma(source) -> tuple[Chain, np.ndarray | None]:
 
 
 def _network_and_sigma(net: Network, theta, sigma) -> tuple[NetworkModel, np.ndarray]:
-    """The network model of packed estimates ``m1..mn, c1..cn, k1..kS``: the second of springs in
-    parallel (NaN, their sum in the first) 0 and known; raises a one-line ``ValueError`` naming
-    every other parameter without an admissible estimate."""
-    theta, sigma = np.array(theta, dtype=float), np.array(sigma, dtype=float)
-    n = net.n
+    """The network model of packed estimates ``m1..mn, c1..cn, k1..kS``
+    (:meth:`NetworkModel.from_packed`) and their standard deviations, those of the second and
+    later springs of a parallel group 0 (known: their sum is in the first)."""
+    model = NetworkModel.from_packed(theta, net)
+    sigma = np.array(sigma, dtype=float)
     for group in net.parallel_groups():
         for s in group[1:]:
-            theta[2 * n + s - 1], sigma[2 * n + s - 1] = 0.0, 0.0
-    names = net.parameter_names()
-    bad = [nm for nm, v in zip(names, theta) if not np.isfinite(v) or v < 0 or (nm[0] == "m" and v == 0)]
-    if bad:
-        raise ValueError(f"no admissible estimate of {', '.join(bad)}: the network's modes need every parameter")
-    return NetworkModel(net, theta[:n], theta[n : 2 * n], theta[2 * n :]), sigma
+            sigma[2 * net.n + s - 1] = 0.0
+    return model, sigma
 
 
 def known_parameters(n: int, boundary: str) -> np.ndarray:

@@ -231,6 +231,28 @@ def topology(n: int, boundary) -> Network:
     return boundary
 
 
+#: The keys every model document holds (:func:`read_model_json`).
+MODEL_KEYS = ("n", "mass", "damping", "stiffness")
+
+
+def read_model_json(source) -> dict:
+    """The document of a model file (a dict, or a path of its JSON): an ``algid identify
+    --json`` result, a diagnosis's model, or a hand-written model. Raises a one-line
+    ``ValueError`` unless it is a JSON object with the keys :data:`MODEL_KEYS`."""
+    doc, name = source, "model"
+    if not isinstance(source, dict):
+        name = str(source)
+        try:
+            doc = json.loads(Path(source).read_text(encoding="utf-8"))
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{source}: not JSON ({err.msg}, line {err.lineno})") from None
+    if not isinstance(doc, dict) or not set(MODEL_KEYS) <= set(doc):
+        topology = isinstance(doc, dict) and {"n", "springs"} <= set(doc)
+        hint = ": a topology without values (read it with algid.Network.from_json)" if topology else ""
+        raise ValueError(f"{name}: not an algid model or identify result (needs {', '.join(MODEL_KEYS)}){hint}")
+    return doc
+
+
 def _end(i: int) -> str:
     return "ground" if i == 0 else f"DOF {i}"
 
@@ -294,6 +316,58 @@ class NetworkModel:
     def packed(self) -> np.ndarray:
         """``m1..mn, c1..cn, k1..kS`` (2n+S,)."""
         return np.concatenate([self.mass, self.damping, self.stiffness])
+
+    @classmethod
+    def from_packed(cls, theta, network: Network) -> NetworkModel:
+        """The model of packed estimates ``m1..mn, c1..cn, k1..kS`` (2n+S,) as ``algid identify``
+        reports them on ``network``: the second and later springs of a parallel group (NaN,
+        their sum reported in the first) become 0, which leaves K unchanged. Raises a one-line
+        ``ValueError`` naming every other parameter without an estimate or with an inadmissible one."""
+        theta = np.array(theta, dtype=float).reshape(-1)
+        names, n = network.parameter_names(), network.n
+        if theta.size != len(names):
+            raise ValueError(f"{theta.size} packed parameters, expected 2n+S = {len(names)} for this network")
+        for group in network.parallel_groups():
+            for s in group[1:]:
+                theta[2 * n + s - 1] = 0.0 if not np.isfinite(theta[2 * n + s - 1]) else theta[2 * n + s - 1]
+        missing = [name for name, v in zip(names, theta) if not np.isfinite(v)]
+        if missing:
+            raise ValueError(f"no estimate of {', '.join(missing)}: a network model needs every parameter")
+        bad = [f"{name} = {v:.4g}" for name, v in zip(names, theta) if v < 0 or (name[0] == "m" and v == 0)]
+        if bad:
+            raise ValueError(f"inadmissible estimates {', '.join(bad)}: a network needs m > 0, c >= 0, k >= 0")
+        return cls(network, theta[:n], theta[n : 2 * n], theta[2 * n :])
+
+    @classmethod
+    def from_json(cls, source) -> NetworkModel:
+        """The network model a JSON document (a dict or a path of its JSON) describes: an
+        ``algid identify --topology`` result, ``algid diagnose --topology``'s ``--model`` file or
+        ``corrected_model``, or a hand-written ``{"n", "springs", "mass", "damping",
+        "stiffness"}``. ``stiffness[s-1]`` is spring ``s = springs[s-1]``; ``null`` on a later
+        spring of a parallel group is 0 (:meth:`from_packed`). A chain's document (``boundary``
+        instead of ``springs``, as :meth:`algid.Chain.from_json` reads) is the network
+        :meth:`Network.chain` of the same chain."""
+        doc = read_model_json(source)
+        if "springs" not in doc:
+            from .chain import Chain
+
+            return Chain.from_json(doc).to_network()
+        net = Network.from_json({"n": doc["n"], "springs": doc["springs"]})
+        packed = [np.nan if v is None else v for v in doc["mass"] + doc["damping"] + doc["stiffness"]]
+        return cls.from_packed(packed, net)
+
+    def to_json(self, path=None) -> dict:
+        """``{"n", "springs", "mass", "damping", "stiffness"}`` (what :meth:`from_json` reads),
+        also written to ``path`` if given."""
+        doc = {
+            **self.network.to_json(),
+            "mass": self.mass.tolist(),
+            "damping": self.damping.tolist(),
+            "stiffness": self.stiffness.tolist(),
+        }
+        if path is not None:
+            Path(path).write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+        return doc
 
     def modes(self, sigma=None, covariance=None):
         """Damped modes (:func:`algid.model.modal.modal_analysis`), with uncertainties from the
