@@ -7,7 +7,7 @@ import pytest
 
 from algid.diagnosis import diagnose
 from algid.diagnosis.report import to_json, to_text
-from algid.diagnosis.timing import channel_timing, realign, shifted
+from algid.diagnosis.timing import ChainFit, channel_timing, realign, shifted
 from algid.diagnosis.windows import window_length
 from algid.model.chain import TABLE1
 from algid.recording import Recording
@@ -38,7 +38,7 @@ def table1():
 
 def _timing(rec: Recording):
     skip = 100
-    return channel_timing(rec, "fixed", window_length(float(rec.dt), 1.0, rec.u.shape[0] - skip), skip)
+    return channel_timing(rec, ChainFit("fixed", window_length(float(rec.dt), 1.0, rec.u.shape[0] - skip), skip))
 
 
 def test_shift_is_exact_on_a_cubic_and_undoes_itself():
@@ -103,3 +103,23 @@ def test_identify_realigns_a_skewed_record_and_its_estimates_are_valid(table1):
     ok = [v.status == "ok" for v in res.verdicts]
     assert all(ok)
     assert np.all(np.abs(res.theta - truth) <= 5 * res.sigma)
+
+
+@pytest.mark.slow
+def test_a_skewed_record_with_an_effect_is_realigned_with_the_effect_in_the_fit():
+    """An effect biases the latenesses the linear chain alone finds; fitted with the leading
+    candidate's force columns, the timing finds the skew and the diagnosis the effect."""
+    rng = np.random.default_rng(4)
+    spectrum = np.fft.rfft(rng.standard_normal((8000, 3)), axis=0)
+    f = np.fft.rfftfreq(8000, 1e-3)
+    u = np.fft.irfft(spectrum * ((f > 0.5) & (f < 50.0))[:, None], 8000, axis=0)
+    quadratic = {"name": "quadratic_damping", "location": {"dof": 2}, "params": {"c_quadratic": 30.0}}
+    res = simulate(TABLE1, 10.0 * u / u.std(axis=0), 8.0, 1000.0, effects=[quadratic], noise_db=50.0, seed=4)
+    rec = skewed(Recording(t=res.t, u=res.u, a=res.a), SCAN)
+    d = diagnose(rec)
+    timing = d.extra["timing"]
+    assert d.effect == "quadratic_damping" and d.location == {"dof": 2}, d.effect
+    assert d.params["c_quadratic"] == pytest.approx(30.0, rel=0.05)
+    assert timing["realigned"]
+    late = np.array(list(timing["late_samples"].values()))
+    assert np.max(np.abs(late - (SCAN - np.median(SCAN)))) < 0.05

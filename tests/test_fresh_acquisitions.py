@@ -1,6 +1,7 @@
 """``algid diagnose`` on acquisitions as converters and loggers write them (issue 35, item 4):
 a decimating converter's filter that starts from rest, a quasi-static device whose mass the
-force-form fit cannot determine, a Stribeck peak on an axis read through encoder counts. The
+force-form fit cannot determine, a Stribeck peak on an axis read through encoder counts, a
+multiplexer's skew on a device and beside an effect. The
 slow cases are records of the fresh-acquisition bench (``bench/realistic_blind.py --fresh``)
 that an earlier diagnosis got wrong, drawn by the bench's own generator with their labels."""
 
@@ -49,11 +50,14 @@ def _bench(monkeypatch):
         (50067, 0.01, "device, 1/f noise: force-form mass undetermined, solved for acceleration"),
         # the Coulomb level of a Stribeck fit through encoder counts is biased (35 % here)
         (50107, 0.4, "axis in 2 um encoder counts: Stribeck peak fitted below the velocity noise"),
+        (50185, None, "device, force half a sample before the motion: its negligible negative mass is no effect"),
+        (50148, 0.01, "clearance and a 4-channel skew: the skew found only with the clearance in the fit"),
     ],
 )
 def test_fresh_acquisitions_the_diagnosis_once_missed(seed, rel, why, monkeypatch):
     rec, label = _bench(monkeypatch).draw(seed, fresh=True)
     d = diagnose(rec, boundary=label["boundary"])
     assert d.effect == label["effect"], why
-    main = MAIN_PARAM[label["effect"]]
-    assert d.params[main] == pytest.approx(label["params"][main], rel=rel), why
+    if rel is not None:
+        main = MAIN_PARAM[label["effect"]]
+        assert d.params[main] == pytest.approx(label["params"][main], rel=rel), why

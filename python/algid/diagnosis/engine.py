@@ -55,7 +55,7 @@ from .integrals import integrals
 from .linear import LinearFit, fit_linear, force_scale, reconstruct_states
 from .locate import locate, noise_floor
 from .model import ModelVerdict, inertia, model_verdict, physical_uncertainty, transient_response
-from .timing import Timing, on_time
+from .timing import Timing, on_time, timing_samples
 from .units import SI, diagnosis_units
 from .windows import Prepared, detrend, parseval_weights, prepare, window_length
 
@@ -87,6 +87,8 @@ QUASI_STATIC = 0.05
 #: Candidates tried with the best one, and the share of the best single candidate's
 #: remaining withheld error a pair must remove to be reported.
 COMBINATION_LEADERS = 4
+#: Verdicts a converter's skew left in the record can take (:func:`_timing_with_effect`).
+SKEW_LIKE = ("unknown", "input_delay", "sensor_lowpass")
 COMBINATION_GAIN = 0.2
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
@@ -303,6 +305,7 @@ class Setup:
     transient: object = None  # an impact record's hits and band (algid.recording.transient)
     noise: NoiseLevels | None = None  # the sensor noise behind ``floor`` (:func:`noise_floors`)
     timing: Timing | None = None  # the channels' skew found, and whether it was undone (:mod:`.timing`)
+    rec: Recording | None = None  # the record as prepared (notched; realigned when it was)
 
 
 def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
@@ -310,7 +313,7 @@ def _form(a, u, dt, L, boundary, skip, A, band: Band) -> str:
     inertia force below :data:`QUASI_STATIC` of the force in the band, or does not find its
     mass above zero by three sigma (its acceleration-form equation, solved for an
     acceleration that carries no information, would be noise)."""
-    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form="force", fit_band=True)
+    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=_band_hz(band), form="force", fit_band=True)
     lin = fit_linear(P)
     dofs = inertia(P, lin, physical_uncertainty(P, lin), band.f_hi).values()
     quasi_static = [d["inertia_share"] < QUASI_STATIC or not d["mass"] > 3 * d["mass_sigma"] for d in dofs]
@@ -324,14 +327,39 @@ def _prepare(rec: Recording, boundary: str | Network, progress, notch: bool = Tr
     clock = time.perf_counter()
     rec, hum = without_hum(rec) if notch else (rec, [])
     rec, tr = transient_record(rec, band_hz)
-    st = _setup(rec, tr, hum, boundary, progress, clock)
+    st = replace(_setup(rec, tr, hum, boundary, progress, clock), rec=rec)
     if tr is not None or not _above_floor(st):
         return st
     _progress(progress, f"{rec.n} DOF: the channels' timing")
-    on_time_rec, timing = on_time(rec, boundary)
+    on_time_rec, timing = on_time(rec, boundary, _band_hz(st.band))
     if timing is not None and timing.realigned:
-        st = _setup(on_time_rec, tr, hum, boundary, progress, clock)
+        st = replace(_setup(on_time_rec, tr, hum, boundary, progress, clock), rec=on_time_rec)
     return replace(st, timing=timing)
+
+
+def _timing_with_effect(st: Setup, scored: list[Scored], boundary, progress, clock: float) -> Setup | None:
+    """The record prepared again once realigned, when the channels' timing, estimated with the
+    chain fitted together with the leading significant additive candidate's force columns,
+    finds a converter's skew that the linear chain alone did not (an effect biases the
+    latenesses the chain alone finds); None when it finds none (:mod:`.timing`)."""
+    lead = next((s for s in scored if s.significant and s.fit.effect.split("+")[0] in ADDITIVE), None)
+    if lead is None or st.timing is None or st.timing.realigned or st.transient is not None:
+        return None
+    T, dt = st.rec.u.shape[0], float(st.rec.dt)
+    if st.P.skip != lead_in(T, dt) or timing_samples(T, dt) > st.P.nw * st.P.L:
+        return None
+    _progress(progress, f"{st.rec.n} DOF: the channels' timing with {lead.fit.effect}")
+    effect = {sp.e: sp.E for sp in lead.fit.specs if sp.E is not None}
+    on_time_rec, timing = on_time(st.rec, boundary, _band_hz(st.band), effect)
+    if timing is None or not timing.realigned:
+        return None
+    st2 = _setup(on_time_rec, st.transient, st.hum, boundary, progress, clock)
+    return replace(st2, timing=timing, rec=on_time_rec)
+
+
+def _band_hz(band: Band) -> float | None:
+    """The upper edge of the signal band, None when it is the whole spectrum."""
+    return None if band.full else band.f_hi
 
 
 def _above_floor(st: Setup) -> bool:
@@ -363,7 +391,7 @@ def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float)
         f_low = lowest_frequency_hz(lin0, boundary)
         L = window_length(dt, f_low if np.isfinite(f_low) else 1.0, T - skip)
     P = prepare(
-        a, u, dt, L, boundary, skip, A=A, band_hz=None if band.full else band.f_hi, form=form, fit_band=order > 0
+        a, u, dt, L, boundary, skip, A=A, band_hz=_band_hz(band), form=form, fit_band=order > 0
     )
     lin = fit_linear(P)
     floor, floor_band, levels = noise_floors(P, lin, motion if order else None, order)
@@ -736,6 +764,16 @@ def diagnose(
     clock = time.perf_counter()
     named = None if given is None else [parse_effect(g, rec.n, boundary) for g in given]
     st = _prepare(rec, boundary, progress, notch, band_hz)
+    d = _analyse(rec, st, boundary, progress, effects, named, quick, clock)
+    if named is None and d.effect in SKEW_LIKE:
+        again = _timing_with_effect(st, d.ranking, boundary, progress, clock)
+        d = d if again is None else _analyse(rec, again, boundary, progress, effects, named, quick, clock)
+    return d
+
+
+def _analyse(rec: Recording, st: Setup, boundary, progress, effects, named, quick: bool, clock: float) -> Diagnosis:
+    """Steps 3-5 of the module docstring on the prepared record ``st`` (:func:`diagnose`'s
+    arguments; ``named`` the given effects parsed, None to search)."""
     P, lin, denom = st.P, st.lin, st.denom
     gap_before = float(np.sqrt(lin.cv.test_sse.sum() / denom))
     gap_before_full = float(np.sqrt(lin.cv.test_sub_full.sum() / denom))

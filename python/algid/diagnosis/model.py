@@ -271,13 +271,13 @@ def admissibility(
     need are dropped too (:func:`bound_gap`), and the second value says what was tried."""
     u_rms = band_rms(P.u, P.dt, f_hi)
     x, v = states
-    v_rms = band_rms(v, P.dt, f_hi)
+    v_rms, a_rms = band_rms(v, P.dt, f_hi), band_rms(P.a, P.dt, f_hi)
     bad: list[tuple[int, int | None, str]] = []  # (equation, column at its bound or None, line)
     for e in range(P.n):
         th, s = lin.theta[e], sd[e]
-        if P.forced[e] and th[0] < -3 * s[0]:
-            bad.append((e, None, f"DOF {e + 1}: mass {th[0]:.4g} +- {s[0]:.2g} is negative"))
         force = u_rms[e] if P.forced[e] else np.nan
+        if P.forced[e] and th[0] < -3 * s[0] and not abs(th[0]) * a_rms[e] < NEGLIGIBLE * force:
+            bad.append((e, None, f"DOF {e + 1}: mass {th[0]:.4g} +- {s[0]:.2g} is negative"))
         for q, (name, val, sg) in enumerate(zip(lin.names[e][1:], th[1:], s[1:])):
             if not val < -3 * sg:
                 continue

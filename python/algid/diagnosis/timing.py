@@ -40,9 +40,11 @@ from ..recording import Recording, accelerations
 from ..recording import motion as recording_motion
 from ..recording.derivatives import MOTION_FIELDS
 from .candidates import lead_in
+from .equations import linear_design, target
+from .gram import EqSpec, cross_validate, window_stats
 from .integrals import integrals
-from .linear import fit_linear
-from .windows import prepare, window_length
+from .linear import linear_specs
+from .windows import band_filter, detrend, prepare, window_length
 
 #: Windows of the record the latenesses are estimated on.
 WINDOWS = 16
@@ -104,6 +106,18 @@ def timing_lines(doc: dict | None, indent: str = "  ") -> list[str]:
     ]
 
 
+def timing_window(T: int, dt: float) -> int:
+    """Samples per window of the timing's fits on a record of ``T`` samples of ``dt`` [s]."""
+    return window_length(dt, 1.0, T - lead_in(T, dt))
+
+
+def timing_samples(T: int, dt: float) -> int:
+    """Samples, from the lead-in on, that the timing's fits analyse on a record of ``T``
+    samples of ``dt`` [s]: its first :data:`WINDOWS` windows, or as many as the record holds."""
+    L = timing_window(T, dt)
+    return min(WINDOWS, (T - lead_in(T, dt)) // L) * L
+
+
 def shifted(x: np.ndarray, late: float) -> np.ndarray:
     """The column ``x`` taken ``late`` samples earlier: a channel recorded that late, on time."""
     k = np.arange(x.shape[0], dtype=float)
@@ -132,13 +146,47 @@ def realign(rec: Recording, late: np.ndarray) -> Recording:
     return replace(rec, u=u, **{MOTION_FIELDS[kind]: y})
 
 
-def _fit(rec: Recording, late: np.ndarray, boundary: str, L: int, skip: int):
-    """The linear chain on the record realigned by ``late``: (in-sample errors, withheld gap)."""
-    r = realign(rec, late)
-    a = accelerations(r)
-    P = prepare(a, np.asarray(r.u, dtype=float), float(r.dt), L, boundary, skip, A=integrals(a, float(r.dt)))
-    lin = fit_linear(P)
-    return lin.resid.ravel(), float(np.sqrt(lin.cv.test_sse.sum() / np.sum(P.y**2)))
+@dataclass(frozen=True)
+class ChainFit:
+    """How the timing fits the chain to a record: windows of ``L`` samples from ``skip`` on,
+    fitted and scored on ``[0, band_hz]`` (the diagnosis's signal band; the whole spectrum when
+    None), with ``effect`` (equation -> (N, q) force columns on the samples from ``skip`` on)
+    beside the chain's columns, each equation's with coefficients of its own, when given."""
+
+    boundary: object
+    L: int
+    skip: int
+    band_hz: float | None = None
+    effect: dict | None = None
+
+    def __call__(self, rec: Recording, late: np.ndarray) -> tuple[np.ndarray, float]:
+        """The chain on ``rec`` realigned by ``late``: (in-band in-sample errors, withheld gap)."""
+        r = realign(rec, late)
+        a = accelerations(r)
+        u, dt = np.asarray(r.u, dtype=float), float(r.dt)
+        P = prepare(a, u, dt, self.L, self.boundary, self.skip, A=integrals(a, dt), band_hz=self.band_hz, fit_band=True)
+        specs = linear_specs(P) if self.effect is None else self._specs(P)
+        cv = cross_validate(P, window_stats(P, specs))
+        gam = cv.theta[cv.stats.shared] if self.effect is not None else None
+        raw = np.stack(
+            [sp.y - sp.X @ cv.theta[sl] - (0.0 if gam is None else sp.E @ gam) for sp, sl in zip(specs, cv.stats.slices)],
+            axis=1,
+        )
+        return band_filter(P, detrend(P, raw)).ravel(), float(np.sqrt(cv.test_sse.sum() / np.sum(P.y**2)))
+
+    def _specs(self, P) -> list[EqSpec]:
+        """The chain's equations on ``P`` with the effect's columns, a block of shared columns
+        per equation (zero in the others)."""
+        N = P.nw * P.L
+        total = sum(cols.shape[1] for cols in self.effect.values())
+        specs, at = [], 0
+        for e in range(P.n):
+            E = np.zeros((N, total))
+            if e in self.effect:
+                E[:, at : at + self.effect[e].shape[1]] = self.effect[e][:N]
+                at += self.effect[e].shape[1]
+            specs.append(EqSpec(e=e, X=linear_design(P, e), y=target(P, e), E=E, key=("base", e)))
+        return specs
 
 
 def _head(rec: Recording, samples: int) -> Recording:
@@ -151,7 +199,7 @@ def _head(rec: Recording, samples: int) -> Recording:
     return replace(rec, dt=float(rec.dt), **cut)
 
 
-def _gauss_newton(rec, late, which, r, boundary, L, skip, stop_above=np.inf):
+def _gauss_newton(rec, late, which, r, fit: ChainFit, stop_above=np.inf):
     """Gauss-Newton in the latenesses of the channels ``which`` (the others held) from ``late``,
     whose errors are ``r``: steps of at most :data:`MAX_STEP`, until one is below
     :data:`TOLERANCE` or leaves more than ``stop_above`` of the starting squared errors. Returns
@@ -159,44 +207,44 @@ def _gauss_newton(rec, late, which, r, boundary, L, skip, stop_above=np.inf):
     late, start, first, J = late.copy(), float(r @ r), None, None
     for _ in range(PASSES):
         nudged = [late + STEP * np.eye(late.size)[c] for c in which]
-        J = np.stack([(_fit(rec, x, boundary, L, skip)[0] - r) / STEP for x in nudged], 1)
+        J = np.stack([(fit(rec, x)[0] - r) / STEP for x in nudged], 1)
         first = J if first is None else first
         step = np.linalg.lstsq(J, -r, rcond=None)[0]
         step *= min(1.0, MAX_STEP / max(float(np.max(np.abs(step))), 1e-300))
         late[which] += step
-        r = _fit(rec, late, boundary, L, skip)[0]
+        r = fit(rec, late)[0]
         if float(r @ r) > stop_above * start or np.max(np.abs(step)) < TOLERANCE:
             break
     return late, r, first, J
 
 
-def channel_timing(rec: Recording, boundary: str, L: int, skip: int) -> Timing | None:
+def channel_timing(rec: Recording, fit: ChainFit) -> Timing | None:
     """The latenesses of ``rec``'s channels (module docstring), estimated on its first
-    :data:`WINDOWS` windows of ``L`` samples after ``skip`` (the latenesses are the
-    converter's, the same all along); None with fewer than three channels (one relative
-    lateness is an input delay or a sensor's, not a pattern)."""
+    :data:`WINDOWS` windows of ``fit`` (the latenesses are the converter's, the same all
+    along); None with fewer than three channels (one relative lateness is an input delay or a
+    sensor's, not a pattern)."""
     C = len(_channels(rec))
     if C < 3:
         return None
-    rec = _head(rec, skip + WINDOWS * L)
+    rec = _head(rec, fit.skip + WINDOWS * fit.L)
     free = np.arange(1, C)  # the first channel is the reference: only differences are seen
-    r0, gap_before = _fit(rec, np.zeros(C), boundary, L, skip)
+    r0, gap_before = fit(rec, np.zeros(C))
     # a pass that does not buy what a converter's skew would ends the search: no pattern to look for
-    late, r, J0, J = _gauss_newton(rec, np.zeros(C), free, r0, boundary, L, skip, stop_above=FIRST_GAIN)
+    late, r, J0, J = _gauss_newton(rec, np.zeros(C), free, r0, fit, stop_above=FIRST_GAIN)
     cov = np.linalg.pinv(J.T @ J) * float(r @ r) / max(r.size - free.size, 1)
     std = np.zeros(C)
     std[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    _, gap_after = _fit(rec, late, boundary, L, skip)
+    _, gap_after = fit(rec, late)
     late = late - np.median(late)
     apart = np.abs(late) > Z_DELAY * np.maximum(std, np.max(std[free]))
     # the reference channel late by d is every other channel early by d
-    gap_one = _one_channel_gap(rec, np.column_stack([-J0.sum(axis=1), J0]), r0, boundary, L, skip)
+    gap_one = _one_channel_gap(rec, np.column_stack([-J0.sum(axis=1), J0]), r0, fit)
     pattern = int(np.sum(apart)) >= MIN_CHANNELS and float(np.ptp(late)) <= MAX_SPREAD
     gain = gap_after <= GAIN * gap_before and gap_after <= GAIN * gap_one
     return Timing(channel_names(rec), late, std, gap_before, gap_after, pattern and gain)
 
 
-def _one_channel_gap(rec: Recording, J0: np.ndarray, r0: np.ndarray, boundary: str, L: int, skip: int) -> float:
+def _one_channel_gap(rec: Recording, J0: np.ndarray, r0: np.ndarray, fit: ChainFit) -> float:
     """The withheld gap left by the best lateness of one channel alone (:func:`_gauss_newton`
     in that one lateness): what an input delay or a sensor's low-pass, which make one channel
     late, would explain. The channel is the one whose lateness alone, to first order (``J0``:
@@ -206,16 +254,20 @@ def _one_channel_gap(rec: Recording, J0: np.ndarray, r0: np.ndarray, boundary: s
     c = int(np.argmax(g**2 / np.maximum(np.sum(J0**2, axis=0), 1e-300)))
     one = np.zeros(J0.shape[1])
     one[c] = float(np.clip(-g[c] / max(float(J0[:, c] @ J0[:, c]), 1e-300), -MAX_STEP, MAX_STEP))
-    one = _gauss_newton(rec, one, [c], _fit(rec, one, boundary, L, skip)[0], boundary, L, skip)[0]
-    return _fit(rec, one, boundary, L, skip)[1]
+    one = _gauss_newton(rec, one, [c], fit(rec, one)[0], fit)[0]
+    return fit(rec, one)[1]
 
 
-def on_time(rec: Recording, boundary: str) -> tuple[Recording, Timing | None]:
+def on_time(
+    rec: Recording, boundary, band_hz: float | None = None, effect: dict | None = None
+) -> tuple[Recording, Timing | None]:
     """``rec`` realigned when its channels show a converter's skew, and what was found (on
-    the diagnosis's first windows: half a second, after its lead-in)."""
+    the diagnosis's first windows of :func:`timing_window`, after its lead-in, in its signal
+    band ``band_hz``); ``effect``: an effect's force columns the chain is fitted with
+    (:class:`ChainFit`)."""
     T, dt = rec.u.shape[0], float(rec.dt)
-    skip = lead_in(T, dt)
-    timing = channel_timing(rec, boundary, window_length(dt, 1.0, T - skip), skip)
+    fit = ChainFit(boundary, timing_window(T, dt), lead_in(T, dt), band_hz, effect)
+    timing = channel_timing(rec, fit)
     if timing is None or not timing.realigned:
         return rec, timing
     return realign(rec, timing.late), timing
