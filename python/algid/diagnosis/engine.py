@@ -390,9 +390,7 @@ def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float)
     else:
         f_low = lowest_frequency_hz(lin0, boundary)
         L = window_length(dt, f_low if np.isfinite(f_low) else 1.0, T - skip)
-    P = prepare(
-        a, u, dt, L, boundary, skip, A=A, band_hz=_band_hz(band), form=form, fit_band=order > 0
-    )
+    P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=_band_hz(band), form=form, fit_band=order > 0)
     lin = fit_linear(P)
     floor, floor_band, levels = noise_floors(P, lin, motion if order else None, order)
     measured = None

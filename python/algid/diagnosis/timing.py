@@ -169,7 +169,10 @@ class ChainFit:
         cv = cross_validate(P, window_stats(P, specs))
         gam = cv.theta[cv.stats.shared] if self.effect is not None else None
         raw = np.stack(
-            [sp.y - sp.X @ cv.theta[sl] - (0.0 if gam is None else sp.E @ gam) for sp, sl in zip(specs, cv.stats.slices)],
+            [
+                sp.y - sp.X @ cv.theta[sl] - (0.0 if gam is None else sp.E @ gam)
+                for sp, sl in zip(specs, cv.stats.slices)
+            ],
             axis=1,
         )
         return band_filter(P, detrend(P, raw)).ravel(), float(np.sqrt(cv.test_sse.sum() / np.sum(P.y**2)))
