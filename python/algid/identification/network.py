@@ -4,10 +4,11 @@ when the linear chain misfits it (:mod:`.augmented`).
 
 1. Screen and noise model as for a chain (:mod:`.engine`, stages 1-2).
 2. The fit check (:func:`.augmented.fit_check` on the network): the diagnosis's equations of
-   every DOF with the springs incident on it, cross-validated over the folds; each spring
-   estimated in both DOFs it joins, fused by inverse variance
-   (:func:`algid.diagnosis.corrected.linear_model`); standard deviations by the jackknife over
-   the folds.
+   every DOF with the springs incident on it, cross-validated over the folds; then all of them
+   in one joint fit (:mod:`algid.diagnosis.joint`, through
+   :func:`algid.diagnosis.corrected.linear_model`): each spring one unknown of both DOFs it
+   joins, the equations weighted by their error variances, a DOF without force scaled along
+   its springs from a forced one; standard deviations by the jackknife over the folds.
 3. Verdicts (:func:`judge_network`): what the topology and the forces cannot give
    (:meth:`~algid.model.network.Network.identifiability`: springs in parallel give their sum,
    reported in the first of them; a DOF without force nor a path of springs to one has no
@@ -69,11 +70,6 @@ def judge_network(theta: np.ndarray, sigma: np.ndarray, net: Network, forced, mi
             status, why = "not_separable", parallel[name]
         elif name in reasons:
             status, why = "not_identifiable", f"not identifiable: {reasons[name]}"
-        elif name[0] in "mc" and int(name[1:]) not in forced:
-            status, why = (
-                "not_identifiable",
-                f"DOF {name[1:]} carries no force: the windowed fit gives its equation per unit mass",
-            )
         else:
             status, why = _determined(name, float(value), float(sd))
             if misfit and status != "not_identifiable":
