@@ -1,6 +1,7 @@
 """``algid.identify(rec, topology=net)`` and ``--topology``: a spring network identified by the
-diagnosis's windowed equation-error fit (:mod:`algid.identification.network`); the chain as
-a network gives the chain's fit bit for bit."""
+diagnosis's windowed equation-error fit, jointly over its equations, then by output error
+(:mod:`algid.identification.network`); the chain as a network gives the chain's fit bit for
+bit."""
 
 from __future__ import annotations
 
@@ -12,10 +13,11 @@ import pytest
 
 import algid
 from algid.cli import main
+from algid.diagnosis.corrected import linear_model
 from algid.diagnosis.integrals import integrals
 from algid.diagnosis.linear import fit_linear
 from algid.diagnosis.windows import prepare
-from algid.identification.network import judge_network
+from algid.identification.network import FLOOR_RATIO, judge_network
 from algid.model.chain import TABLE1
 from algid.model.network import Network, NetworkModel
 from algid.recording import Recording, save_recording
@@ -40,6 +42,31 @@ def test_network_record_identified_within_its_sigmas(half_car):
     mk = np.r_[0:4, 8:13]  # masses and springs: within 1 %
     assert np.max(np.abs(r.theta[mk] / truth[mk] - 1)) < 0.01
     assert len(r.modes()[0].modes) == 4  # the modal table of the NetworkModel
+
+
+def test_noise_on_the_forces_keeps_the_joint_fit(half_car):
+    """The fixture's forces carry 40 dB of noise: the output error's residual is above the
+    accelerometers' floor, so the joint equation-error fit is the answer."""
+    _, r = half_car
+    oe = r.model_fit["output_error"]
+    assert not oe["kept"] and oe["residual_over_floor"] > FLOOR_RATIO
+    assert "output error" not in r.plan.reason
+
+
+def test_output_error_refines_a_record_with_exact_forces():
+    """Noise on the accelerations alone (the Cramer-Rao bound's model): the output error's
+    residual is the sensor noise, it is kept, its sigmas are calibrated and its errors are a
+    fraction of the joint fit's."""
+    model = network_model("half_car")
+    truth = model.packed()
+    sim = simulate(model, multisine(4, 3), 4.0, 1000.0, noise_db=40.0, noise_on=("accel",), seed=3)
+    r = algid.identify(Recording(t=sim.t, u=sim.u, a=sim.a), topology=model.network)
+    assert r.model_fit["output_error"]["kept"] and "refined by output error" in r.plan.reason
+    assert r.valid and np.max(np.abs((r.theta - truth) / r.sigma)) < 5.0
+    cm = linear_model(r.diagnosis)
+    joint = np.array(cm["mass"] + cm["damping"] + cm["stiffness"], dtype=float)
+    rms = lambda theta: float(np.sqrt(np.mean((theta / truth - 1) ** 2)))  # noqa: E731
+    assert rms(r.theta) < 0.5 * rms(joint), (rms(r.theta), rms(joint))
 
 
 def test_json_names_the_springs_in_the_networks_order(half_car):
