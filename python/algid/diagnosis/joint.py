@@ -123,7 +123,7 @@ def _gauss_newton(P: Prepared, G: list, places: list, w: np.ndarray, theta: np.n
 def _unscaled(P: Prepared) -> list[set[int]]:
     """The parts of the network (0-based DOFs) with no force nor a spring path to one."""
     forced = {int(i) for i in np.nonzero(P.forced)[0]}
-    parts = P.network._components(set(range(1, P.n + 1)))
+    parts = P.network.components()
     return [{i - 1 for i in part} for part in parts if not {i - 1 for i in part} & forced]
 
 
