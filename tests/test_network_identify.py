@@ -1,6 +1,7 @@
 """``algid.identify(rec, topology=net)`` and ``--topology``: a spring network identified by the
-diagnosis's windowed equation-error fit (:mod:`algid.identification.network`); the chain as
-a network gives the chain's fit bit for bit."""
+diagnosis's windowed equation-error fit, jointly over its equations, then by output error
+(:mod:`algid.identification.network`); the chain as a network gives the chain's fit bit for
+bit."""
 
 from __future__ import annotations
 
@@ -12,10 +13,11 @@ import pytest
 
 import algid
 from algid.cli import main
+from algid.diagnosis.corrected import linear_model
 from algid.diagnosis.integrals import integrals
 from algid.diagnosis.linear import fit_linear
 from algid.diagnosis.windows import prepare
-from algid.identification.network import judge_network
+from algid.identification.network import FLOOR_RATIO, judge_network
 from algid.model.chain import TABLE1
 from algid.model.network import Network, NetworkModel
 from algid.recording import Recording, save_recording
@@ -40,6 +42,31 @@ def test_network_record_identified_within_its_sigmas(half_car):
     mk = np.r_[0:4, 8:13]  # masses and springs: within 1 %
     assert np.max(np.abs(r.theta[mk] / truth[mk] - 1)) < 0.01
     assert len(r.modes()[0].modes) == 4  # the modal table of the NetworkModel
+
+
+def test_noise_on_the_forces_keeps_the_joint_fit(half_car):
+    """The fixture's forces carry 40 dB of noise: the output error's residual is above the
+    accelerometers' floor, so the joint equation-error fit is the answer."""
+    _, r = half_car
+    oe = r.model_fit["output_error"]
+    assert not oe["kept"] and oe["residual_over_floor"] > FLOOR_RATIO
+    assert "output error" not in r.plan.reason
+
+
+def test_output_error_refines_a_record_with_exact_forces():
+    """Noise on the accelerations alone (the Cramer-Rao bound's model): the output error's
+    residual is the sensor noise, it is kept, its sigmas are calibrated and its errors are a
+    fraction of the joint fit's."""
+    model = network_model("half_car")
+    truth = model.packed()
+    sim = simulate(model, multisine(4, 3), 4.0, 1000.0, noise_db=40.0, noise_on=("accel",), seed=3)
+    r = algid.identify(Recording(t=sim.t, u=sim.u, a=sim.a), topology=model.network)
+    assert r.model_fit["output_error"]["kept"] and "refined by output error" in r.plan.reason
+    assert r.valid and np.max(np.abs((r.theta - truth) / r.sigma)) < 5.0
+    cm = linear_model(r.diagnosis)
+    joint = np.array(cm["mass"] + cm["damping"] + cm["stiffness"], dtype=float)
+    rms = lambda theta: float(np.sqrt(np.mean((theta / truth - 1) ** 2)))  # noqa: E731
+    assert rms(r.theta) < 0.5 * rms(joint), (rms(r.theta), rms(joint))
 
 
 def test_json_names_the_springs_in_the_networks_order(half_car):
@@ -73,8 +100,54 @@ def test_parallel_springs_get_their_reason_not_a_number():
     assert "k1 + k2 in parallel between ground and DOF 1" in by["k2"].reason
     assert "reported as k1" in by["k1"].reason
     assert by["k3"].status == "ok" and by["m2"].status == "ok"
-    unforced = {v.name: v for v in judge_network(theta, sigma, net, [1], "")}
-    assert unforced["m2"].status == "not_identifiable" and "DOF 2 carries no force" in unforced["m2"].reason
+    one_force = {v.name: v for v in judge_network(theta, sigma, net, [1], "")}
+    assert one_force["m2"].status == "ok"  # scaled through k3 from DOF 1
+
+
+def _one_force(model: NetworkModel, dof: int, duration_s: float, noise_db):
+    """``model`` driven by the tests' multisine at DOF ``dof`` (1-based) alone, identified."""
+    full = multisine(model.n, 3)
+
+    def force(t):
+        f = full(t)
+        return np.where(np.arange(model.n) == dof - 1, f, 0.0)
+
+    sim = simulate(model, force, duration_s, 1000.0, noise_db=noise_db, noise_on=("accel", "force"), seed=3)
+    assert np.count_nonzero(np.any(sim.u != 0.0, axis=0)) == 1
+    return algid.identify(Recording(t=sim.t, u=sim.u, a=sim.a), topology=model.network)
+
+
+@pytest.mark.parametrize(
+    "name, dof",
+    [
+        ("half_car", 1),
+        pytest.param("frame", 1, marks=pytest.mark.slow),
+        pytest.param("frame", 5, marks=pytest.mark.slow),
+    ],
+)
+def test_one_force_scales_the_whole_network(name, dof):
+    """Issue 39: one force, every parameter. The joint fit carries the force's scale along the
+    springs to every unforced DOF: noise-free within 1e-6, at 40 dB every parameter valid and
+    within its sigmas."""
+    model = network_model(name)
+    truth = model.packed()
+    exact = _one_force(model, dof, 4.0, None)
+    assert np.max(np.abs(exact.theta / truth - 1)) < 1e-6
+    noisy = _one_force(model, dof, 4.0, 40.0)
+    assert noisy.valid, [(v.name, v.status, v.reason) for v in noisy.verdicts if v.status != "ok"]
+    assert np.max(np.abs((noisy.theta - truth) / noisy.sigma)) < 5.0
+
+
+def test_a_part_without_force_nor_path_to_one_gets_its_reason():
+    """DOF 3 hangs on its own spring to ground: no force reaches it, so it has no scale."""
+    model = NetworkModel(Network(3, [(0, 1), (1, 2), (0, 3)]), [1.0, 2.0, 1.5], [2.0, 3.0, 2.5], [2e3, 1e3, 1.5e3])
+    r = _one_force(model, 1, 2.0, None)
+    by = {v.name: v for v in r.verdicts}
+    assert all(by[p].status == "ok" for p in ("m1", "m2", "c1", "c2", "k1", "k2"))
+    for p in ("m3", "c3", "k3"):
+        assert by[p].status == "not_identifiable" and "no force on DOF 3" in by[p].reason
+    np.testing.assert_allclose(r.theta[[0, 1, 3, 4, 6, 7]], model.packed()[[0, 1, 3, 4, 6, 7]], rtol=1e-6)
+    assert np.all(np.isnan(r.theta[[2, 5, 8]]))
 
 
 @pytest.mark.slow

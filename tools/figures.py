@@ -673,9 +673,11 @@ def network_identify() -> str:
         "RMS z m / c / k",
         "noise-free, largest error",
     ]
+    kept = sum(v.get("output_error_kept", 0) for v in d["networks"].values())
     return (
         table(head, rows) + f"\n{d['seconds']:g} s records, {d['snr_db']:g} dB on the accelerations, force on "
-        f"{d['forces']}, {d['seeds']} seeds per network.\n"
+        f"{d['forces']}, {d['seeds']} seeds per network; the output error kept on {kept} of the "
+        f"{d['seeds'] * len(d['networks'])} noisy records.\n"
     )
 
 

@@ -9,6 +9,10 @@ that equation's estimate the less certain). A DOF without force has no scale
 here (its parameters are per unit mass): its mass and damping are ``None`` and its springs
 come from a forced neighbour's equation only. Standard deviations: the delete-a-group
 jackknife over the folds' fits, the spread the effect's parameters are given.
+
+A spring network's linear model (:func:`network_model`) is the joint fit of all its DOF
+equations instead (:mod:`.joint`): each spring one unknown of both equations it enters, which
+also scales a DOF without force along its springs.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ import numpy as np
 
 from .equations import to_physical
 from .gram import jackknife_std
+from .joint import joint_fit
 
 
 def _physical(P, eqs: list[int], cv) -> dict[int, tuple[np.ndarray, np.ndarray]]:
@@ -48,6 +53,26 @@ def _packed(P, names: list[list[str]], thetas: dict[int, np.ndarray], var: dict[
     return out
 
 
+def _listed(x: np.ndarray) -> list:
+    return [float(v) if np.isfinite(v) else None for v in x]
+
+
+def _as_dict(P, theta: np.ndarray, sigma: np.ndarray) -> dict:
+    """Packed parameters and standard deviations as :meth:`algid.Chain.from_json` reads them
+    (``springs`` in place of ``boundary`` for a network; ``None`` where NaN)."""
+    n = P.n
+    return {
+        "n": n,
+        **({"boundary": P.boundary} if P.chain else {"springs": [list(p) for p in P.network.springs]}),
+        "mass": _listed(theta[:n]),
+        "damping": _listed(theta[n : 2 * n]),
+        "stiffness": _listed(theta[2 * n :]),
+        "sigma_mass": _listed(sigma[:n]),
+        "sigma_damping": _listed(sigma[n : 2 * n]),
+        "sigma_stiffness": _listed(sigma[2 * n :]),
+    }
+
+
 def effect_parts(effect: str, location: dict, params: dict, params_std: dict) -> list[dict]:
     """A reported effect as a list of ``{effect, location, params, params_std}``, one per part
     of a combination (``a+b``, whose location holds ``parts`` and params one dict per effect)."""
@@ -73,28 +98,22 @@ def chain_model(d, fit=None) -> dict:
     theta = _packed(P, lin.names, {e: v[0] for e, v in per_eq.items()}, var)
     K = len(next(iter(per_eq.values()))[1])
     folds = np.array([_packed(P, lin.names, {e: v[1][k] for e, v in per_eq.items()}, var) for k in range(K)])
-    sigma = jackknife_std(folds)
-    n = P.n
+    return _as_dict(P, theta, jackknife_std(folds))
 
-    def listed(x: np.ndarray) -> list:
-        return [float(v) if np.isfinite(v) else None for v in x]
 
-    return {
-        "n": n,
-        **({"boundary": P.boundary} if P.chain else {"springs": [list(p) for p in P.network.springs]}),
-        "mass": listed(theta[:n]),
-        "damping": listed(theta[n : 2 * n]),
-        "stiffness": listed(theta[2 * n :]),
-        "sigma_mass": listed(sigma[:n]),
-        "sigma_damping": listed(sigma[n : 2 * n]),
-        "sigma_stiffness": listed(sigma[2 * n :]),
-    }
+def network_model(d) -> dict:
+    """The keys of :func:`chain_model` for a spring network (``springs`` in place of
+    ``boundary``) from the joint fit of its equations (:func:`.joint.joint_fit`): every spring
+    one unknown of both DOFs it joins, a DOF without force scaled along its springs."""
+    return _as_dict(d.P, *joint_fit(d.P, d.lin.cv))
 
 
 def linear_model(d) -> dict:
-    """The one linear chain of a record, whichever command prints it: the diagnosis's linear
-    fit (:func:`chain_model`), its withheld gap ``gap``."""
-    return {**chain_model(d), "effects": [], "gap": d.gap_before}
+    """The one linear model of a record, whichever command prints it: the diagnosis's linear
+    fit (:func:`chain_model` for the chain, :func:`network_model` for a network), its
+    withheld gap ``gap``."""
+    model = chain_model(d) if d.P.chain else network_model(d)
+    return {**model, "effects": [], "gap": d.gap_before}
 
 
 def corrected_model(d) -> dict | None:

@@ -191,7 +191,7 @@ class Network:
                     reasons.setdefault(
                         name, f"{', '.join(names)} in parallel between {_end(a)} and {_end(b)}: only their sum"
                     )
-        for part in self._components(measured):
+        for part in self.components(measured):
             if not part & forced:
                 dofs = ", ".join(str(i) for i in sorted(part))
                 why = f"no force on DOF {dofs} nor a path of springs to a forced DOF: no scale"
@@ -202,9 +202,11 @@ class Network:
                         reasons.setdefault(f"k{s}", why)
         return reasons
 
-    def _components(self, measured: set[int]) -> list[set[int]]:
-        """Groups of measured DOFs joined by springs between measured DOFs (the paths along
-        which a spring estimated in both its DOFs carries the scale of a force)."""
+    def components(self, measured=None) -> list[set[int]]:
+        """Groups of measured DOFs (1-based; default: every DOF) joined by springs between
+        measured DOFs (the paths along which a spring estimated in both its DOFs carries the
+        scale of a force)."""
+        measured = set(range(1, self.n + 1)) if measured is None else set(measured)
         parent = {i: i for i in measured}
 
         def root(i: int) -> int:
