@@ -55,7 +55,7 @@ from .integrals import integrals
 from .linear import LinearFit, fit_linear, force_scale, reconstruct_states
 from .locate import locate, noise_floor
 from .model import ModelVerdict, inertia, model_verdict, physical_uncertainty, transient_response
-from .timing import Timing, on_time, timing_samples
+from .timing import Timing, on_time, realign
 from .units import SI, diagnosis_units
 from .windows import Prepared, detrend, parseval_weights, prepare, window_length
 
@@ -331,30 +331,42 @@ def _prepare(rec: Recording, boundary: str | Network, progress, notch: bool = Tr
     if tr is not None or not _above_floor(st):
         return st
     _progress(progress, f"{rec.n} DOF: the channels' timing")
-    on_time_rec, timing = on_time(rec, boundary, _band_hz(st.band))
+    on_time_rec, timing = on_time(rec, boundary, st.P.L, _band_hz(st.band))
     if timing is not None and timing.realigned:
         st = replace(_setup(on_time_rec, tr, hum, boundary, progress, clock), rec=on_time_rec)
     return replace(st, timing=timing)
 
 
-def _timing_with_effect(st: Setup, scored: list[Scored], boundary, progress, clock: float) -> Setup | None:
+def _timing_with_effect(st: Setup, scored: list[Scored], boundary, effects, progress, clock: float) -> Setup | None:
     """The record prepared again once realigned, when the channels' timing, estimated with the
     chain fitted together with the leading significant additive candidate's force columns,
     finds a converter's skew that the linear chain alone did not (an effect biases the
-    latenesses the chain alone finds); None when it finds none (:mod:`.timing`)."""
-    lead = next((s for s in scored if s.significant and s.fit.effect.split("+")[0] in ADDITIVE), None)
-    if lead is None or st.timing is None or st.timing.realigned or st.transient is not None:
+    latenesses the chain alone finds); None when it finds none (:mod:`.timing`). When no
+    additive candidate is significant but the chain alone found a converter's pattern (short
+    of its gain: the effect's share of the gap), the candidate is the leading one of the
+    record realigned as that pattern says."""
+    if st.timing is None or st.timing.realigned or st.transient is not None:
         return None
-    T, dt = st.rec.u.shape[0], float(st.rec.dt)
-    if st.P.skip != lead_in(T, dt) or timing_samples(T, dt) > st.P.nw * st.P.L:
+    if st.P.skip != lead_in(st.rec.u.shape[0], float(st.rec.dt)):  # the effect's columns start there
+        return None
+    lead = _additive_lead(scored)
+    if lead is None and st.timing.pattern:
+        tentative = _setup(realign(st.rec, st.timing.late), st.transient, st.hum, boundary, progress, clock)
+        lead = _additive_lead(_candidates(tentative, _context(tentative), effects, progress))
+    if lead is None:
         return None
     _progress(progress, f"{st.rec.n} DOF: the channels' timing with {lead.fit.effect}")
     effect = {sp.e: sp.E for sp in lead.fit.specs if sp.E is not None}
-    on_time_rec, timing = on_time(st.rec, boundary, _band_hz(st.band), effect)
+    on_time_rec, timing = on_time(st.rec, boundary, st.P.L, _band_hz(st.band), effect)
     if timing is None or not timing.realigned:
         return None
     st2 = _setup(on_time_rec, st.transient, st.hum, boundary, progress, clock)
     return replace(st2, timing=timing, rec=on_time_rec)
+
+
+def _additive_lead(scored: list[Scored]) -> Scored | None:
+    """The best significant candidate that only adds a force (:data:`.candidates.ADDITIVE`)."""
+    return next((s for s in scored if s.significant and s.fit.effect.split("+")[0] in ADDITIVE), None)
 
 
 def _band_hz(band: Band) -> float | None:
@@ -764,7 +776,7 @@ def diagnose(
     st = _prepare(rec, boundary, progress, notch, band_hz)
     d = _analyse(rec, st, boundary, progress, effects, named, quick, clock)
     if named is None and d.effect in SKEW_LIKE:
-        again = _timing_with_effect(st, d.ranking, boundary, progress, clock)
+        again = _timing_with_effect(st, d.ranking, boundary, effects, progress, clock)
         d = d if again is None else _analyse(rec, again, boundary, progress, effects, named, quick, clock)
     return d
 

@@ -44,7 +44,7 @@ from .equations import linear_design, target
 from .gram import EqSpec, cross_validate, window_stats
 from .integrals import integrals
 from .linear import linear_specs
-from .windows import band_filter, detrend, prepare, window_length
+from .windows import band_filter, detrend, prepare
 
 #: Windows of the record the latenesses are estimated on.
 WINDOWS = 16
@@ -76,6 +76,8 @@ class Timing:
     gap_before, gap_after : withheld gaps of the linear chain on the record's first windows
         (:data:`WINDOWS`), as recorded and realigned.
     realigned : whether the record was realigned (the pattern and the gain held).
+    pattern : whether the latenesses form a converter's pattern (module docstring, the first
+        two tests), whatever the gain.
     """
 
     channels: list[str]
@@ -84,6 +86,7 @@ class Timing:
     gap_before: float
     gap_after: float
     realigned: bool
+    pattern: bool = False
 
     def to_json(self) -> dict:
         return {
@@ -104,18 +107,6 @@ def timing_lines(doc: dict | None, indent: str = "  ") -> list[str]:
         f"{indent}channel skew (a multiplexed converter), undone before the fit [samples late]: {late}",
         f"{indent}  linear-chain gap {doc['gap_before']:.4g} -> {doc['gap_after']:.4g} once realigned",
     ]
-
-
-def timing_window(T: int, dt: float) -> int:
-    """Samples per window of the timing's fits on a record of ``T`` samples of ``dt`` [s]."""
-    return window_length(dt, 1.0, T - lead_in(T, dt))
-
-
-def timing_samples(T: int, dt: float) -> int:
-    """Samples, from the lead-in on, that the timing's fits analyse on a record of ``T``
-    samples of ``dt`` [s]: its first :data:`WINDOWS` windows, or as many as the record holds."""
-    L = timing_window(T, dt)
-    return min(WINDOWS, (T - lead_in(T, dt)) // L) * L
 
 
 def shifted(x: np.ndarray, late: float) -> np.ndarray:
@@ -244,7 +235,7 @@ def channel_timing(rec: Recording, fit: ChainFit) -> Timing | None:
     gap_one = _one_channel_gap(rec, np.column_stack([-J0.sum(axis=1), J0]), r0, fit)
     pattern = int(np.sum(apart)) >= MIN_CHANNELS and float(np.ptp(late)) <= MAX_SPREAD
     gain = gap_after <= GAIN * gap_before and gap_after <= GAIN * gap_one
-    return Timing(channel_names(rec), late, std, gap_before, gap_after, pattern and gain)
+    return Timing(channel_names(rec), late, std, gap_before, gap_after, pattern and gain, pattern)
 
 
 def _one_channel_gap(rec: Recording, J0: np.ndarray, r0: np.ndarray, fit: ChainFit) -> float:
@@ -262,14 +253,13 @@ def _one_channel_gap(rec: Recording, J0: np.ndarray, r0: np.ndarray, fit: ChainF
 
 
 def on_time(
-    rec: Recording, boundary, band_hz: float | None = None, effect: dict | None = None
+    rec: Recording, boundary, L: int, band_hz: float | None = None, effect: dict | None = None
 ) -> tuple[Recording, Timing | None]:
-    """``rec`` realigned when its channels show a converter's skew, and what was found (on
-    the diagnosis's first windows of :func:`timing_window`, after its lead-in, in its signal
-    band ``band_hz``); ``effect``: an effect's force columns the chain is fitted with
-    (:class:`ChainFit`)."""
-    T, dt = rec.u.shape[0], float(rec.dt)
-    fit = ChainFit(boundary, timing_window(T, dt), lead_in(T, dt), band_hz, effect)
+    """``rec`` realigned when its channels show a converter's skew, and what was found: on the
+    diagnosis's first :data:`WINDOWS` windows of ``L`` samples after its lead-in, in its signal
+    band ``band_hz`` (the chain judged as the diagnosis judges it); ``effect``: an effect's
+    force columns the chain is fitted with (:class:`ChainFit`)."""
+    fit = ChainFit(boundary, int(L), lead_in(rec.u.shape[0], float(rec.dt)), band_hz, effect)
     timing = channel_timing(rec, fit)
     if timing is None or not timing.realigned:
         return rec, timing
