@@ -21,7 +21,9 @@ when the linear chain misfits it, :mod:`.augmented`), then by output error.
    reported in the first of them; a DOF without force nor a path of springs to one has no
    scale) gets its reason; a mass above zero by three sigma, a damping or spring not below zero
    by three sigma, each with a relative uncertainty of at most :data:`.verdicts.RELATIVE`, is
-   ``ok`` when the fit check passes, ``model_misfit`` when it does not.
+   ``ok`` when the fit check passes or the output error is kept (the network then predicts
+   every DOF's acceleration to its noise, the stronger test of the two), ``model_misfit``
+   otherwise.
 """
 
 from __future__ import annotations
@@ -132,6 +134,8 @@ def identify_network(rec, net: Network, progress) -> dict:
     progress("output error")
     floor = np.array([c.sigma for c in nm.motions]) if nm.motion == "acceleration" else None
     theta, sigma, oe = output_error(d, net, theta, sigma, floor)
+    if oe and oe["kept"]:  # every DOF's acceleration predicted to its noise: the network explains the record
+        misfit = ""
     forced = [i + 1 for i in np.nonzero(np.any(sig.rec.u != 0.0, axis=0))[0]]
     folds = int(d.lin.cv.theta_folds.shape[0])
     plan = diagnosis_plan(d, "the linear network", False)
