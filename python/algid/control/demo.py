@@ -639,8 +639,7 @@ def run(args: argparse.Namespace) -> int:
     if args.velocity_pole is not None and (args.velocity_pole < 0 or args.mode != "sampled"):
         print("algid demo: --velocity-pole must be >= 0 and needs --mode sampled", file=sys.stderr)
         return 2
-    if not args.duration > 0.5:
-        print("algid demo: --duration must be > 0.5 s", file=sys.stderr)
+    if _too_short(args.duration):
         return 2
     progress = Progress("demo")
     try:
@@ -662,17 +661,32 @@ def run(args: argparse.Namespace) -> int:
     finally:
         progress.close()
     print(format_summary(summary))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "summary.json", "w") as fh:
-        json.dump(jsonable(summary), fh, indent=2)
-    written = [out / "summary.json"]
-    if not args.no_plots:
+
+    def figures(out: Path) -> list[Path]:
         from ..plotting.demo import write_figures
 
         progress("writing figures")
-        written += write_figures(res, summary, out)
+        paths = write_figures(res, summary, out)
         progress.close()
+        return paths
+
+    return _write_outputs(Path(args.out), summary, None if args.no_plots else figures)
+
+
+def _too_short(duration_s: float) -> bool:
+    """Whether the demo's record of ``duration_s`` is too short (said on stderr)."""
+    if duration_s > 0.5:
+        return False
+    print("algid demo: --duration must be > 0.5 s", file=sys.stderr)
+    return True
+
+
+def _write_outputs(out: Path, summary: dict, figures: Callable[[Path], list[Path]] | None) -> int:
+    """``summary.json`` (and ``figures(out)`` unless None) written in ``out``; prints what was
+    written and returns the exit code 0."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "summary.json").write_text(json.dumps(jsonable(summary), indent=2) + "\n", encoding="utf-8")
+    written = [out / "summary.json"] + ([] if figures is None else figures(out))
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
 
@@ -685,8 +699,7 @@ def run_network_demo(args: argparse.Namespace) -> int:
     if given:
         print(f"algid demo: error: {', '.join(given)}: the chain's closed loop, not with --topology", file=sys.stderr)
         return 2
-    if not args.duration > 0.5:
-        print("algid demo: --duration must be > 0.5 s", file=sys.stderr)
+    if _too_short(args.duration):
         return 2
     progress = Progress("demo")
     try:
@@ -700,16 +713,13 @@ def run_network_demo(args: argparse.Namespace) -> int:
     finally:
         progress.close()
     print(network_demo.format_summary(summary, source))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "summary.json").write_text(json.dumps(jsonable(summary), indent=2) + "\n", encoding="utf-8")
-    written = [out / "summary.json"]
-    if not args.no_plots:
+
+    def figures(out: Path) -> list[Path]:
         from ..plotting.demo import write_network_figures
 
-        written += write_network_figures(res, summary, out)
-    print("wrote " + ", ".join(str(p) for p in written))
-    return 0
+        return write_network_figures(res, summary, out)
+
+    return _write_outputs(Path(args.out), summary, None if args.no_plots else figures)
 
 
 def jsonable(o: Any) -> Any:

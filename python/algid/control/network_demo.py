@@ -27,15 +27,13 @@ masses, dampings and stiffnesses, each list cycled to ``n`` masses and ``S`` spr
 
 from __future__ import annotations
 
-import json
 import time
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
 from ..model.chain import TABLE1
-from ..model.network import Network, NetworkModel
+from ..model.network import Network, NetworkModel, json_document
 
 #: The demo options of the chain's closed loop and their defaults: ``--topology`` refuses
 #: any other value (``args`` attribute -> (flag, default)).
@@ -70,12 +68,7 @@ def default_values(net: Network) -> NetworkModel:
 def read_network(path) -> tuple[NetworkModel, str]:
     """The network model of a ``--topology`` file (or its dict) and where its values come from:
     the file's own, or :func:`default_values` for a topology without values."""
-    doc = path
-    if not isinstance(path, dict):
-        try:
-            doc = json.loads(Path(path).read_text(encoding="utf-8"))
-        except json.JSONDecodeError as err:
-            raise ValueError(f"{path}: not JSON ({err.msg}, line {err.lineno})") from None
+    doc = json_document(path)
     if isinstance(doc, dict) and {"mass", "damping", "stiffness"} & set(doc):
         return NetworkModel.from_json(path), "values from the file"
     return default_values(Network.from_json(path)), "no values in the file: Table 1's cycled over masses and springs"

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .network import BOUNDARIES, Network, NetworkModel, read_model_json, set_parameters
+from .network import BOUNDARIES, Network, NetworkModel, checked_packed, read_model_json, set_parameters
 
 
 def _walls(n: int) -> Network:
@@ -161,12 +161,7 @@ class Chain:
             raise ValueError(f"{theta.size} packed parameters, expected 3n+1 = {len(names)} for n = {n}")
         if boundary == "free" or n == 1:
             theta[-1] = 0.0 if not np.isfinite(theta[-1]) else theta[-1]
-        missing = [name for name, v in zip(names, theta) if not np.isfinite(v)]
-        if missing:
-            raise ValueError(f"no estimate of {', '.join(missing)}: a chain needs every parameter")
-        bad = [f"{name} = {v:.4g}" for name, v in zip(names, theta) if v < 0 or (name[0] == "m" and v == 0)]
-        if bad:
-            raise ValueError(f"inadmissible estimates {', '.join(bad)}: a chain needs m > 0, c >= 0, k >= 0")
+        theta = checked_packed(names, theta, "chain")
         return cls(theta[:n], theta[n : 2 * n], theta[2 * n :], boundary)
 
     @staticmethod

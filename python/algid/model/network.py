@@ -62,12 +62,7 @@ class Network:
     @classmethod
     def from_json(cls, source) -> Network:
         """The network of ``{"n": N, "springs": [[a, b], ...]}`` (a dict or a path of its JSON)."""
-        doc = source
-        if not isinstance(source, dict):
-            try:
-                doc = json.loads(Path(source).read_text(encoding="utf-8"))
-            except json.JSONDecodeError as err:
-                raise ValueError(f"{source}: not JSON ({err.msg}, line {err.lineno})") from None
+        doc = json_document(source)
         if not isinstance(doc, dict) or not {"n", "springs"} <= set(doc):
             raise ValueError(f"{source if not isinstance(source, dict) else 'network'}: needs keys n and springs")
         bad = [p for p in doc["springs"] if not (isinstance(p, (list, tuple)) and len(p) == 2)]
@@ -237,17 +232,35 @@ def topology(n: int, boundary) -> Network:
 MODEL_KEYS = ("n", "mass", "damping", "stiffness")
 
 
+def json_document(source):
+    """``source`` itself when it is a dict, else the JSON read from the path ``source`` (a
+    one-line ``ValueError`` when it is not JSON)."""
+    if isinstance(source, dict):
+        return source
+    try:
+        return json.loads(Path(source).read_text(encoding="utf-8"))
+    except json.JSONDecodeError as err:
+        raise ValueError(f"{source}: not JSON ({err.msg}, line {err.lineno})") from None
+
+
+def checked_packed(names: list[str], theta: np.ndarray, what: str) -> np.ndarray:
+    """The packed parameters ``theta`` (named ``names``) of a model read back, after checking
+    that every one is estimated and admissible (``m > 0``, ``c >= 0``, ``k >= 0``); ``what``
+    names the model in the one-line ``ValueError``."""
+    missing = [name for name, v in zip(names, theta) if not np.isfinite(v)]
+    if missing:
+        raise ValueError(f"no estimate of {', '.join(missing)}: a {what} needs every parameter")
+    bad = [f"{name} = {v:.4g}" for name, v in zip(names, theta) if v < 0 or (name[0] == "m" and v == 0)]
+    if bad:
+        raise ValueError(f"inadmissible estimates {', '.join(bad)}: a {what} needs m > 0, c >= 0, k >= 0")
+    return theta
+
+
 def read_model_json(source) -> dict:
     """The document of a model file (a dict, or a path of its JSON): an ``algid identify
     --json`` result, a diagnosis's model, or a hand-written model. Raises a one-line
     ``ValueError`` unless it is a JSON object with the keys :data:`MODEL_KEYS`."""
-    doc, name = source, "model"
-    if not isinstance(source, dict):
-        name = str(source)
-        try:
-            doc = json.loads(Path(source).read_text(encoding="utf-8"))
-        except json.JSONDecodeError as err:
-            raise ValueError(f"{source}: not JSON ({err.msg}, line {err.lineno})") from None
+    doc, name = json_document(source), "model" if isinstance(source, dict) else str(source)
     if not isinstance(doc, dict) or not set(MODEL_KEYS) <= set(doc):
         topology = isinstance(doc, dict) and {"n", "springs"} <= set(doc)
         hint = ": a topology without values (read it with algid.Network.from_json)" if topology else ""
@@ -332,12 +345,7 @@ class NetworkModel:
         for group in network.parallel_groups():
             for s in group[1:]:
                 theta[2 * n + s - 1] = 0.0 if not np.isfinite(theta[2 * n + s - 1]) else theta[2 * n + s - 1]
-        missing = [name for name, v in zip(names, theta) if not np.isfinite(v)]
-        if missing:
-            raise ValueError(f"no estimate of {', '.join(missing)}: a network model needs every parameter")
-        bad = [f"{name} = {v:.4g}" for name, v in zip(names, theta) if v < 0 or (name[0] == "m" and v == 0)]
-        if bad:
-            raise ValueError(f"inadmissible estimates {', '.join(bad)}: a network needs m > 0, c >= 0, k >= 0")
+        theta = checked_packed(names, theta, "network model")
         return cls(network, theta[:n], theta[n : 2 * n], theta[2 * n :])
 
     @classmethod
