@@ -14,8 +14,8 @@ carries over, and says so in its first line:
    :data:`EXCITATION_N`) is added to every DOF's force.
 2. **The record.** The simulator samples the network at 1 kHz open loop, with ``--noise-db`` of
    white noise on the accelerations (forces exact, as the chain demo's).
-3. **The estimates.** :func:`algid.identify` with ``topology=`` the network (the windowed
-   equation-error fit of ``algid identify --topology``), printed against the truth: value,
+3. **The estimates.** :func:`algid.identify` with ``topology=`` the network (the joint fit and
+   its output-error refinement of ``algid identify --topology``), printed against the truth: value,
    one standard deviation, relative error and ``z = (estimate - truth) / sigma``.
 
 The network's values come from the file when it holds them (a
@@ -70,8 +70,8 @@ def read_network(path) -> tuple[NetworkModel, str]:
     the file's own, or :func:`default_values` for a topology without values."""
     doc = json_document(path)
     if isinstance(doc, dict) and {"mass", "damping", "stiffness"} & set(doc):
-        return NetworkModel.from_json(path), "values from the file"
-    return default_values(Network.from_json(path)), "no values in the file: Table 1's cycled over masses and springs"
+        return NetworkModel.from_json(doc), "values from the file"
+    return default_values(Network.from_json(doc)), "no values in the file: Table 1's cycled over masses and springs"
 
 
 def demo_force(model: NetworkModel, duration_s: float, excitation_n: float) -> Callable[[float], np.ndarray]:

@@ -87,9 +87,9 @@ QUASI_STATIC = 0.05
 #: Candidates tried with the best one, and the share of the best single candidate's
 #: remaining withheld error a pair must remove to be reported.
 COMBINATION_LEADERS = 4
+COMBINATION_GAIN = 0.2
 #: Verdicts a converter's skew left in the record can take (:func:`_timing_with_effect`).
 SKEW_LIKE = ("unknown", "input_delay", "sensor_lowpass")
-COMBINATION_GAIN = 0.2
 #: Effects whose regressors depend on the reconstructed states (refitted once with
 #: states reconstructed under the candidate model).
 SPRING_EFFECTS = ("cubic_stiffness", "clearance", "parameter_drift", "amplitude_damping")

@@ -196,10 +196,14 @@ def _fitting_grams(
 
 
 def solve_gram(G: np.ndarray) -> np.ndarray:
-    """Least-squares parameters from Gram(s) (..., P+1, P+1) (target last), column-scaled,
-    with a 1e-12 relative ridge against exactly collinear columns -> (..., P)."""
-    A = G[..., :-1, :-1]
-    b = G[..., :-1, -1]
+    """Least-squares parameters from Gram(s) (..., P+1, P+1) (target last) -> (..., P)
+    (:func:`scaled_solve`)."""
+    return scaled_solve(G[..., :-1, :-1], G[..., :-1, -1])
+
+
+def scaled_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``A^-1 b`` for normal matrices ``A`` (..., P, P) and right sides ``b`` (..., P),
+    column-scaled, with a 1e-12 relative ridge against exactly collinear columns."""
     d = np.sqrt(np.clip(np.diagonal(A, axis1=-2, axis2=-1), 1e-300, None))
     As = A / d[..., :, None] / d[..., None, :]
     eye = np.eye(A.shape[-1])

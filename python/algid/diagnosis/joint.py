@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .equations import force_form
-from .gram import jackknife_std
+from .gram import jackknife_std, scaled_solve
 from .windows import Prepared
 
 #: Gauss-Newton stops when no free parameter moves by more than this fraction of itself.
@@ -82,12 +82,6 @@ def _force_units(P: Prepared, e: int, idx: np.ndarray, size: int) -> tuple[np.nd
     return T, np.r_[np.ones(lead), np.zeros(idx.size)]
 
 
-def _scaled_solve(H: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """``H^-1 g``, scaled by H's diagonal, with a 1e-12 relative ridge (as :func:`.gram.solve_gram`)."""
-    d = np.sqrt(np.clip(np.diag(H), 1e-300, None))
-    return np.linalg.solve(H / d[:, None] / d[None, :] + 1e-12 * np.eye(d.size), g / d) / d
-
-
 def _start(P: Prepared, G: list, places: list, w: np.ndarray, theta: np.ndarray, free: np.ndarray) -> np.ndarray:
     """The force-unit least squares (module docstring): ``theta`` with its ``free`` entries
     solved, equation e weighted ``w_e`` (its error variance in force units)."""
@@ -98,7 +92,7 @@ def _start(P: Prepared, G: list, places: list, w: np.ndarray, theta: np.ndarray,
         H += w[e] * T.T @ Ge @ T
         g += w[e] * T.T @ Ge @ t
     out = theta.copy()
-    out[free] = _scaled_solve(H[np.ix_(free, free)], -g[free] - H[np.ix_(free, ~free)] @ theta[~free])
+    out[free] = scaled_solve(H[np.ix_(free, free)], -g[free] - H[np.ix_(free, ~free)] @ theta[~free])
     return out
 
 
@@ -112,7 +106,7 @@ def _gauss_newton(P: Prepared, G: list, places: list, w: np.ndarray, theta: np.n
             A, b = Ge[:-1, :-1], Ge[:-1, -1]
             H += w[e] * J.T @ A @ J
             g += w[e] * J.T @ (A @ phi - b)
-        step = -_scaled_solve(H[np.ix_(free, free)], g[free])
+        step = -scaled_solve(H[np.ix_(free, free)], g[free])
         theta = theta.copy()
         theta[free] += step
         if np.all(np.abs(step) <= STEP_TOL * np.abs(theta[free])):
@@ -132,7 +126,7 @@ def _error_variances(G: list, N: int) -> np.ndarray:
     out = []
     for Ge in G:
         A, b = Ge[:-1, :-1], Ge[:-1, -1]
-        out.append(max(float(Ge[-1, -1] - b @ _scaled_solve(A, b)), 0.0) / N)
+        out.append(max(float(Ge[-1, -1] - b @ scaled_solve(A, b)), 0.0) / N)
     return np.array(out)
 
 

@@ -10,7 +10,8 @@ channel late and leaves the rest on time.
 
 The estimate (Gauss-Newton on the delays, variable projection on the chain): every channel
 ``c`` but a reference is shifted by ``-delta_c`` (cubic spline), the linear chain is refitted
-on the shifted record (:func:`.linear.fit_linear` on the first pass's windows), and the
+on the shifted record (:class:`ChainFit`: the diagnosis's windows and signal band, with an
+effect's force columns when the diagnosis asks), and the
 Jacobian of its in-sample equation errors with respect to each delay is taken by finite
 differences of :data:`STEP` samples. The record is realigned only when
 

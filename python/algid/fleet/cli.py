@@ -100,17 +100,10 @@ def _topology(args):
     """The network of ``--topology`` (None without it); a one-line ``ValueError`` with a chain's option."""
     if args.topology is None:
         return None
+    from ..identification.network import refuse_chain_options
     from ..model.network import Network
 
-    chain_only = [
-        flag
-        for flag, given in (("--boundary", args.boundary != "fixed"), ("--estimator", args.estimator != "auto"))
-        if given
-    ]
-    if chain_only:
-        raise ValueError(
-            f"{', '.join(chain_only)}: the chain's, not with --topology (a network is fitted by the windowed fit)"
-        )
+    refuse_chain_options(args.boundary, args.estimator)
     return Network.from_json(args.topology)
 
 

@@ -74,11 +74,10 @@ class Options:
             raise ValueError(f"replicates must be >= 2, got {self.replicates}")
         self.reading_for("")  # the options are known keywords with readable values
         if self.topology:
+            from ..identification.network import refuse_chain_options
+
             self.network()
-            if self.boundary != "fixed" or self.estimator != "auto":
-                raise ValueError(
-                    "a network (topology) is identified by the windowed fit alone: no boundary or estimator"
-                )
+            refuse_chain_options(self.boundary, self.estimator)
 
     def network(self):
         """The :class:`algid.Network` of ``topology``, or the chain's boundary (``fixed``, ``free``)

@@ -49,7 +49,7 @@ from .base import FIT_CHECK_SKIPPED, augment, reduce
 from .estimate import Estimate, estimate
 from .frf_fit import identify_frf
 from .impact_fit import impact_fit
-from .network import identify_network
+from .network import identify_network, refuse_chain_options
 from .plan import plan_record
 from .result import Identification
 from .screen import Signals, screened_signals
@@ -122,10 +122,7 @@ def _identification(common: dict, est: Estimate, unc: Uncertainty, judged: Judge
 
 def _identify_network(rec: Recording, topology, boundary: str, estimator: str, effects, progress) -> Identification:
     """:func:`identify` of a record on a spring network (:mod:`.network`)."""
-    if effects or estimator != "auto" or boundary != "fixed":
-        raise ValueError(
-            "a network (--topology) is identified by the windowed fit alone: no effects, estimator or boundary"
-        )
+    refuse_chain_options(boundary, estimator, effects)
     net = network_of(rec.n, topology if isinstance(topology, Network) else Network.from_json(topology))
     fields = identify_network(rec, net, lambda stage: _progress(progress, stage, None))
     sig, nm = fields.pop("sig"), fields.pop("noise")

@@ -42,6 +42,25 @@ from .screen import on_time_signals, screened_signals
 from .verdicts import RELATIVE, Verdict
 
 
+def refuse_chain_options(boundary: str = "fixed", estimator: str = "auto", effects=()) -> None:
+    """A one-line ``ValueError`` when an option of the chain's comes with a network: a boundary
+    other than ``fixed``, an estimator other than ``auto``, effects."""
+    given = [
+        flag
+        for flag, on in (
+            ("--boundary", boundary != "fixed"),
+            ("--estimator", estimator != "auto"),
+            ("--effect", bool(effects)),
+        )
+        if on
+    ]
+    if given:
+        raise ValueError(
+            f"{', '.join(given)}: the chain's, not with --topology "
+            "(a network's joint fit has no boundary or estimator and takes no effects)"
+        )
+
+
 def _parallel_reasons(net: Network) -> dict[str, str]:
     """``k<s>`` -> reason for every spring of a parallel group: the sum is reported in the first."""
     out = {}

@@ -6,9 +6,8 @@ Why: the equation error of DOF e is the accelerometer noise ``n`` passed through
 own dynamic stiffness, ``M^-1 Z(w) n / w^2`` with ``Z(w) = K - w^2 M + i w C``: small near
 every resonance, large below it. An unweighted least squares on it spends its weight where
 the noise is largest and gives the resonances, where a lightly damped network tells most about
-itself, little; whitening that noise is the output error. With 1-2 % damping the equation
-error's spread is 5 to 40 times the Cramer-Rao bound, the output error's close to it
-(bench/network_identify.py).
+itself, little; whitening that noise is the output error (bench/network_identify.py measures
+both against the Cramer-Rao bound).
 
 The model: ``M a + C v + K x = u`` simulated exactly from sample to sample with the force the
 degree-5 polynomial through the six samples around each interval (:func:`_discrete`), in the
@@ -26,10 +25,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.linalg import expm
 from scipy.signal import lfilter
 
 from ..model.network import Network
+from ..simulator.state_space import phi
 
 #: Samples through which the force is interpolated on each interval, and how many of them
 #: lie before the interval's start.
@@ -56,16 +55,10 @@ def _state_space(net: Network, theta: np.ndarray) -> tuple[np.ndarray, np.ndarra
 def _discrete(A: np.ndarray, B: np.ndarray, dt: float) -> list[np.ndarray]:
     """``W_i`` (2n, n) with ``s_{t+1} = expm(A dt) s_t + sum_i W_i f_{t-LEAD+i}``: the force on
     each interval the polynomial through samples ``t-LEAD .. t-LEAD+POINTS-1``, integrated
-    exactly (one augmented exponential with a chain of ``POINTS`` input integrators)."""
-    nx, nu = B.shape
-    F = np.zeros((nx + POINTS * nu, nx + POINTS * nu))
-    F[:nx, :nx] = A
-    F[:nx, nx : nx + nu] = B
-    for j in range(POINTS - 1):
-        F[nx + j * nu : nx + (j + 1) * nu, nx + (j + 1) * nu : nx + (j + 2) * nu] = np.eye(nu)
-    E = expm(F * dt)
-    # Gamma_j = int_0^dt expm(A (dt - s)) B s^j / j! ds; the interpolant in sigma = s / dt
-    gamma = [E[:nx, nx + j * nu : nx + (j + 1) * nu] * math.factorial(j) / dt**j for j in range(POINTS)]
+    exactly (the simulator's phi functions, :func:`algid.simulator.state_space.phi`)."""
+    ph = phi(A * dt, POINTS)
+    # Gamma_j = int_0^dt expm(A (dt - s)) B (s / dt)^j ds = j! dt phi_{j+1}(A dt) B
+    gamma = [math.factorial(j) * dt * ph[j + 1] @ B for j in range(POINTS)]
     coef = np.linalg.inv(np.vander(np.arange(POINTS) - LEAD, increasing=True))  # (power j, sample i)
     return [sum(coef[j, i] * gamma[j] for j in range(POINTS)) for i in range(POINTS)]
 
