@@ -28,6 +28,7 @@ def _bench_accelerations(rec: C.Record, theta: np.ndarray) -> np.ndarray:
     return a
 
 
+@pytest.mark.slow  # 6 s: the fast tier stays within 6 minutes
 def test_sensitivities_match_finite_differences_of_the_benchmark_simulation():
     rec = C.simulate(TABLE1, 0.4, seed=3, burn_in_s=0.5)
     J, idx = C.sensitivities(rec)

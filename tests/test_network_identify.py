@@ -120,7 +120,7 @@ def _one_force(model: NetworkModel, dof: int, duration_s: float, noise_db):
 @pytest.mark.parametrize(
     "name, dof",
     [
-        ("half_car", 1),
+        pytest.param("half_car", 1, marks=pytest.mark.slow),
         pytest.param("frame", 1, marks=pytest.mark.slow),
         pytest.param("frame", 5, marks=pytest.mark.slow),
     ],

@@ -193,6 +193,7 @@ def test_highpass_accelerometer_is_the_truth_less_its_integrated_reading():
         simulate(TABLE1, None, 0.1, effects=eff + [Effect("sensor_lowpass", {"dof": 2}, {"cutoff_hz": 50.0})])
 
 
+@pytest.mark.slow  # 7 s: the fast tier stays within 6 minutes
 def test_steep_effects_match_solve_ivp_and_converge_with_substeps():
     """Dry friction and a clearance contact switch within a step: fourth order is lost at
     the switches, the error is still small and shrinks with sub-steps."""

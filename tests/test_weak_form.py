@@ -165,7 +165,12 @@ def test_misfit_is_the_noise_against_its_weights():
 
 
 @pytest.mark.parametrize(
-    "value", [73.0, pytest.param(1e3, marks=pytest.mark.slow), pytest.param(1e6, marks=pytest.mark.slow)]
+    "value",
+    [
+        pytest.param(73.0, marks=pytest.mark.slow),
+        pytest.param(1e3, marks=pytest.mark.slow),
+        pytest.param(1e6, marks=pytest.mark.slow),
+    ],
 )
 def test_one_absurd_sample_stays_out_of_the_joint(value):
     """Finding 9 of docs/reliability.md: one finite acceleration sample far off (73 m/s^2 is 13
