@@ -12,12 +12,12 @@ import pytest
 import algid
 from algid import Chain, Network, NetworkModel
 from algid.cli import main
-from algid.control.network_demo import demo_force, read_network
+from algid.control.network_demo import demo_force, probe_lines, read_network
 from algid.control.trajectories import BezierReference
 from algid.model.modal import modal_analysis
 from algid.recording import save_recording
 from algid.simulator import simulate
-from algid.simulator.scenarios import network_recording
+from algid.simulator.scenarios import network_model, network_recording
 
 HALF_CAR = {"n": 4, "springs": [[1, 2], [3, 1], [4, 2], [0, 3], [0, 4]]}
 
@@ -106,6 +106,16 @@ def test_the_demo_force_moves_the_network_along_the_references():
     ref = BezierReference.paper(4, t_out=(0.0, 0.4), t_back=(0.5, 0.9))
     x_ref = np.array([ref.evaluate(t)[0] for t in sim.t])
     assert np.max(np.abs(sim.x - x_ref)) < 1e-6 * 0.005
+
+
+@pytest.mark.parametrize("name", ["frame", "half_car", "lattice"])
+def test_the_demo_probe_spans_every_mode_of_the_network(name):
+    """The probe's lines reach below the lowest natural frequency and above the highest (the
+    chain demo's lines stop at 15.7 Hz, below the lattice's upper modes), two lines per DOF."""
+    model = network_model(name)
+    f_hz, lines = model.natural_frequencies_hz(), probe_lines(model)
+    assert lines.size == max(6, 2 * model.n) and np.all(np.diff(lines) > 0)
+    assert lines[0] < f_hz.min() and lines[-1] > f_hz.max()
 
 
 def test_demo_topology_identifies_the_network_against_its_truth(tmp_path, capsys):

@@ -11,7 +11,9 @@ carries over, and says so in its first line:
    applies once its estimates are exact. Along these references every DOF moves with the same
    time function, so the springs on one DOF could not be told apart; the demo's probe multisine
    (:class:`~.trajectories.Multisine`, ``--excitation`` N per line, default
-   :data:`EXCITATION_N`) is added to every DOF's force.
+   :data:`EXCITATION_N`) is added to every DOF's force. Its lines span the network's modes
+   (:func:`probe_lines`): the chain demo's six lines stop at 15.7 Hz, below a stiff network's
+   upper modes, which a record must carry for its springs to be told apart.
 2. **The record.** The simulator samples the network at 1 kHz open loop, with ``--noise-db`` of
    white noise on the accelerations (forces exact, as the chain demo's).
 3. **The estimates.** :func:`algid.identify` with ``topology=`` the network (the joint fit and
@@ -50,6 +52,12 @@ CHAIN_ONLY = {
 #: loop nothing does, and the probe is what tells the springs apart (docs/networks.md).
 EXCITATION_N = 0.5
 
+#: The probe's lines per DOF of the network (at least :data:`MIN_LINES`), and how far below the
+#: lowest and above the highest natural frequency they reach.
+LINES_PER_DOF = 2
+MIN_LINES = 6
+BELOW, ABOVE = 0.5, 1.5
+
 #: The first line of the report: what this demo is and is not.
 OPEN_LOOP = (
     "open loop: the closed loop of eqs. 8-10 is the chain's; the network gets the force that "
@@ -74,13 +82,22 @@ def read_network(path) -> tuple[NetworkModel, str]:
     return default_values(Network.from_json(doc)), "no values in the file: Table 1's cycled over masses and springs"
 
 
+def probe_lines(model: NetworkModel) -> np.ndarray:
+    """The probe's frequencies [Hz]: :data:`LINES_PER_DOF` lines per DOF, log-spaced from
+    :data:`BELOW` times the lowest natural frequency of ``model`` (a rigid-body mode's zero
+    left out) to :data:`ABOVE` times the highest."""
+    f_hz = model.natural_frequencies_hz()
+    elastic = f_hz[f_hz > 1e-3 * f_hz.max()]
+    return np.geomspace(BELOW * elastic.min(), ABOVE * elastic.max(), max(MIN_LINES, LINES_PER_DOF * model.n))
+
+
 def demo_force(model: NetworkModel, duration_s: float, excitation_n: float) -> Callable[[float], np.ndarray]:
     """``u(t)`` [N] (n,): the inverse dynamics of ``model`` along the demo's references plus
     the probe multisine of ``excitation_n`` N per line (module docstring)."""
     from .trajectories import BezierReference, Multisine
 
     ref = BezierReference.paper(model.n, t_out=(0.0, 0.4 * duration_s), t_back=(0.5 * duration_s, 0.9 * duration_s))
-    probe = Multisine(model.n, excitation_n)
+    probe = Multisine(model.n, excitation_n, freqs_hz=probe_lines(model))
     M, C, K = model.matrices()
 
     def force(t: float) -> np.ndarray:
@@ -113,6 +130,7 @@ def run_network(
     result = identify(Recording(t=sim.t, u=sim.u, a=sim.a), topology=model.network, progress=progress)
     s = summarize(model, result, time.perf_counter() - clock)
     s.update(duration_s=float(duration_s), noise_db=noise_db, excitation_n=excitation_n, seed=int(seed))
+    s["probe_hz"] = probe_lines(model).tolist()
     return sim, result, s
 
 
@@ -150,7 +168,8 @@ def format_summary(s: dict[str, Any], source: str) -> str:
     noise = "noise-free" if s["noise_db"] is None else f"{s['noise_db']:g} dB SNR"
     lines = [
         f"algid demo --topology: n = {s['n']}, {len(s['springs'])} springs ({source}), fs = 1000 Hz, "
-        f"{s['duration_s']:g} s, accelerometers {noise}, probe {s['excitation_n']:g} N per line",
+        f"{s['duration_s']:g} s, accelerometers {noise}, probe {s['excitation_n']:g} N per line "
+        f"({len(s['probe_hz'])} lines, {min(s['probe_hz']):.3g}-{max(s['probe_hz']):.3g} Hz)",
         OPEN_LOOP,
         f"estimates: algid.identify(record, topology=network), estimator {s['estimator']}",
         "",
@@ -174,8 +193,16 @@ def format_summary(s: dict[str, Any], source: str) -> str:
         + (f"{100 * s['max_rel_err_estimated']:.3g} %" if s["estimated_parameters"] else "n/a"),
         f"simulated and identified in {s['wall_s']:.1f} s",
     ]
-    lines += [f"{r['name']}: {r['reason']}" for r in s["parameters"] if r["status"] != "ok" and r["reason"]]
-    return "\n".join(lines)
+    return "\n".join(lines + _reasons(s["parameters"]))
+
+
+def _reasons(rows: list[dict[str, Any]]) -> list[str]:
+    """One line per distinct reason of the parameters that are not ``ok``, naming them all."""
+    named: dict[str, list[str]] = {}
+    for r in rows:
+        if r["status"] != "ok" and r["reason"]:
+            named.setdefault(r["reason"], []).append(r["name"])
+    return [f"{', '.join(names)}: {reason}" for reason, names in named.items()]
 
 
 def chain_options_given(args: Any) -> list[str]:
