@@ -304,6 +304,7 @@ class Setup:
     hum: list = field(default_factory=list)  # mains lines notched out [Hz]
     transient: object = None  # an impact record's hits and band (algid.recording.transient)
     noise: NoiseLevels | None = None  # the sensor noise behind ``floor`` (:func:`noise_floors`)
+    shapes: np.ndarray | None = None  # accelerometer noise carried through the analysis (:func:`noise_shapes`)
     timing: Timing | None = None  # the channels' skew found, and whether it was undone (:mod:`.timing`)
     rec: Recording | None = None  # the record as prepared (notched; realigned when it was)
 
@@ -375,7 +376,10 @@ def _band_hz(band: Band) -> float | None:
 
 
 def _above_floor(st: Setup) -> bool:
-    """Whether the linear chain's withheld gap exceeds the sensor-noise floor."""
+    """Whether the linear chain's withheld gap exceeds the floor of white and 1/f noise on the
+    equations themselves (:func:`coloured_floor` without the shapes of accelerometer noise
+    carried through the integrals: the lower floor, so that a skew under a sensor's coloured
+    noise is still looked for; the timing's own tests decide)."""
     gap = float(np.sqrt(st.lin.cv.test_sse.sum() / st.denom))
     return gap > relative_floors(st.P, st.floor_band, st.denom, st.lin.resid)[1]
 
@@ -405,6 +409,7 @@ def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float)
     P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=_band_hz(band), form=form, fit_band=order > 0)
     lin = fit_linear(P)
     floor, floor_band, levels = noise_floors(P, lin, motion if order else None, order)
+    shapes = noise_shapes(P, lin) if order == 0 else None
     measured = None
     if kind == "displacement":  # positions and their derivative, in band: no states to reconstruct
         xb = band_limited(rec.x, dt, band.f_hi)
@@ -412,7 +417,7 @@ def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float)
     states = measured if measured is not None else (lin.x, lin.v)
     denom = float(np.sum(P.y**2))
     # the gap the noise explains, as the verdict's ``none`` reads it on the linear fit
-    noise_gap = FIT_FLOOR_RATIO * relative_floors(P, floor_band, denom, lin.resid)[1]
+    noise_gap = FIT_FLOOR_RATIO * relative_floors(P, floor_band, denom, lin.resid, shapes)[1]
     drive = int(np.argmax(np.max(np.abs(u), axis=0)))  # the hammer's DOF
     response = None if tr is None else transient_response(u[:, drive], motion[:, drive], tr)
     return Setup(
@@ -428,6 +433,7 @@ def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float)
         hum=hum,
         transient=tr,
         noise=levels,
+        shapes=shapes,
     )
 
 
@@ -523,13 +529,18 @@ class NoiseLevels:
 
 def equation_noise(P: Prepared, lin: LinearFit, sigma: np.ndarray, order: int, rng: np.random.Generator):
     """(N, n) one draw of white noise of standard deviation ``sigma`` (n,) on the motion
-    channels carried through the analysis: differentiated ``order`` times as the recording's
-    accelerations were, integrated, put into each equation with the linear fit's parameters
-    and detrended per window (each equation's target units; the force sensor's noise apart)."""
+    channels carried through the analysis (:func:`carried`), differentiated ``order`` times as
+    the recording's accelerations were."""
+    return carried(P, lin, derivative(rng.standard_normal(P.a_full.shape) * sigma, P.dt, order))
+
+
+def carried(P: Prepared, lin: LinearFit, a_n: np.ndarray) -> np.ndarray:
+    """(N, n) accelerometer noise ``a_n`` (as ``P.a_full``) carried through the analysis:
+    integrated, put into each equation with the linear fit's parameters and detrended per
+    window (each equation's target units; the force sensor's noise apart)."""
     from .equations import base_design
 
     N, sl = P.y.shape[0], P.sl
-    a_n = derivative(rng.standard_normal(P.a_full.shape) * sigma, P.dt, order)
     A1n, A2n = integrals(a_n, P.dt)
     a_n, A1n, A2n = a_n[sl], A1n[sl], A2n[sl]
     out = np.empty((N, P.n))
@@ -538,6 +549,33 @@ def equation_noise(P: Prepared, lin: LinearFit, sigma: np.ndarray, order: int, r
         y = np.zeros(N) if force_form(P, e) else a_n[:, e]
         out[:, e] = detrend(P, y - X @ lin.theta_a[e]).reshape(N)
     return out
+
+
+def noise_shapes(P: Prepared, lin: LinearFit) -> np.ndarray:
+    """(2, F, n) mean power per DFT bin of a window (as :func:`coloured_floor` reads the
+    equation errors) of unit white and unit ``1/f`` accelerometer noise (PSD ``1/f`` times the
+    white one's, ``f`` in Hz) carried through the analysis (:func:`carried`): the integrals
+    lift a sensor's low-frequency noise into the equations far above its own ``1/f``, and the
+    windows' detrending takes the lowest bins back. Fixed seed; draws for about
+    :data:`FLOOR_DOF` in-band degrees of freedom."""
+    T = P.a_full.shape[0]
+    f = np.fft.rfftfreq(T, P.dt)
+    tilt = 1.0 / np.sqrt(np.maximum(f, f[1]))[:, None]
+    draws = int(np.clip(np.ceil(FLOOR_DOF / (P.nw * max(int(np.sum(P.band_mask)), 1))), 1, 8))
+    rng = np.random.default_rng(0)
+    out = np.zeros((2,) + _bin_power(P, P.y).shape)
+    for _ in range(draws):
+        white = rng.standard_normal(P.a_full.shape)
+        pink = np.fft.irfft(np.fft.rfft(white, axis=0) * tilt, T, axis=0)
+        out += [_bin_power(P, carried(P, lin, x)) / draws for x in (white, pink)]
+    return out
+
+
+def _bin_power(P: Prepared, resid: np.ndarray) -> np.ndarray:
+    """(F, n) mean power per DFT bin of a window of the equation errors ``resid`` (N, n) (Parseval
+    weights: the bins sum to the windows' mean square)."""
+    R = P.windows(resid)  # (nw, L, n)
+    return parseval_weights(P.L)[:, None] * np.mean(np.abs(np.fft.rfft(R, axis=1)) ** 2, axis=0) / P.L
 
 
 #: In-band degrees of freedom (windows times band bins) of the simulated noise of
@@ -800,7 +838,7 @@ def _analyse(rec: Recording, st: Setup, boundary, progress, effects, named, quic
     if gap_before < GAP_RESOLUTION and named is None:
         best = None
     final = lin.resid if best is None else detrend(P, raw_residual(ctx, best.fit)).reshape(lin.resid.shape)
-    floor_white, floor_rel = relative_floors(P, st.floor_band, denom, final)
+    floor_white, floor_rel = relative_floors(P, st.floor_band, denom, final, st.shapes)
     verdict = (
         _verdict(gap_before, gap_before_full, floor_rel, best, st.model, floor_white)
         if named is None
@@ -851,34 +889,46 @@ def _analyse(rec: Recording, st: Setup, boundary, progress, effects, named, quic
     )
 
 
-def relative_floors(P: Prepared, floor_band: np.ndarray, denom: float, resid: np.ndarray) -> tuple[float, float]:
+def relative_floors(
+    P: Prepared, floor_band: np.ndarray, denom: float, resid: np.ndarray, shapes: np.ndarray | None = None
+) -> tuple[float, float]:
     """The in-band noise floor relative to the targets (the scale of the withheld gap,
     ``denom`` their squared sum): white (from the noise model's in-band ``floor_band``, at
     least :data:`GAP_RESOLUTION` / :data:`UNKNOWN_FLOOR_RATIO`), and with the 1/f part of the
     detrended equation errors ``resid`` (N, n) of the final model (:func:`coloured_floor`:
-    the noise of a sensor may be coloured)."""
+    the noise of a sensor may be coloured; ``shapes``: :func:`noise_shapes`)."""
     white = float(np.sqrt(np.sum(floor_band**2) * P.y.shape[0] / denom))
     white = max(white, GAP_RESOLUTION / UNKNOWN_FLOOR_RATIO)
-    return white, max(white, float(np.sqrt(coloured_floor(P, resid).sum() / denom)))
+    return white, max(white, float(np.sqrt(coloured_floor(P, resid, shapes).sum() / denom)))
 
 
-def coloured_floor(P: Prepared, resid: np.ndarray) -> np.ndarray:
+def coloured_floor(P: Prepared, resid: np.ndarray, shapes: np.ndarray | None = None) -> np.ndarray:
     """(n,) in-band noise power of detrended equation errors ``resid`` (N, n), summed over
     the analysed samples, under a white plus 1/f noise model: per DFT bin of a window, the
     mean power over the windows; the white level ``w`` from the bins above the band
-    (:func:`algid.recording.noise.white_floor`); the 1/f level ``p`` the median over the band's bins of
-    ``(power - w) f`` (a median: an effect's power on a few bins does not move it); the
-    floor ``sum over the band of w + p / f``. For white noise ``p`` is about 0 and this is
-    the white floor's band share."""
-    R = P.windows(resid)  # (nw, L, n)
-    pw = parseval_weights(P.L)[:, None] * np.mean(np.abs(np.fft.rfft(R, axis=1)) ** 2, axis=0) / P.L
+    (:func:`algid.recording.noise.white_floor`); the 1/f level ``p`` the median over the band's
+    bins of what the white noise leaves, over the 1/f noise's shape (a median: an effect's
+    power on a few bins does not move it); the floor the sum of both over the band. The
+    shapes are those of accelerometer noise carried through the analysis (``shapes``,
+    :func:`noise_shapes`), else flat and ``1/f`` (noise on the equation itself). For white
+    noise ``p`` is about 0 and this is the white floor's band share."""
+    pw = _bin_power(P, resid)
     fk = np.fft.rfftfreq(P.L, P.dt)
     band = P.band_mask & (fk > 0)
     if P.full_band or band.sum() < 4:  # no bins above the band to tell the white level
         return np.zeros(P.n)
-    w = white_floor(fk[~P.band_mask], pw[~P.band_mask]) if (~P.band_mask).sum() >= 2 else np.median(pw, axis=0)
-    p = np.median(np.maximum(pw[band] - w, 0.0) * fk[band, None], axis=0)
-    return P.nw * (w * band.sum() + p * np.sum(1.0 / fk[band]))
+    above = ~P.band_mask
+    g0, g1 = (
+        (np.ones_like(pw), np.broadcast_to(1.0 / np.maximum(fk, fk[1])[:, None], pw.shape))
+        if shapes is None
+        else shapes
+    )
+    if above.sum() >= 2:
+        w = white_floor(fk[above], pw[above]) / white_floor(fk[above], g0[above])
+    else:
+        w = np.median(pw / g0, axis=0)
+    p = np.median(np.maximum(pw[band] - w * g0[band], 0.0) / g1[band], axis=0)
+    return P.nw * np.sum(w * g0[band] + p * g1[band], axis=0)
 
 
 def _candidate_sse_eq(lin: LinearFit, s: Scored) -> np.ndarray:
