@@ -1298,9 +1298,9 @@ def fresh_misses() -> str:
 
 def fresh_held_out() -> str:
     """The diagnosis on fresh seeds it was not developed on, against the code before this
-    stop's changes to it (``realistic_blind_fresh70k_before``)."""
-    res = result("realistic_blind_fresh70k")
-    after, before = res["summary"], result("realistic_blind_fresh70k_before")["summary"]
+    stop's change to it (``realistic_blind_fresh90k_before``)."""
+    res = result("realistic_blind_fresh90k")
+    after, before = res["summary"], result("realistic_blind_fresh90k_before")["summary"]
 
     def skew(s: dict) -> str:
         k = s["per_nuisance"]["skew"]
@@ -1310,10 +1310,10 @@ def fresh_held_out() -> str:
     missed = sum(not c["effect_ok"] for c in two)
     rest = [c for c in res["cases"] if c not in two]
     return (
-        f"On {after['cases']} fresh cases nothing was developed on (`--seeds 70000:70300 --fresh`), top-1 is "
+        f"On {after['cases']} fresh cases nothing was developed on (`--seeds 90000:90300 --fresh`), top-1 is "
         f"{pct(after['top1_accuracy'], 3)} % ({skew(after)}), against {pct(before['top1_accuracy'], 3)} % "
-        f"({skew(before)}) for the same cases diagnosed by the code before the changes listed above (commit "
-        f"dda3028); location {pct(after['location_accuracy_among_correct'], 3)} %, main parameter "
+        f"({skew(before)}) for the same cases diagnosed by the code before the carried noise shapes (commit "
+        f"ad93642); location {pct(after['location_accuracy_among_correct'], 3)} %, main parameter "
         f"within 20 % {pct(after['param_within_20pct_among_correct'], 3)} %; false alarms on `none` "
         f"{pct(after['false_alarm_rate_none'], 3)} % against {pct(before['false_alarm_rate_none'], 3)} %; `none` "
         f"on an effect {pct(after['false_none_on_effect'], 2)} % against {pct(before['false_none_on_effect'], 2)} %. "

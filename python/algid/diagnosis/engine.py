@@ -417,7 +417,7 @@ def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float)
     states = measured if measured is not None else (lin.x, lin.v)
     denom = float(np.sum(P.y**2))
     # the gap the noise explains, as the verdict's ``none`` reads it on the linear fit
-    noise_gap = FIT_FLOOR_RATIO * relative_floors(P, floor_band, denom, lin.resid, shapes)[1]
+    noise_gap = FIT_FLOOR_RATIO * relative_floors(P, floor_band, denom, lin.resid)[1]
     drive = int(np.argmax(np.max(np.abs(u), axis=0)))  # the hammer's DOF
     response = None if tr is None else transient_response(u[:, drive], motion[:, drive], tr)
     return Setup(
@@ -838,7 +838,7 @@ def _analyse(rec: Recording, st: Setup, boundary, progress, effects, named, quic
     if gap_before < GAP_RESOLUTION and named is None:
         best = None
     final = lin.resid if best is None else detrend(P, raw_residual(ctx, best.fit)).reshape(lin.resid.shape)
-    floor_white, floor_rel = relative_floors(P, st.floor_band, denom, final, st.shapes)
+    floor_white, floor_rel = relative_floors(P, st.floor_band, denom, final, _carried_shapes(st))
     verdict = (
         _verdict(gap_before, gap_before_full, floor_rel, best, st.model, floor_white)
         if named is None
@@ -889,6 +889,14 @@ def _analyse(rec: Recording, st: Setup, boundary, progress, effects, named, quic
     )
 
 
+def _carried_shapes(st: Setup) -> np.ndarray | None:
+    """The shapes of accelerometer noise carried through the analysis (:func:`noise_shapes`)
+    for the verdict's noise floor, unless the record has more modes than the chain: the error
+    of a model short of modes is structure, broadband and rising towards low frequencies as
+    carried 1/f noise does, and a noise fit to it would call the structure noise."""
+    return None if st.model.verdict == "more_modes_than_dof" else st.shapes
+
+
 def relative_floors(
     P: Prepared, floor_band: np.ndarray, denom: float, resid: np.ndarray, shapes: np.ndarray | None = None
 ) -> tuple[float, float]:
@@ -918,11 +926,8 @@ def coloured_floor(P: Prepared, resid: np.ndarray, shapes: np.ndarray | None = N
     if P.full_band or band.sum() < 4:  # no bins above the band to tell the white level
         return np.zeros(P.n)
     above = ~P.band_mask
-    g0, g1 = (
-        (np.ones_like(pw), np.broadcast_to(1.0 / np.maximum(fk, fk[1])[:, None], pw.shape))
-        if shapes is None
-        else shapes
-    )
+    flat = (np.ones_like(pw), np.broadcast_to(1.0 / np.maximum(fk, fk[1])[:, None], pw.shape))
+    g0, g1 = flat if shapes is None else shapes
     if above.sum() >= 2:
         w = white_floor(fk[above], pw[above]) / white_floor(fk[above], g0[above])
     else:
