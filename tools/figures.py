@@ -1312,8 +1312,8 @@ def fresh_held_out() -> str:
     return (
         f"On {after['cases']} fresh cases nothing was developed on (`--seeds 90000:90300 --fresh`), top-1 is "
         f"{pct(after['top1_accuracy'], 3)} % ({skew(after)}), against {pct(before['top1_accuracy'], 3)} % "
-        f"({skew(before)}) for the same cases diagnosed by the code before the carried noise shapes (commit "
-        f"ad93642); location {pct(after['location_accuracy_among_correct'], 3)} %, main parameter "
+        f"({skew(before)}) for the same cases diagnosed by the code before the carried noise shapes "
+        f"(`realistic_blind_fresh90k_before.json`); location {pct(after['location_accuracy_among_correct'], 3)} %, main parameter "
         f"within 20 % {pct(after['param_within_20pct_among_correct'], 3)} %; false alarms on `none` "
         f"{pct(after['false_alarm_rate_none'], 3)} % against {pct(before['false_alarm_rate_none'], 3)} %; `none` "
         f"on an effect {pct(after['false_none_on_effect'], 2)} % against {pct(before['false_none_on_effect'], 2)} %. "

@@ -304,7 +304,9 @@ class Setup:
     hum: list = field(default_factory=list)  # mains lines notched out [Hz]
     transient: object = None  # an impact record's hits and band (algid.recording.transient)
     noise: NoiseLevels | None = None  # the sensor noise behind ``floor`` (:func:`noise_floors`)
-    shapes: np.ndarray | None = None  # accelerometer noise carried through the analysis (:func:`noise_shapes`)
+    shapes: np.ndarray | None = (
+        None  # accelerometer noise carried through the analysis, for the verdict's floor (:func:`noise_shapes`)
+    )
     timing: Timing | None = None  # the channels' skew found, and whether it was undone (:mod:`.timing`)
     rec: Recording | None = None  # the record as prepared (notched; realigned when it was)
 
@@ -409,17 +411,21 @@ def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float)
     P = prepare(a, u, dt, L, boundary, skip, A=A, band_hz=_band_hz(band), form=form, fit_band=order > 0)
     lin = fit_linear(P)
     floor, floor_band, levels = noise_floors(P, lin, motion if order else None, order)
-    shapes = noise_shapes(P, lin) if order == 0 else None
     measured = None
     if kind == "displacement":  # positions and their derivative, in band: no states to reconstruct
         xb = band_limited(rec.x, dt, band.f_hi)
         measured = (xb[P.sl], derivative(xb, dt, 1)[P.sl])
     states = measured if measured is not None else (lin.x, lin.v)
     denom = float(np.sum(P.y**2))
-    # the gap the noise explains, as the verdict's ``none`` reads it on the linear fit
+    # the gap the noise on the equations explains, on the linear fit
     noise_gap = FIT_FLOOR_RATIO * relative_floors(P, floor_band, denom, lin.resid)[1]
     drive = int(np.argmax(np.max(np.abs(u), axis=0)))  # the hammer's DOF
     response = None if tr is None else transient_response(u[:, drive], motion[:, drive], tr)
+    model = model_verdict(P, lin, band.f_hi, states, noise_gap=noise_gap, denom=denom, response=response)
+    # the verdict's floor carries accelerometer noise through the integrals, unless the record has
+    # more modes than the chain: the error of a model short of modes is structure, broadband and
+    # rising towards low frequencies as carried 1/f noise does, and a noise fit would call it noise
+    shapes = noise_shapes(P, lin) if order == 0 and model.verdict != "more_modes_than_dof" else None
     return Setup(
         P=P,
         lin=lin,
@@ -427,7 +433,7 @@ def _setup(rec: Recording, tr, hum: list, boundary: str, progress, clock: float)
         denom=denom,
         floor=floor,
         floor_band=floor_band,
-        model=model_verdict(P, lin, band.f_hi, states, noise_gap=noise_gap, denom=denom, response=response),
+        model=model,
         timings={"linear": time.perf_counter() - clock},
         measured=measured,
         hum=hum,
@@ -838,7 +844,7 @@ def _analyse(rec: Recording, st: Setup, boundary, progress, effects, named, quic
     if gap_before < GAP_RESOLUTION and named is None:
         best = None
     final = lin.resid if best is None else detrend(P, raw_residual(ctx, best.fit)).reshape(lin.resid.shape)
-    floor_white, floor_rel = relative_floors(P, st.floor_band, denom, final, _carried_shapes(st))
+    floor_white, floor_rel = relative_floors(P, st.floor_band, denom, final, st.shapes)
     verdict = (
         _verdict(gap_before, gap_before_full, floor_rel, best, st.model, floor_white)
         if named is None
@@ -887,14 +893,6 @@ def _analyse(rec: Recording, st: Setup, boundary, progress, effects, named, quic
         recording_units=dict(rec.units),
         recording_notes=list(rec.notes),
     )
-
-
-def _carried_shapes(st: Setup) -> np.ndarray | None:
-    """The shapes of accelerometer noise carried through the analysis (:func:`noise_shapes`)
-    for the verdict's noise floor, unless the record has more modes than the chain: the error
-    of a model short of modes is structure, broadband and rising towards low frequencies as
-    carried 1/f noise does, and a noise fit to it would call the structure noise."""
-    return None if st.model.verdict == "more_modes_than_dof" else st.shapes
 
 
 def relative_floors(
